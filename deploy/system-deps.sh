@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Installs the Debian packages livedrummer needs, only when one is missing.
+# Runs as root (CI, stage rigs set up by a technician) or through sudo when available.
+set -euo pipefail
+packages=(python3-venv)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
+done
+# python3 from pyenv or elsewhere already carries venv; only ask apt when it is really absent.
+if python3 -c 'import venv, ensurepip' 2>/dev/null; then
+  missing=("${missing[@]/python3-venv}")
+fi
+missing=(${missing[@]+"${missing[@]}"})
+[ ${#missing[@]} -eq 0 ] && exit 0
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+$sudo apt-get update
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y --no-install-recommends "${missing[@]}"

@@ -1,0 +1,33 @@
+"""The exception hierarchy.
+
+Every error a user can cause (a bad file, a typo in a kit, an unknown map name) is a
+``LivedrummerError`` whose message names *where* (file, key, byte offset) and *what*. The CLI
+prints ``str(error)`` on one line and exits with status 2; services log it and keep running.
+Programming errors stay ordinary Python exceptions so they are never mistaken for bad input.
+"""
+
+from __future__ import annotations
+
+
+class LivedrummerError(Exception):
+    """Base of all errors caused by input, configuration or the environment."""
+
+
+class ConfigError(LivedrummerError):
+    """A TOML configuration file (kit, note map, preset) is malformed or inconsistent."""
+
+
+class KitError(ConfigError):
+    """A kit file is wrong, or a kit name is unknown."""
+
+
+class NoteMapError(ConfigError):
+    """A note-map file is wrong, or a map name is unknown."""
+
+
+class MidiFileError(LivedrummerError):
+    """A Standard MIDI File cannot be read."""
+
+
+class MidiInputError(LivedrummerError):
+    """A live MIDI or serial source failed."""
