@@ -74,6 +74,10 @@ class Table:
         if key in self._data:
             return self._data[key]
         if default is _MISSING:
+            unread = [k for k in self._data if k not in self._used]
+            typo = difflib.get_close_matches(key, unread, n=1)
+            if typo:  # report the typo itself, as done() would have
+                raise self.fail(typo[0], f"unknown key; did you mean {key!r}?")
             raise self.fail(key, "missing required key")
         return default
 

@@ -59,7 +59,11 @@ def parse_kit(data: dict[str, object], source: str) -> Kit:
     if not piece_tables:
         raise root.fail("piece", "a kit needs at least one [[piece]]")
     pieces = tuple(_parse_piece(t) for t in piece_tables)
-    names = {p.name for p in pieces}
+    names: set[str] = set()
+    for piece, t in zip(pieces, piece_tables, strict=True):
+        if piece.name in names:
+            raise t.fail("name", "another piece has this name", piece.name)
+        names.add(piece.name)
     pairs: dict[tuple[str, str], float] = {}
     for t in root.tables("pair"):
         a, b = _pair_names(t, names)

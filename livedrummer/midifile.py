@@ -35,7 +35,9 @@ from livedrummer.tempo import Grid, TempoMap
 log = logging.getLogger(__name__)
 
 MAX_MESSAGES = 20_000_000
-_MIDO_ERRORS = (ValueError, EOFError, KeyError, IndexError, TypeError, OSError, struct.error)
+# mido raises a wide, undocumented set of exception types on bad bytes (ValueError, EOFError,
+# KeySignatureError, IndexError, ...). Around the parse call only, any Exception is bad input.
+_MIDO_ERRORS = (Exception,)
 
 
 @dataclass(frozen=True, slots=True)

@@ -148,7 +148,7 @@ class MidiMessage:
 
     @property
     def kind(self) -> str:
-        """mido-style type name, e.g. ``"note_on"``; ``"unknown"`` for undefined statuses."""
+        """mido-style type name, e.g. ``"note_on"`` (``"unknown"`` if undefined)."""
         return _KIND[self.status & 0xFF]
 
     @property

@@ -1,0 +1,83 @@
+"""The command line as a user meets it: real processes, exit codes, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+FUNK = "drummer1/session1/1_funk_80_beat_4-4.mid"
+
+
+SCRIPT = Path(sys.executable).parent / "livedrummer"  # the installed console script
+
+
+def run(*args: str, **env: str) -> subprocess.CompletedProcess[str]:
+    command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "livedrummer"]
+    return subprocess.run(
+        [*command, *args], capture_output=True, text=True, timeout=120, env={**os.environ, **env}
+    )
+
+
+def test_inspect_json_on_a_groove(groove_dir: Path) -> None:
+    proc = run("inspect", str(groove_dir / FUNK), "--map", "roland-td", "--json")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["onsets"] == sum(int(v) for v in out["by_note"].values())
+    assert out["unknown_notes"] == {}
+    assert out["duration_s"] == pytest.approx(87.0, abs=0.1)
+    assert out["by_note"]["36"] == out["by_piece"]["kick"]["head"]
+    assert out["tempos_bpm"] == [[0.0, 80.0]] and out["meters"] == [[0.0, 4, 4]]
+
+
+def test_inspect_text_reports_unknown_notes_with_the_wrong_map(groove_dir: Path) -> None:
+    proc = run("inspect", str(groove_dir / FUNK), "--map", "general-midi")
+    assert proc.returncode == 0, proc.stderr
+    assert "UNKNOWN   note 26 x8 (not in map general-midi" in proc.stdout
+
+
+@pytest.mark.parametrize("content", [b"", os.urandom(2000), b"MThd\x00\x00\x00\x06\x00"])
+def test_bad_files_exit_2_with_one_line(tmp_path: Path, content: bytes) -> None:
+    path = tmp_path / "bad.mid"
+    path.write_bytes(content)
+    proc = run("inspect", str(path), "--map", "roland-td")
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"livedrummer: error: {path}: ")
+    assert "Traceback" not in proc.stderr
+
+
+def test_directory_and_bad_map_exit_2(tmp_path: Path) -> None:
+    proc = run("inspect", str(tmp_path))
+    assert proc.returncode == 2 and "is a directory" in proc.stderr
+    proc = run("inspect", str(tmp_path), "--map", "nope")
+    assert proc.returncode == 2 and "unknown note map 'nope'" in proc.stderr
+
+
+def test_kit_typo_exit_2(tmp_path: Path) -> None:
+    kit = tmp_path / "kits"
+    kit.mkdir()
+    text = (REPO / "kits" / "rock5.toml").read_text().replace("tilt_deg", "tilt_dge", 1)
+    (kit / "rock5.toml").write_text(text)
+    proc = run("kits", LIVEDRUMMER_PATH=str(tmp_path))
+    assert proc.returncode == 0
+    assert "tilt_dge: unknown key; did you mean 'tilt_deg'" in proc.stdout
+
+
+def test_kits_lists_kits_and_maps() -> None:
+    proc = run("kits")
+    assert proc.returncode == 0, proc.stderr
+    for name in ("rock5", "rock5-left", "general-midi", "roland-td", "yamaha-dtx", "alesis-nitro"):
+        assert f"  {name} " in proc.stdout
+
+
+def test_demo_runs_on_the_bundled_groove() -> None:
+    proc = run("demo")
+    assert proc.returncode == 0, proc.stderr
+    assert "gmd-drummer1-funk-80.mid" in proc.stdout
