@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -15,6 +16,8 @@ GROOVE = REPO.parent / "shared" / "data" / "groove"
 @pytest.fixture(scope="session")
 def groove_dir() -> Path:
     if not GROOVE.is_dir():
+        if os.environ.get("CI"):  # CI always has ../shared: a missing corpus is a failure there
+            pytest.fail(f"Groove MIDI Dataset not found at {GROOVE}")
         pytest.skip(f"Groove MIDI Dataset not found at {GROOVE}")
     return GROOVE
 
