@@ -22,7 +22,13 @@ from livedrummer.errors import LivedrummerError
 EXIT_USAGE = 2
 
 #: Subcommand modules of this package, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("demo", "inspect", "kits", "bench")
+COMMANDS: tuple[str, ...] = (
+    "demo",
+    "inspect",
+    "kits",
+    "sticking",
+    "bench",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

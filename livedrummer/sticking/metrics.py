@@ -1,0 +1,110 @@
+"""How a sticking is judged: crossings, same-hand-too-fast, dropped notes, accuracy.
+
+Defined once here, used by the tests, the benchmark and (through :func:`crossing_depth`) the
+cost model, so "better" means the same thing everywhere.
+
+*Too fast*: a hand stroke that follows the same hand's previous stroke sooner than the piece's
+``min_time_gap_s`` (moving between two pieces: the smaller of their two gaps). A second stroke
+on the *same* piece may come after half that gap (a double stroke: the stick rebounds), but not
+twice in a row.
+
+*Crossing*: at a hand stroke, the stance is this hand's piece and the piece the other hand
+struck last (up to the end of this stroke's chord, see :mod:`.prepare`), if it did so within
+:data:`STANCE_WINDOW_S` (a hand idle longer has gone back to
+rest). The arms are crossed when the right hand's piece lies left of the left hand's (by more
+than :data:`CROSS_TOL_M` in x). A crossing is *conventional*, and not counted, when the hand
+reaching over is the lead hand (right on a right-handed kit) on a cymbal and the other hand is on
+a drum below it, no further than :data:`CONVENTIONAL_REACH_M` across: the right hand on the
+hi-hat over the left on the snare, or on a crash just beyond the hi-hat. Anything else (right
+hand on the high tom while the left plays the floor tom) counts. Because
+everything is measured from piece positions and the kit's handedness, a mirrored kit is judged
+by the mirrored rule.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from livedrummer.kit import Kit
+from livedrummer.sticking.prepare import chords
+from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED, Sticking
+from livedrummer.vocabulary import Limb
+
+STANCE_WINDOW_S = 0.5
+CROSS_TOL_M = 0.10
+CONVENTIONAL_REACH_M = 0.40
+DOUBLE_STROKE_FACTOR = 0.5
+
+_RH = LIMB_CODE[Limb.RH]
+_LH = LIMB_CODE[Limb.LH]
+
+
+def crossing_depth(kit: Kit) -> tuple[np.ndarray, np.ndarray]:
+    """For every (right-hand piece, left-hand piece): how far crossed (m) and if conventional."""
+    x = np.array([p.position_m[0] for p in kit.pieces])
+    cymbal = np.array([p.kind.is_cymbal for p in kit.pieces])
+    depth = x[None, :] - x[:, None]  # [r, l]: > 0 when the right hand is left of the left
+    depth = np.where(depth > CROSS_TOL_M, depth, 0.0)
+    if kit.handedness == "right":
+        conventional = cymbal[:, None] & ~cymbal[None, :]
+    else:
+        conventional = ~cymbal[:, None] & cymbal[None, :]
+    conventional &= depth <= CONVENTIONAL_REACH_M
+    return depth, conventional
+
+
+def too_fast(sticking: Sticking, kit: Kit) -> np.ndarray:
+    """Per onset: a hand stroke too soon after the same hand's previous one (see above)."""
+    out = np.zeros(sticking.limb.size, dtype=bool)
+    gap = np.array([p.min_time_gap_s for p in kit.pieces])
+    t = sticking.onsets["time_s"]
+    for hand in (_RH, _LH):
+        idx = np.flatnonzero(sticking.limb == hand)
+        if idx.size < 2:
+            continue
+        dt = np.diff(t[idx])
+        pc = sticking.piece[idx]
+        same = pc[1:] == pc[:-1]
+        g = np.where(same, gap[pc[1:]], np.minimum(gap[pc[1:]], gap[pc[:-1]]))
+        double = same & (dt >= DOUBLE_STROKE_FACTOR * g) & (dt < g)
+        repeated = double & np.concatenate(([False], double[:-1]))
+        out[idx[1:]] = ((dt < g) & ~double) | repeated
+    return out
+
+
+def crossings(sticking: Sticking, kit: Kit) -> np.ndarray:
+    """Per onset: a hand stroke made with the arms unconventionally crossed (see above)."""
+    out = np.zeros(sticking.limb.size, dtype=bool)
+    t = sticking.onsets["time_s"]
+    depth, conventional = crossing_depth(kit)
+    bad = (depth > 0) & ~conventional
+    hands = np.flatnonzero((sticking.limb == _RH) | (sticking.limb == _LH))
+    chord_end = np.zeros(sticking.limb.size)
+    for group in chords(t[hands]):
+        chord_end[hands[group]] = t[hands[group[-1]]]
+    by_hand = {h: np.flatnonzero(sticking.limb == h) for h in (_RH, _LH)}
+    for hand, other in ((_RH, _LH), (_LH, _RH)):
+        mine, theirs = by_hand[hand], by_hand[other]
+        if mine.size == 0 or theirs.size == 0:
+            continue
+        tt = t[theirs]
+        j = np.searchsorted(tt, chord_end[mine], side="right") - 1
+        ok = j >= 0
+        jj = np.where(ok, j, 0)
+        ok &= t[mine] - tt[jj] <= STANCE_WINDOW_S
+        mp, op = sticking.piece[mine], sticking.piece[theirs][jj]
+        r, lft = (mp, op) if hand == _RH else (op, mp)
+        out[mine] = ok & bad[r, lft]
+    return out
+
+
+def dropped(sticking: Sticking) -> np.ndarray:
+    """Per onset: a note the kit could play but no limb plays."""
+    out: np.ndarray = (sticking.limb == NOT_PLAYED) & (sticking.piece >= 0)
+    return out
+
+
+def accuracy(sticking: Sticking, annotated: np.ndarray) -> tuple[int, int]:
+    """(matches, total) over the notes a teacher gave to a hand (annotated RH or LH)."""
+    mask = (annotated == _RH) | (annotated == _LH)
+    return int(np.count_nonzero(sticking.limb[mask] == annotated[mask])), int(mask.sum())
