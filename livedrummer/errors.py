@@ -31,3 +31,19 @@ class MidiFileError(LivedrummerError):
 
 class MidiInputError(LivedrummerError):
     """A live MIDI or serial source failed."""
+
+
+class ProtocolError(LivedrummerError):
+    """A message on the wire (ZeroMQ frames) is malformed, of another version, or too large."""
+
+
+class JournalError(LivedrummerError):
+    """A session journal cannot be written or read."""
+
+
+class PresetError(ConfigError):
+    """An expression preset file is wrong, or a preset name is unknown."""
+
+
+class UnreachableError(KitError):
+    """A piece of a kit lies out of the drummer's reach (named with the limb and the gap)."""

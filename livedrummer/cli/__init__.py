@@ -28,6 +28,9 @@ COMMANDS: tuple[str, ...] = (
     "kits",
     "sticking",
     "bench",
+    "input",
+    "ports",
+    "sessions",
 )
 
 
