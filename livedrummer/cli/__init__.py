@@ -31,6 +31,8 @@ COMMANDS: tuple[str, ...] = (
     "input",
     "ports",
     "sessions",
+    "render",
+    "display",
 )
 
 

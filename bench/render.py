@@ -1,0 +1,88 @@
+"""Render benchmark: ms per frame headless, with and without read-back, and export speed.
+
+Draws the rest-pose drummer and the demo groove's kit motion from the ``stage`` camera.
+``draw`` is draw + ``glFinish`` (what a window pays before swapping); ``draw+read`` adds the
+read-back of the frame into numpy (what export pays before encoding). Export speed is the
+whole ``livedrummer render`` job (audio mix, render, H.264/AAC encode) on the first
+``--seconds`` of the demo groove, as a multiple of real time. Prints medians of one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from livedrummer.cli.common import DEMO_MAP, demo_groove
+from livedrummer.cli.render import parse_size
+from livedrummer.kitfile import load_kit
+from livedrummer.midifile import read_midi_file
+from livedrummer.notemap import load_note_map
+from livedrummer.render.animate import kit_channels
+from livedrummer.render.camera import pick_camera
+from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.scene import SceneFrame
+from livedrummer.scene_rest import REST_SKELETON, rest_frame
+from services.display.context import headless_context
+from services.display.export import export
+from services.display.renderer import Renderer
+from services.display.video import VideoSettings
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="livedrummer bench render")
+    parser.add_argument("--sizes", default="1280x720,1920x1080")
+    parser.add_argument("--frames", type=int, default=120, help="frames per measurement")
+    parser.add_argument("--aa", type=int, default=0, help="multisample count")
+    parser.add_argument("--seconds", type=float, default=20.0, help="export length (0: skip)")
+    parser.add_argument("--export-fps", default="30,60")
+    args = parser.parse_args(argv)
+
+    kit = load_kit("rock5")
+    perf = read_midi_file(demo_groove(), load_note_map(DEMO_MAP))
+    ctx = headless_context()
+    print(f"render: {ctx.info['GL_RENDERER']} ({ctx.info['GL_VERSION']}), aa {args.aa}")
+    rest = rest_frame(kit)
+    cam = pick_camera(kit, "stage")
+    times = np.arange(args.frames) / 60.0 + 4.0
+    channels = kit_channels(perf.onsets, kit, times)
+    frames = [SceneFrame(rest.joints_m, rest.sticks_m, channels[i]) for i in range(args.frames)]
+    for text in args.sizes.split(","):
+        size = parse_size(text)
+        r = Renderer(ctx, build_kit_mesh(kit), REST_SKELETON, size, samples=args.aa)
+        r.draw(frames[0], cam)
+        r.read_rgba()
+        draw, read = [], []
+        for f in frames:
+            t0 = time.perf_counter()
+            r.draw(f, cam)
+            ctx.finish()
+            draw.append(time.perf_counter() - t0)
+        for f in frames:
+            t0 = time.perf_counter()
+            r.draw(f, cam)
+            r.read_rgba()
+            read.append(time.perf_counter() - t0)
+        d, rd = statistics.median(draw) * 1e3, statistics.median(read) * 1e3
+        print(f"  {text:>9}  draw {d:6.2f} ms ({1e3 / d:6.1f} fps)   "
+              f"draw+read {rd:6.2f} ms ({1e3 / rd:6.1f} fps)")  # fmt: skip
+    ctx.release()
+    if args.seconds > 0:
+        short = dataclasses.replace(
+            perf,
+            duration_s=min(perf.duration_s, args.seconds),
+            onsets=perf.onsets[perf.onsets["time_s"] < args.seconds],
+        )
+        with tempfile.TemporaryDirectory() as tmp:
+            for fps in (int(v) for v in args.export_fps.split(",")):
+                settings = VideoSettings(size=(1280, 720), fps=fps)
+                report = export(short, kit, out=Path(tmp) / "bench.mp4", settings=settings,
+                                tail_s=0.0, samples=args.aa)  # fmt: skip
+                print(f"  export 1280x720 @ {fps} fps: {report.frames} frames in "
+                      f"{report.wall_s:.2f} s = {report.realtime:.2f}x real time")  # fmt: skip
+    return 0

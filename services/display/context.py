@@ -1,0 +1,37 @@
+"""Headless OpenGL contexts: EGL first (Mesa llvmpipe where there is no GPU).
+
+``moderngl`` can create a stand-alone context through EGL without any display server, which
+is what a render farm, CI or a stage laptop over SSH has. When EGL cannot load (no libEGL,
+no Mesa), the error names the Debian packages that provide it (see ``deploy/system-deps.sh``).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from livedrummer.errors import LivedrummerError
+
+log = logging.getLogger(__name__)
+
+GL_VERSION = 330
+
+
+class DisplayError(LivedrummerError):
+    """No OpenGL context could be made, or a window or video file could not be opened."""
+
+
+def headless_context() -> Any:
+    """A stand-alone OpenGL 3.3 core context over EGL."""
+    import moderngl
+
+    try:
+        create: Any = moderngl.create_context  # its stub types ``backend`` wrongly
+        ctx = create(standalone=True, backend="egl", require=GL_VERSION)
+    except Exception as exc:  # moderngl/glcontext raise bare Exception subclasses
+        raise DisplayError(
+            f"no headless OpenGL context (EGL): {exc}; install libegl1 libegl-mesa0 "
+            "libgl1-mesa-dri (deploy/system-deps.sh)"
+        ) from None
+    log.info("OpenGL: %s, %s", ctx.info.get("GL_RENDERER"), ctx.info.get("GL_VERSION"))
+    return ctx

@@ -1,0 +1,248 @@
+"""The renderer: kit instances, body capsules and sticks drawn with the ``shaders/`` programs.
+
+Built once per (context, kit, skeleton, size): unit meshes are uploaded once; per frame only
+the instance buffers change. The kit's instances come from :meth:`KitMesh.instances` (one
+array for all pieces); the body goes in as joint positions gathered by the skeleton's parent
+index (one numpy gather, no per-joint Python loop) and the segment shader builds each
+capsule's basis on the GPU. Drawing is one instanced call per unit mesh and program.
+
+Off-screen, it draws into a texture framebuffer, or with ``samples > 0`` into a multisampled
+one resolved into it (multisampling costs about 4x on llvmpipe, so export defaults to none).
+:meth:`Renderer.read_rgb` returns top-down RGB rows as PNG writers expect;
+:meth:`Renderer.read_rgba` returns the driver's own bottom-up RGBA, the cheapest read-back,
+which the video encoder flips while converting to YUV. A window passes its framebuffer to
+:meth:`Renderer.draw`. Limits: no shadows, no transparency; every surface is opaque and lit by
+the same rig; the window must set :attr:`Renderer.size` when its framebuffer is resized.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from livedrummer.render.camera import Camera
+from livedrummer.render.geometry import Mesh, all_meshes
+from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
+from livedrummer.render.shaders import PROGRAMS, program_sources
+from livedrummer.scene import SceneFrame, Skeleton, Tone
+
+BACKGROUND = (0.02, 0.02, 0.035)
+#: colour per :class:`Tone`
+PALETTE = np.zeros((len(Tone), 3), np.float32)
+PALETTE[Tone.SHIRT] = (0.14, 0.26, 0.50)
+PALETTE[Tone.TROUSERS] = (0.10, 0.10, 0.12)
+PALETTE[Tone.SKIN] = (0.82, 0.60, 0.46)
+PALETTE[Tone.SHOES] = (0.85, 0.85, 0.85)
+PALETTE[Tone.HAIR] = (0.12, 0.07, 0.04)
+STICK_COLOR = (0.92, 0.78, 0.52)
+STICK_RADIUS_M = 0.0075
+SEGMENT_FLOATS = 15  # a xyz, b xyz, radius, colour rgba, material
+BALL_FLOATS = 12  # centre xyz radius, colour rgba, material
+
+
+class Renderer:
+    """Draws one kit and one skeleton; see the module docstring."""
+
+    def __init__(
+        self,
+        ctx: Any,
+        kit_mesh: KitMesh,
+        skeleton: Skeleton | None,
+        size: tuple[int, int],
+        *,
+        samples: int = 4,
+        offscreen: bool = True,
+    ) -> None:
+        self.ctx = ctx
+        self.kit_mesh = kit_mesh
+        self.skeleton = skeleton
+        self.size = size
+        self.programs = {
+            name: ctx.program(vertex_shader=v, fragment_shader=f)
+            for name, (v, f) in ((n, program_sources(n)) for n in PROGRAMS)
+        }
+        import moderngl
+
+        meshes = all_meshes()
+        self._vbo = {n: ctx.buffer(m.vertices.tobytes()) for n, m in meshes.items()}
+        self._ibo = {n: ctx.buffer(m.indices.tobytes()) for n, m in meshes.items()}
+        groups = kit_mesh.groups
+        self._kit_groups = {k: groups[k] for k in sorted(groups, key=lambda k: k == "floor")}
+        self._kit_vaos: list[tuple[Any, Any, np.ndarray]] = []
+        for name, idx in self._kit_groups.items():
+            buf = ctx.buffer(reserve=max(1, len(idx)) * INSTANCE_FLOATS * 4, dynamic=True)
+            program = "floor" if name == "floor" else "mesh"
+            vao = self._vao(program, meshes[name], buf, "16f 4f 4f/i",
+                            "in_model", "in_color", "in_material")  # fmt: skip
+            self._kit_vaos.append((vao, buf, idx))
+        self._body_setup(meshes)
+        self._fbo: Any = None
+        self._resolve: Any = None
+        if offscreen:
+            w, h = size
+            self._rgb = ctx.texture((w, h), 4)
+            self._rgb.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            plain = ctx.framebuffer(color_attachments=[self._rgb])
+            if samples > 0:
+                color = ctx.renderbuffer((w, h), 4, samples=samples)
+                depth = ctx.depth_renderbuffer((w, h), samples=samples)
+                self._fbo = ctx.framebuffer(color_attachments=[color], depth_attachment=depth)
+                self._resolve = plain
+            else:
+                depth = ctx.depth_renderbuffer((w, h))
+                self._fbo = ctx.framebuffer(color_attachments=[self._rgb], depth_attachment=depth)
+                self._resolve = self._fbo
+        self.samples = samples
+
+    def _vao(self, program: str, mesh: Mesh, inst: Any, fmt: str, *names: str) -> Any:
+        prog = self.programs[program]
+        return self.ctx.vertex_array(
+            prog,
+            [
+                _used(prog, self._vbo[mesh.name], "3f 3f", ("in_pos", "in_normal")),
+                _used(prog, inst, fmt, names),
+            ],
+            index_buffer=self._ibo[mesh.name],
+        )
+
+    def _body_setup(self, meshes: dict[str, Mesh]) -> None:
+        sk = self.skeleton
+        material = np.array([0.0, 14.0, MATERIAL_PLAIN, 0.0], np.float32)
+        if sk is None:
+            self._bones = np.zeros(0, np.int64)
+            self._balls = np.zeros(0, np.int64)
+        else:
+            self._bones = sk.bones[sk.segment_radius_m[sk.bones] > 0]
+            self._balls = np.flatnonzero(sk.joint_radius_m > 0)
+        nb = len(self._bones)
+        seg = np.zeros((nb + 2, SEGMENT_FLOATS), np.float32)
+        if sk is not None:
+            seg[:nb, 6] = sk.segment_radius_m[self._bones]
+            seg[:nb, 7:10] = PALETTE[sk.tone[self._bones]]
+        seg[nb:, 6] = STICK_RADIUS_M
+        seg[nb:, 7:10] = STICK_COLOR
+        seg[:, 11:15] = material
+        self._seg = seg
+        ball = np.zeros((len(self._balls), BALL_FLOATS), np.float32)
+        if sk is not None:
+            ball[:, 3] = sk.joint_radius_m[self._balls]
+            ball[:, 4:7] = PALETTE[sk.tone[self._balls]]
+        ball[:, 8:12] = material
+        self._ball = ball
+        self._seg_buf = self.ctx.buffer(reserve=seg.nbytes, dynamic=True)
+        self._ball_buf = self.ctx.buffer(reserve=max(ball.nbytes, 4), dynamic=True)
+        self._seg_vao = self._vao("segment", meshes["limb"], self._seg_buf,
+                                  "3f 3f 1f 4f 4f/i", "in_a", "in_b", "in_radius", "in_color",
+                                  "in_material")  # fmt: skip
+        self._ball_vao = self._vao("ball", meshes["sphere"], self._ball_buf, "4f 4f 4f/i",
+                                   "in_centre_radius", "in_color", "in_material")  # fmt: skip
+
+    def upload(self, frame: SceneFrame | None) -> None:
+        """Copy one frame's kit channels, joints and sticks into the instance buffers."""
+        channels = (
+            frame.channels if frame is not None else np.zeros((self.kit_mesh.pieces, 4), np.float32)
+        )
+        inst = self.kit_mesh.instances(channels)
+        for _vao, buf, idx in self._kit_vaos:
+            buf.write(inst[idx].tobytes())
+        self._draw_body = frame is not None
+        if frame is None:
+            return
+        frame.check(self.skeleton, self.kit_mesh.pieces)
+        nb = len(self._bones)
+        has_body = self.skeleton is not None and len(frame.joints_m) > 0
+        self._seg_count = len(self._seg) if has_body else 2
+        if has_body and self.skeleton is not None:
+            j = frame.joints_m
+            self._seg[:nb, 0:3] = j[self.skeleton.parent[self._bones]]
+            self._seg[:nb, 3:6] = j[self._bones]
+            self._ball[:, 0:3] = j[self._balls]
+        self._seg[nb:, 0:6] = frame.sticks_m.reshape(2, 6)
+        self._seg_buf.write(self._seg[nb:].tobytes() if not has_body else self._seg.tobytes())
+        self._ball_count = len(self._ball) if has_body else 0
+        if self._ball_count:
+            self._ball_buf.write(self._ball.tobytes())
+
+    def draw(self, frame: SceneFrame | None, camera: Camera, target: Any = None) -> None:
+        """Draw ``frame`` (None: the kit at rest and no drummer) seen from ``camera``."""
+        import moderngl
+
+        fbo = target if target is not None else self._fbo
+        fbo.use()
+        w, h = self.size
+        self.ctx.viewport = (0, 0, w, h)
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        self.ctx.disable(moderngl.CULL_FACE)
+        fbo.clear(*BACKGROUND, 1.0, depth=1.0)
+        self.upload(frame)
+        vp = camera.view_projection(w / h)
+        centre = self.kit_mesh.model[0, :3, 3] if len(self.kit_mesh.model) else np.zeros(3)
+        eye = np.asarray(camera.eye, np.float32)
+        uniforms: dict[str, Any] = {
+            "u_view_proj": vp.T.tobytes(),
+            "u_eye": tuple(eye),
+            "u_key_pos": (float(centre[0]) - 1.6, float(centre[1]) + 3.2, 3.6),
+            "u_key_color": (1.05, 0.95, 0.82),
+            "u_rim_dir": tuple(np.array([0.35, -0.8, 0.5]) / np.linalg.norm([0.35, -0.8, 0.5])),
+            "u_rim_color": (0.45, 0.62, 1.0),
+            "u_stage_centre": (float(centre[0]), float(centre[1]), 0.0),
+            "u_stage_radius": STAGE_RADIUS_M,
+        }
+        for prog in self.programs.values():
+            for name, value in uniforms.items():
+                if name in prog:
+                    if name == "u_view_proj":
+                        prog[name].write(value)
+                    else:
+                        prog[name].value = value
+        # Nearest and largest first, the floor last: hidden fragments fail the depth test
+        # before they are shaded (llvmpipe tests depth early for these shaders).
+        if self._draw_body:
+            self._seg_vao.render(instances=self._seg_count)
+            if self._ball_count:
+                self._ball_vao.render(instances=self._ball_count)
+        for vao, _buf, idx in self._kit_vaos:
+            vao.render(instances=len(idx))
+
+    def _resolved(self) -> None:
+        if self.samples > 0:
+            self.ctx.copy_framebuffer(self._resolve, self._fbo)
+
+    def read_rgb(self) -> np.ndarray:
+        """The last off-screen frame as (H, W, 3) uint8, top row first."""
+        w, h = self.size
+        self._resolved()
+        data = self._resolve.read(components=3, alignment=1)
+        return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1]
+
+    def read_rgba(self) -> np.ndarray:
+        """The last off-screen frame as (H, W, 4) uint8, bottom row first (GL order).
+
+        The driver's native layout: the fastest read-back; the encoder flips it for free.
+        """
+        w, h = self.size
+        self._resolved()
+        return np.frombuffer(self._resolve.read(components=4, alignment=1), np.uint8).reshape(
+            h, w, 4
+        )
+
+    def finish(self) -> None:
+        self.ctx.finish()
+
+
+def _used(prog: Any, buf: Any, fmt: str, names: tuple[str, ...]) -> tuple[Any, ...]:
+    """A buffer binding that skips attributes the linker optimized out of ``prog``."""
+    tokens = fmt.split()
+    divisor = tokens[-1][tokens[-1].index("/") :] if "/" in tokens[-1] else ""
+    tokens = [t.split("/")[0] for t in tokens]
+    keep: list[str] = []
+    out: list[str] = []
+    for token, name in zip(tokens, names, strict=True):
+        if name in prog:
+            out.append(token)
+            keep.append(name)
+        else:
+            count = int(token[:-1] or 1)
+            out.append(f"{4 * count}x")
+    return (buf, " ".join(out) + divisor, *keep)

@@ -1,0 +1,154 @@
+"""Video files through PyAV (FFmpeg bundled in its wheels): H.264 + AAC in MP4.
+
+Why PyAV and not a pipe to an ``ffmpeg`` binary: the wheels carry FFmpeg with libx264 and the
+AAC encoder, so a clean clone needs no system FFmpeg, and frames go in as numpy arrays without
+a subprocess. The audio track is encoded first, whole (the muxer interleaves it with video by
+timestamp); video frames are converted RGBA -> YUV 4:2:0 (BT.709) and encoded on a worker
+thread (:class:`VideoWriter`), so the next frame renders while this one encodes.
+
+Limits: even width and height (4:2:0 chroma); constant frame rate; one stereo audio track;
+AAC pads its last frame, so a decoder may return up to 1024 samples (21 ms) more than was
+written.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from services.display.context import DisplayError
+
+AUDIO_FRAME = 1024  # samples per AAC frame
+CONTAINERS = (".mp4", ".m4v", ".mov", ".mkv")
+
+
+@dataclass(frozen=True)
+class VideoSettings:
+    size: tuple[int, int] = (1280, 720)
+    fps: int = 60
+    crf: int = 20
+    preset: str = "veryfast"
+    sample_rate: int = 48_000
+
+
+class _Encoder:
+    """The PyAV side: an open MP4 with one H.264 and one AAC stream (runs in the child)."""
+
+    def __init__(self, path: str, settings: VideoSettings) -> None:
+        import av
+
+        w, h = settings.size
+        self.settings = settings
+        self.container: Any = av.open(path, mode="w")
+        stream = self.container.add_stream("libx264", rate=settings.fps)
+        stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
+        stream.options = {
+            "crf": str(settings.crf),
+            "preset": settings.preset,
+            "x264-params": "colorprim=bt709:transfer=bt709:colormatrix=bt709:range=tv",
+        }
+        self.video = stream
+        self.audio = self.container.add_stream("aac", rate=settings.sample_rate)
+        self.audio.layout = "stereo"
+
+    def write_audio(self, stereo: np.ndarray) -> None:
+        import av
+
+        planar = np.ascontiguousarray(stereo.T, dtype=np.float32)
+        sr = self.settings.sample_rate
+        for start in range(0, planar.shape[1], AUDIO_FRAME):
+            chunk = np.ascontiguousarray(planar[:, start : start + AUDIO_FRAME])
+            frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout="stereo")
+            frame.sample_rate = sr
+            frame.pts = start
+            frame.time_base = Fraction(1, sr)
+            for packet in self.audio.encode(frame):
+                self.container.mux(packet)
+        for packet in self.audio.encode(None):
+            self.container.mux(packet)
+
+    def write(self, rgba_bottom_up: np.ndarray) -> None:
+        import av
+
+        frame = av.VideoFrame.from_ndarray(
+            np.ascontiguousarray(rgba_bottom_up[::-1]), format="rgba"
+        ).reformat(format="yuv420p", dst_colorspace="ITU709")
+        for packet in self.video.encode(frame):
+            self.container.mux(packet)
+
+    def close(self) -> None:
+        for packet in self.video.encode(None):
+            self.container.mux(packet)
+        self.container.close()
+
+
+class VideoWriter:
+    """Writes bottom-up RGBA frames and one stereo track to an MP4, encoding on a thread.
+
+    PyAV releases the GIL while FFmpeg converts and encodes, so the thread runs beside the
+    renderer. (A child process was tried: on a two-core machine it was slower, because the
+    machine is short of cores, not of interpreter.)
+    """
+
+    def __init__(self, path: Path, settings: VideoSettings) -> None:
+        w, h = settings.size
+        if w % 2 or h % 2:
+            raise DisplayError(f"video size {w}x{h}: width and height must be even")
+        path = Path(path)
+        if path.suffix.lower() not in CONTAINERS:
+            raise DisplayError(
+                f"video file {path}: unknown type {path.suffix!r}; use {', '.join(CONTAINERS)}"
+            )
+        if not path.parent.is_dir():
+            raise DisplayError(f"video file {path}: folder {path.parent} does not exist")
+        try:
+            self._enc = _Encoder(str(path), settings)
+        except (OSError, ValueError) as exc:  # PyAV's errors are OSError subclasses
+            raise DisplayError(f"cannot write video {path}: {exc}") from None
+        self.path = path
+        self.settings = settings
+        self._queue: queue.Queue[np.ndarray | None] = queue.Queue(maxsize=3)
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._loop, name="video-encode", daemon=True)
+        self._thread.start()
+        self.frames = 0
+
+    def write_audio(self, stereo: np.ndarray) -> None:
+        """The whole track, (N, 2) float32 at the settings' sample rate; once, before frames."""
+        try:
+            self._enc.write_audio(stereo)
+        except (OSError, ValueError) as exc:
+            raise DisplayError(f"cannot write video {self.path}: {exc}") from None
+
+    def write(self, rgba_bottom_up: np.ndarray) -> None:
+        """Queue one (H, W, 4) uint8 frame in OpenGL row order (bottom row first)."""
+        if self._error is not None:
+            raise DisplayError(f"video encoding failed: {self._error}")
+        self._queue.put(rgba_bottom_up)
+        self.frames += 1
+
+    def _loop(self) -> None:
+        try:
+            while (image := self._queue.get()) is not None:
+                self._enc.write(image)
+        except Exception as exc:  # surfaced on the caller's thread by write()/close()
+            self._error = exc
+            while self._queue.get() is not None:
+                pass
+
+    def close(self) -> None:
+        self._queue.put(None)
+        self._thread.join()
+        if self._error is not None:
+            self._enc.container.close()
+            raise DisplayError(f"video encoding failed: {self._error}")
+        try:
+            self._enc.close()
+        except (OSError, ValueError) as exc:
+            raise DisplayError(f"cannot write video {self.path}: {exc}") from None

@@ -1,0 +1,163 @@
+"""The window: the drummer on a monitor or projector, with camera keys and file transport.
+
+GLFW makes the window and its OpenGL 3.3 core context (windowed, or full screen on a chosen
+monitor for a projector); the same :class:`~services.display.renderer.Renderer` draws into the
+window's framebuffer. Each frame the loop asks its clock how much time passed, advances the
+:class:`~livedrummer.render.transport.Transport`, evaluates the scene at the transport's
+position and swaps; keys go through :data:`~livedrummer.render.transport.KEYS` (transport),
+1..8 (cameras, with a smooth move), F (full screen) and Q/Esc (quit). The clock is injected
+(default ``time.monotonic``) as the style guide asks; with sound it would be the audio stream's.
+
+Limits: no sound in the window yet, no score or joint-angle overlays; resizing keeps the
+aspect ratio of the new size but not the pixel density of a HiDPI monitor.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from livedrummer.kit import Kit
+from livedrummer.performance import Performance
+from livedrummer.render.animate import kit_channels
+from livedrummer.render.camera import CAMERA_NAMES, CameraMove, kit_cameras
+from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.transport import KEYS, Transport
+from livedrummer.scene import SceneFrame
+from livedrummer.scene_rest import REST_SKELETON, rest_frame
+from services.display.context import DisplayError
+from services.display.renderer import Renderer
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class WindowOptions:
+    size: tuple[int, int] = (1280, 720)
+    fullscreen: bool = False
+    monitor: int = 0
+    camera: str = "stage"
+    samples: int = 4
+    vsync: bool = True
+    quit_after_s: float | None = None  # close by itself (demos, smoke tests)
+
+
+DEFAULT_OPTIONS = WindowOptions()
+
+
+def key_name(glfw: Any, key: int, mods: int) -> str:
+    """GLFW key code and modifiers as the names :data:`KEYS` uses."""
+    names = {
+        glfw.KEY_SPACE: "space", glfw.KEY_RIGHT: "right", glfw.KEY_LEFT: "left",
+        glfw.KEY_HOME: "home", glfw.KEY_END: "end", glfw.KEY_EQUAL: "equal",
+        glfw.KEY_MINUS: "minus", glfw.KEY_KP_ADD: "kp_add",
+        glfw.KEY_KP_SUBTRACT: "kp_subtract", glfw.KEY_LEFT_BRACKET: "left_bracket",
+        glfw.KEY_RIGHT_BRACKET: "right_bracket", glfw.KEY_ESCAPE: "escape",
+    }  # fmt: skip
+    if key in names:
+        name = names[key]
+    elif glfw.KEY_A <= key <= glfw.KEY_Z:
+        name = chr(ord("a") + key - glfw.KEY_A)
+    elif glfw.KEY_0 <= key <= glfw.KEY_9:
+        name = chr(ord("0") + key - glfw.KEY_0)
+    else:
+        return ""
+    return f"shift+{name}" if mods & glfw.MOD_SHIFT and name in ("left", "right") else name
+
+
+def show(
+    performance: Performance,
+    kit: Kit,
+    options: WindowOptions = DEFAULT_OPTIONS,
+    clock: Callable[[], float] = time.monotonic,
+) -> None:
+    """Open the window and play ``performance`` until the user quits."""
+    import glfw
+    import moderngl
+
+    glfw.ERROR_REPORTING = "log"  # GLFW's complaints go to logging, not to warnings
+    if not glfw.init():
+        raise DisplayError("no display for a window (is DISPLAY set?); use `livedrummer render`")
+    try:
+        glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
+        glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
+        glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
+        glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
+        glfw.window_hint(glfw.SAMPLES, options.samples)
+        monitor = None
+        size = options.size
+        if options.fullscreen:
+            monitors = glfw.get_monitors()
+            if not 0 <= options.monitor < len(monitors):
+                raise DisplayError(f"monitor {options.monitor}: there are {len(monitors)}")
+            monitor = monitors[options.monitor]
+            mode = glfw.get_video_mode(monitor)
+            size = (mode.size.width, mode.size.height)
+        window = glfw.create_window(size[0], size[1], "livedrummer", monitor, None)
+        if not window:
+            raise DisplayError("could not open an OpenGL 3.3 window")
+        glfw.make_context_current(window)
+        glfw.swap_interval(1 if options.vsync else 0)
+        ctx = moderngl.create_context()
+        _loop(glfw, window, ctx, performance, kit, options, clock)
+    finally:
+        glfw.terminate()
+
+
+def _loop(
+    glfw: Any,
+    window: Any,
+    ctx: Any,
+    performance: Performance,
+    kit: Kit,
+    options: WindowOptions,
+    clock: Callable[[], float],
+) -> None:
+    transport = Transport(performance.duration_s + 1.0)
+    cameras = kit_cameras(kit)
+    move = CameraMove(cameras[options.camera], cameras[options.camera], 0.0, 0.0)
+    rest = rest_frame(kit)
+    mesh = build_kit_mesh(kit)
+    size = glfw.get_framebuffer_size(window)
+    renderer = Renderer(ctx, mesh, REST_SKELETON, size, offscreen=False)
+    pending: list[str] = []
+
+    def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
+        if action in (glfw.PRESS, glfw.REPEAT):
+            pending.append(key_name(glfw, key, mods))
+
+    glfw.set_key_callback(window, on_key)
+    transport.apply("play_pause")
+    last = started = clock()
+    frames = 0
+    while not glfw.window_should_close(window):
+        if options.quit_after_s is not None and last - started >= options.quit_after_s:
+            break
+        glfw.poll_events()
+        now = clock()
+        for name in pending:
+            if name in ("q", "escape"):
+                glfw.set_window_should_close(window, True)
+            elif name in KEYS:
+                transport.apply(KEYS[name])
+            elif name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
+                current = move.at(now)
+                move = CameraMove(current, cameras[CAMERA_NAMES[int(name) - 1]], now)
+        pending.clear()
+        t = transport.advance(now - last)
+        last = now
+        fb = glfw.get_framebuffer_size(window)
+        if fb != renderer.size and fb[0] > 0 and fb[1] > 0:
+            renderer.size = fb
+        channels = kit_channels(performance.onsets, kit, np.array([t]))[0]
+        frame = SceneFrame(rest.joints_m, rest.sticks_m, channels, t)
+        renderer.draw(frame, move.at(now), target=ctx.screen)
+        glfw.swap_buffers(window)
+        frames += 1
+    elapsed = clock() - started
+    log.info("window: %d frames in %.2f s (%.1f fps)", frames, elapsed, frames / max(elapsed, 1e-9))

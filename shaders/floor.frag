@@ -1,0 +1,21 @@
+#version 330
+// The stage floor, cheaper than lit.frag because it covers most of the frame: planks, and a
+// pool of key light around the kit that fades into the dark hall (no specular, no rim).
+uniform vec3 u_stage_centre;
+uniform float u_stage_radius;
+
+in vec3 v_pos;
+in vec3 v_normal;
+in vec4 v_color;
+flat in vec4 v_material;
+in float v_ring;
+
+out vec4 f_color;
+
+void main() {
+    float d = length(v_pos.xy - u_stage_centre.xy);
+    float pool = 1.0 - smoothstep(0.4, u_stage_radius, d);
+    float plank = 0.88 + 0.12 * step(0.5, fract(v_pos.x * 6.0));
+    vec3 c = v_color.rgb * plank * (0.12 + 1.25 * pool * pool) * vec3(1.05, 0.95, 0.85);
+    f_color = vec4(c, 1.0);
+}

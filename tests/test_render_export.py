@@ -1,0 +1,130 @@
+"""``livedrummer render``: a video read back with PyAV matches the performance, frame and sample.
+
+PyAV here is the independent reader: the test opens the file itself and does not use the
+project's own read-back helper. Small frames (160x90) keep the test fast on llvmpipe.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import av
+import mido
+import numpy as np
+import pytest
+
+from livedrummer.cli import main
+from livedrummer.midifile import read_midi_file
+from livedrummer.notemap import load_note_map
+from services.display.context import DisplayError, headless_context
+
+FPS = 30
+TAIL_S = 0.5
+# General MIDI: 36 kick, 38 snare, 42 closed hi-hat, 49 crash. 480 ticks per beat at 120 bpm.
+NOTES = [(0, 36, 110), (240, 38, 100), (360, 42, 90), (600, 49, 120), (480, 36, 127)]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def needs_egl() -> None:
+    try:
+        headless_context().release()
+    except DisplayError as exc:
+        pytest.skip(str(exc))
+
+
+@pytest.fixture
+def groove(write_midi) -> Path:  # type: ignore[no-untyped-def]
+    msgs: list[mido.Message] = [mido.MetaMessage("set_tempo", tempo=500_000, time=0)]
+    for delta, note, vel in NOTES:
+        msgs.append(mido.Message("note_on", channel=9, note=note, velocity=vel, time=delta))
+        msgs.append(mido.Message("note_off", channel=9, note=note, velocity=0, time=30))
+    path: Path = write_midi(msgs)
+    return path
+
+
+def read_back(path: Path) -> tuple[int, float, np.ndarray, int, tuple[int, int]]:
+    with av.open(str(path)) as c:
+        vs = c.streams.video[0]
+        pts = [float(f.pts * f.time_base) for f in c.decode(vs)]
+        size = (vs.codec_context.width, vs.codec_context.height)
+    with av.open(str(path)) as c:
+        a = c.streams.audio[0]
+        audio = np.concatenate([f.to_ndarray() for f in c.decode(a)], axis=1).T
+        rate = a.rate
+    return len(pts), pts[-1] + 1 / FPS, audio, rate, size
+
+
+def test_video_frames_audio_and_onsets_line_up(groove: Path, tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    out = tmp_path / "out.mp4"
+    code = main(["render", str(groove), "-o", str(out), "--size", "160x90", "--fps", str(FPS),
+                 "--tail", str(TAIL_S), "--camera", "front"])  # fmt: skip
+    assert code == 0
+    assert "wrote" in capsys.readouterr().out
+    perf = read_midi_file(groove, load_note_map("general-midi"))
+    expected_frames = math.ceil((perf.duration_s + TAIL_S) * FPS)
+    frames, video_s, audio, rate, size = read_back(out)
+    assert size == (160, 90)
+    assert frames == expected_frames
+    assert video_s == pytest.approx(expected_frames / FPS, abs=1e-6)
+    audio_s = len(audio) / rate
+    assert abs(audio_s - video_s) < 1 / FPS
+    # Each onset's attack: the loudest moment of the track near it is within one frame.
+    env = np.abs(audio).max(axis=1)
+    frame_n = int(rate / FPS)
+    for t in perf.onsets["time_s"]:
+        start = int(t * rate)
+        window = env[max(0, start - frame_n) : start + frame_n]
+        peak_at = (max(0, start - frame_n) + int(np.argmax(window))) / rate
+        assert abs(peak_at - t) < 1 / FPS, (t, peak_at)
+        quiet_before = env[max(0, start - 3 * frame_n) : max(0, start - frame_n)]
+        if quiet_before.size and t > 0.1:
+            # A real attack: louder than the tail of what came before.
+            assert window.max() > 1.2 * quiet_before[-frame_n // 2 :].max()
+    assert env[: int(perf.onsets["time_s"][0] * rate)].max(initial=0) < 0.01
+
+
+def test_frames_folder_gets_pngs(groove: Path, tmp_path: Path) -> None:
+    frames = tmp_path / "frames"
+    code = main(["render", str(groove), "--frames", str(frames), "--size", "96x54",
+                 "--fps", "10", "--tail", "0"])  # fmt: skip
+    assert code == 0
+    pngs = sorted(frames.glob("*.png"))
+    perf = read_midi_file(groove, load_note_map("general-midi"))
+    assert len(pngs) == math.ceil(perf.duration_s * 10)
+    with av.open(str(pngs[3])) as c:
+        img = next(iter(c.decode(video=0))).to_ndarray(format="rgb24")
+    assert img.shape == (54, 96, 3)
+    assert img.std() > 5  # a scene, not a blank frame
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--size", "1280x721"], "even"),
+        (["--size", "big"], "WIDTHxHEIGHT"),
+        (["--fps", "0"], "--fps"),
+        (["--kit", "no-such-kit"], "no-such-kit"),
+    ],
+)
+def test_bad_options_are_one_line_errors(groove: Path, tmp_path: Path, capsys, argv: list[str],  # type: ignore[no-untyped-def]
+                                         message: str) -> None:  # fmt: skip
+    code = main(["render", str(groove), "-o", str(tmp_path / "x.mp4"), *argv])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize(("name", "message"), [("x.txt", "unknown type"), ("no/x.mp4", "folder")])
+def test_bad_output_is_a_one_line_error(groove: Path, tmp_path: Path, capsys, name: str,  # type: ignore[no-untyped-def]
+                                        message: str) -> None:  # fmt: skip
+    code = main(["render", str(groove), "-o", str(tmp_path / name), "--size", "64x36"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_missing_midi_file_is_an_error(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    code = main(["render", str(tmp_path / "none.mid"), "-o", str(tmp_path / "x.mp4")])
+    assert code == 2
+    assert "none.mid" in capsys.readouterr().err
