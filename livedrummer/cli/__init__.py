@@ -31,8 +31,12 @@ COMMANDS: tuple[str, ...] = (
     "input",
     "ports",
     "sessions",
+    "check",
+    "export",
     "render",
     "display",
+    "synth",
+    "up",
 )
 
 

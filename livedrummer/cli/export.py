@@ -1,0 +1,74 @@
+"""``livedrummer export FILE.mid -o out.bvh``: the drummer's motion as a BVH file.
+
+Animates the file on the kit (fallback limb assignment until the sticking module lands) and
+samples it at ``--fps`` from the first onset minus a second to the last plus a second.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from livedrummer.cli.common import Subparsers, add_command, add_kit_option, add_map_option
+from livedrummer.errors import LivedrummerError
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "export", run, "export the drummer's motion as BVH")
+    p.add_argument("file", help="Standard MIDI File")
+    p.add_argument("-o", "--output", required=True, help="output .bvh path")
+    p.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
+    add_kit_option(p)
+    add_map_option(p)
+    p.add_argument("--preset", default=None, help="expression preset name or .toml path")
+    p.add_argument(
+        "--sticking",
+        default="fallback",
+        help="limb assignment: fallback (default) or a livedrummer.sticking strategy",
+    )
+    p.add_argument(
+        "--strokes",
+        default="livedrummer",
+        choices=("livedrummer", "paper", "smed"),
+        help="stroke overlap rules (default livedrummer)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from livedrummer.body.bvh import bvh_text
+    from livedrummer.body.expression import load_expression
+    from livedrummer.body.perform import named_sticking, perform
+    from livedrummer.body.rig import build_rig
+    from livedrummer.body.strokes import StrokeParams
+    from livedrummer.kitfile import load_kit
+    from livedrummer.midifile import read_midi_file
+    from livedrummer.notemap import load_note_map
+
+    if not 1.0 <= args.fps <= 1000.0:
+        raise LivedrummerError(f"--fps must be between 1 and 1000 (got {args.fps})")
+    note_map = load_note_map(args.map)
+    rig = build_rig(load_kit(args.kit))
+    performance = read_midi_file(args.file, note_map)
+    expression = load_expression(args.preset) if args.preset else None
+    done = perform(
+        performance,
+        rig,
+        note_map,
+        expression,
+        StrokeParams(model=args.strokes),
+        sticking=named_sticking(args.sticking),
+    )
+    t = performance.onsets["time_s"]
+    start = max(0.0, float(t.min()) - 1.0) if t.size else 0.0
+    end = float(t.max()) + 1.0 if t.size else 1.0
+    times = np.arange(start, end, 1.0 / args.fps)
+    local, root = done.animation.locals(times)
+    out = Path(args.output)
+    try:
+        out.write_text(bvh_text(rig.skeleton, local, root, args.fps))
+    except OSError as exc:
+        raise LivedrummerError(f"{out}: cannot write: {exc.strerror or exc}") from exc
+    print(f"{out}: {times.size} frames at {args.fps:g} fps, {len(local[0])} joints")
+    return 0
