@@ -3,7 +3,7 @@
 * ``sample``: one animated groove sampled at ``--samples`` times in one call (curves, leg IK,
   forward kinematics, no kit channels); figure = samples x 24 joints / seconds (goal >= 1e6).
 * ``corpus``: every Groove MIDI Dataset file read first (not timed), then limb assignment
-  (the fallback until livedrummer.sticking lands), torso, arm IK at every onset, stroke keys,
+  (the optimal strategy), torso, arm IK at every onset, stroke keys,
   curves and the clearance search, timed together (goal < 30 s).
 Figures are from one run (``--repeat`` takes the median); nothing asserts on time.
 """

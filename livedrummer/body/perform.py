@@ -1,8 +1,9 @@
 """One call from a performance to an animated body: sticking, hi-hat pedal, torso, strokes.
 
 The CLI commands, benchmarks and (later) services all start here, so they cannot disagree on
-how a performance is animated. Limb assignment is a parameter: until
-:mod:`livedrummer.sticking` provides strategies, :func:`fallback_sticking` is the default.
+how a performance is animated. Limb assignment is a parameter: the ``optimal`` strategy of
+:mod:`livedrummer.sticking` by default; :func:`fallback_sticking` (preferred limbs with simple
+alternation) stays selectable as ``"fallback"`` for comparison.
 """
 
 from __future__ import annotations
@@ -58,9 +59,10 @@ def perform(
     expression: Expression | None = None,
     strokes: StrokeParams | None = None,
     secondary: SecondaryParams | None = None,
-    sticking: StickingFn = fallback_sticking,
+    sticking: StickingFn | None = None,
 ) -> Performed:
-    st = sticking(performance.onsets, rig.kit, rig.hand_ok)
+    assign = sticking if sticking is not None else named_sticking("optimal")
+    st = assign(performance.onsets, rig.kit, rig.hand_ok)
     if st.onsets.size and np.any(np.diff(st.onsets["time_s"]) < 0):
         raise ValueError("a sticking's onsets must be sorted by time")
     cc_open = np.array([note_map.openness(v) for v in range(128)])

@@ -1,6 +1,6 @@
 """``livedrummer check FILE.mid...``: is the drummer's motion physically true?
 
-Animates each file on the kit (fallback limb assignment until the sticking module lands) and
+Animates each file on the kit (optimal limb assignment unless --sticking says otherwise) and
 measures contact error at every onset, the deepest stick-tip penetration and joint-limit
 violations (see :mod:`livedrummer.body.check`). Several files or folders are checked one by
 one and summarised together (max over files; p99 and mean over all onsets).
@@ -27,8 +27,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--preset", default=None, help="expression preset name or .toml path")
     p.add_argument(
         "--sticking",
-        default="fallback",
-        help="limb assignment: fallback (default) or a livedrummer.sticking strategy",
+        default="optimal",
+        help="limb assignment: a livedrummer.sticking strategy (default optimal) or fallback",
     )
     p.add_argument(
         "--strokes",

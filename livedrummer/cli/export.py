@@ -1,6 +1,6 @@
 """``livedrummer export FILE.mid -o out.bvh``: the drummer's motion as a BVH file.
 
-Animates the file on the kit (fallback limb assignment until the sticking module lands) and
+Animates the file on the kit (optimal limb assignment unless --sticking says otherwise) and
 samples it at ``--fps`` from the first onset minus a second to the last plus a second.
 """
 
@@ -25,8 +25,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--preset", default=None, help="expression preset name or .toml path")
     p.add_argument(
         "--sticking",
-        default="fallback",
-        help="limb assignment: fallback (default) or a livedrummer.sticking strategy",
+        default="optimal",
+        help="limb assignment: a livedrummer.sticking strategy (default optimal) or fallback",
     )
     p.add_argument(
         "--strokes",
