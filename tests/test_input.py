@@ -358,7 +358,11 @@ def test_remote_source_relays_another_daemon_and_flags_it(
         wait_subscribers=1,
     )
     remote_src.endpoint = site_a.endpoints["pub"]
-    site_b, thread_b, stop_b = start_daemon(remote_src, clock, ctx, tmp_path / "b", performer=8)
+    # Site B opens its remote source only once the test subscribes, so nothing is relayed
+    # before anyone listens (PUB/SUB drops messages sent before a subscription arrives).
+    site_b, thread_b, stop_b = start_daemon(
+        remote_src, clock, ctx, tmp_path / "b", performer=8, wait_subscribers=1
+    )
     try:
         sub = Subscriber(ctx, site_b.endpoints["pub"])
         sub.collect(

@@ -27,9 +27,25 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
     p.add_argument("--aa", type=int, default=4, metavar="N", help="multisample N (default 4)")
     p.add_argument("--quit-after", type=float, metavar="S", help="close after S seconds")
+    live = p.add_argument_group("live (poses from a running synth)")
+    live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
+    live.add_argument("--sub", default="tcp://127.0.0.1:5720",
+                      help="the synth's pose endpoint (default tcp://127.0.0.1:5720)")  # fmt: skip
+    live.add_argument("--headless", action="store_true", help="no window: render off screen")
+    live.add_argument("--frames", type=int, metavar="N", help="stop after N frames")
+    live.add_argument("--out", type=Path, metavar="DIR",
+                      help="write frame PNGs and frames.jsonl into DIR")  # fmt: skip
+    live.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
+    live.add_argument("--clock", choices=("auto", "audio", "monotonic"), default="auto",
+                      help="frame clock: the audio output's (auto: when not headless)")  # fmt: skip
+    live.add_argument("--no-png", action="store_true", help="--out: frames.jsonl only, no PNGs")
+    live.add_argument("--no-render", action="store_true",
+                      help="only log frames (benchmarks without a GPU context)")  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.live:
+        return run_live(args)
     from livedrummer.kitfile import load_kit
     from livedrummer.midifile import read_midi_file
     from livedrummer.notemap import load_note_map
@@ -44,3 +60,66 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     show(performance, load_kit(args.kit), options)
     return 0
+
+
+def run_live(args: argparse.Namespace) -> int:
+    """``--live``: subscribe to poses and render them on the frame clock until stopped."""
+    import json
+    import signal
+    import sys
+    import threading
+    from types import FrameType
+
+    import zmq
+
+    from livedrummer.errors import ConfigError
+    from livedrummer.kitfile import load_kit
+    from livedrummer.live.calibration import Calibration
+    from services.display.live import (
+        AudioFrameClock,
+        FrameClock,
+        LiveConfig,
+        LiveDisplay,
+        MonotonicFrameClock,
+    )
+    from services.notify import ready
+
+    if not args.headless:
+        raise ConfigError("display --live: only --headless is implemented yet (no live window)")
+    if args.frames is not None and args.frames < 1:
+        raise ConfigError(f"--frames: expected >= 1 (got {args.frames})")
+    if not 0 < args.fps <= 1000:
+        raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps})")
+    calibration = Calibration.load()
+    clock: FrameClock
+    if args.clock == "audio":
+        clock = AudioFrameClock(calibration.audio_ms / 1000.0)
+    else:
+        clock = MonotonicFrameClock(calibration.audio_ms / 1000.0)
+    config = LiveConfig(
+        sub=args.sub, fps=args.fps, frames=args.frames, out=args.out,
+        size=parse_size(args.size), camera=args.camera,
+        display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
+        png=not args.no_png,
+    )  # fmt: skip
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    display = LiveDisplay(load_kit(args.kit), config, clock, ctx)
+    stop = threading.Event()
+
+    def on_signal(signum: int, _frame: FrameType | None) -> None:
+        stop.set()
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    try:
+        display.start()
+        print(json.dumps({"service": "display", "sub": args.sub}), flush=True)
+        ready(args.sub)
+        code = display.run(stop)
+    finally:
+        ctx.term()
+    s = display.summary()
+    where = f" into {args.out}" if args.out else ""
+    print(f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "
+          f"{s['missing']} pose messages lost", file=sys.stderr)  # fmt: skip
+    return code

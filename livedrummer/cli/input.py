@@ -57,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.notemap import load_note_map
     from services.input.base import Source
     from services.input.daemon import DaemonConfig, InputDaemon
+    from services.notify import ready
 
     if not 0 <= args.performer <= 0xFFFF:
         raise ConfigError(f"--performer: expected 0..65535 (got {args.performer})")
@@ -107,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         endpoints = daemon.start()
         print(json.dumps({"service": "input", **endpoints}), flush=True)
+        ready(endpoints.get("pub", ""))
         code = daemon.run(stop)
     finally:
         ctx.term()

@@ -1,0 +1,236 @@
+"""End-to-end latency of the live pipeline: JACK note-on → bus → pose → rendered frame.
+
+Starts a ``jackd -d dummy -S`` server (Debian jackd2) with a virtual rtmidi output port as
+the kit, then for each rate (default 1, 100 and 1,000 notes/s) a fresh pipeline of three
+processes: ``livedrummer input`` on that port, ``livedrummer synth`` and ``livedrummer
+display --live --headless`` (frames rendered off screen, not written, logged in
+``frames.jsonl``). Notes alternate snare and hi-hat, so each should get a hand and a contact
+sample. Measured per note, on the shared clock, from the moment the note-on is sent:
+
+* JACK loopback: an rtmidi input port on the same server, connected to the kit (reference);
+* onset on the bus: a subscriber to the input daemon receives the ONSET;
+* pose available: a subscriber to the synth receives the POSE message holding the note's
+  contact sample (show time = onset stamp + D);
+* frame rendered: the display has finished the first frame that drew that sample or a later one.
+
+Prints p50/p99 per stage and rate and the counts lost at each stage (sent vs on the bus, on
+the bus vs contact samples; a note the sticking leaves out, e.g. a third hand note of a
+chord, has no contact sample). Figures from one run; no assertions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import zmq
+
+from livedrummer import protocol as p
+from livedrummer.body.pose import pose_dtype
+from livedrummer.clock import MonotonicClock
+from livedrummer.kitfile import load_kit
+
+REPO = Path(__file__).resolve().parent.parent
+NOTES = (38, 42)  # snare head, closed hi-hat (roland-td)
+
+
+def _spawn(args: list[str], home: str, err: Path) -> subprocess.Popen[str]:
+    env = {**os.environ, "LIVEDRUMMER_HOME": home}
+    env.pop("DISPLAY", None)
+    return subprocess.Popen([sys.executable, "-m", "livedrummer", *args], text=True, env=env,
+                            stdout=subprocess.PIPE, stderr=err.open("w"), cwd=REPO)  # fmt: skip
+
+
+def _line(proc: subprocess.Popen[str]) -> dict[str, Any]:
+    assert proc.stdout is not None
+    out: dict[str, Any] = json.loads(proc.stdout.readline())
+    return out
+
+
+class Jack:
+    def __init__(self) -> None:
+        import rtmidi
+
+        name = f"ldlat-{os.getpid()}"
+        os.environ.update({"JACK_DEFAULT_SERVER": name, "JACK_NO_AUDIO_RESERVATION": "1"})
+        self.jackd = subprocess.Popen(
+            ["jackd", "--no-realtime", "-S", "-n", name, "-d", "dummy", "-r", "48000", "-p", "64"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        )  # fmt: skip
+        subprocess.run(["jack_wait", "-s", name, "-w", "-t", "10"], check=True, capture_output=True)
+        self.out = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
+        self.out.open_virtual_port("pads")
+        self.loop = rtmidi.MidiIn(rtmidi.API_UNIX_JACK, "loopback")
+        self.loop.open_virtual_port("in")
+        self.loop_times: list[float] = []
+        clock = MonotonicClock()
+        self.loop.set_callback(lambda _msg, _data: self.loop_times.append(clock.now()))
+        subprocess.run(["jack_connect", "kit:pads", "loopback:in"], check=True)
+
+    def close(self) -> None:
+        self.loop.close_port()
+        self.out.close_port()
+        self.jackd.terminate()
+        self.jackd.wait(10)
+
+
+def run_rate(jack: Jack, rate: float, count: int, delay_ms: float, lookahead_ms: float,
+             tmp: Path) -> dict[str, Any]:  # fmt: skip
+    clock = MonotonicClock()
+    home = str(tmp / "home")
+    fmt = p.PoseFormat.from_dtype(pose_dtype(len(load_kit("rock5").pieces)))
+    procs = []
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    frames_dir = tmp / f"frames-{rate:g}"
+    try:
+        inp = _spawn(["input", "--midi", "kit:pads", "--api", "jack", "--map", "roland-td",
+                      "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
+                      "--no-journal"], home, tmp / "input.err")  # fmt: skip
+        procs.append(inp)
+        in_ep = _line(inp)["pub"]
+        syn = _spawn(["synth", "--sub", in_ep, "--pub", "tcp://127.0.0.1:*", "--control",
+                      "tcp://127.0.0.1:*", "--delay-ms", str(delay_ms), "--lookahead-ms",
+                      str(lookahead_ms)], home, tmp / "synth.err")  # fmt: skip
+        procs.append(syn)
+        syn_ep = _line(syn)["pub"]
+        disp = _spawn(["display", "--live", "--headless", "--sub", syn_ep, "--size", "320x180",
+                       "--fps", "60", "--out", str(frames_dir), "--no-png"], home,
+                      tmp / "display.err")  # fmt: skip
+        procs.append(disp)
+        _line(disp)
+        ev = ctx.socket(zmq.SUB)
+        ev.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
+        ev.connect(in_ep)
+        poses = ctx.socket(zmq.SUB)
+        poses.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.POSE))
+        poses.setsockopt(zmq.RCVHWM, 0)
+        poses.connect(syn_ep)
+        onsets: list[tuple[float, np.ndarray]] = []
+        pose_in: list[tuple[float, np.ndarray]] = []
+
+        def pump(seconds: float) -> None:
+            end = clock.now() + seconds
+            while True:
+                left = end - clock.now()
+                if left <= 0:
+                    return
+                for sock in zmq.select([ev, poses], [], [], min(left, 0.005))[0]:
+                    msg = p.decode(sock.recv_multipart(), fmt)
+                    if msg.kind is p.Kind.ONSET and isinstance(msg.body, np.ndarray):
+                        onsets.append((clock.now(), msg.body.copy()))
+                    elif isinstance(msg.body, p.Pose):
+                        show = msg.body.time_s + msg.body.rows["time_s"].astype(np.float64)
+                        pose_in.append((clock.now(), show))
+
+        while not onsets:  # JACK and the subscriptions settle: probe until a note lands
+            jack.out.send_message([0x99, 36, 1])
+            pump(0.2)
+        pump(1.0)
+        onsets.clear()
+        pose_in.clear()
+        jack.loop_times.clear()
+        sent: list[float] = []
+        stop = threading.Event()
+
+        def play() -> None:
+            start = clock.now() + 0.05
+            for i in range(count):
+                clock.wait_until(start + i / rate, stop)
+                sent.append(clock.now())
+                jack.out.send_message([0x99, NOTES[i % 2], 64 + i % 60])
+
+        player = threading.Thread(target=play)
+        player.start()
+        pump(count / rate + 0.1)
+        player.join()
+        pump(2.0)
+    finally:
+        for proc in reversed(procs):
+            proc.send_signal(signal.SIGTERM)
+        for name, proc in zip(("input", "synth", "display"), procs, strict=False):
+            try:
+                proc.wait(15)
+            except subprocess.TimeoutExpired:
+                print(f"  ({name} did not stop on SIGTERM within 15 s: killed)")
+                proc.kill()
+                proc.wait()
+        ctx.destroy(0)
+    got_t = np.array([t for t, rows in onsets for _ in range(rows.size)])
+    stamps = np.concatenate([rows["time_s"] for _, rows in onsets]).astype(np.float64) if onsets \
+        else np.zeros(0)  # fmt: skip
+    n = min(len(sent), got_t.size)
+    sent_a = np.array(sent[:n])
+    loop = np.array(jack.loop_times[:n]) - sent_a[: len(jack.loop_times[:n])]
+    bus = got_t[:n] - sent_a
+    # pose: the first POSE message holding the contact sample at stamp + D
+    d = delay_ms / 1000.0
+    pose_lat, missing_pose = [], 0
+    shows = [(t, s) for t, s in pose_in]
+    contact_at = np.full(n, np.nan)
+    for i in range(n):
+        target = stamps[i] + d
+        for t, s in shows:
+            if (
+                s.size
+                and s[0] - 1e-6 <= target <= s[-1] + 1e-6
+                and np.min(np.abs(s - target)) < 1e-6
+            ):
+                contact_at[i] = t
+                break
+        if np.isnan(contact_at[i]):
+            missing_pose += 1
+    pose_lat = (contact_at - sent_a)[~np.isnan(contact_at)]
+    frames = [json.loads(x) for x in (frames_dir / "frames.jsonl").read_text().splitlines()]
+    drawn = [(f["pose_s"], f["done_s"]) for f in frames if f["pose_s"] is not None]
+    frame_lat = []
+    for i in range(n):
+        target = stamps[i] + d
+        done = next((ds for ps, ds in drawn if ps >= target - 1e-6), None)
+        if done is not None:
+            frame_lat.append(done - sent_a[i])
+    return {
+        "rate": rate, "sent": len(sent), "on_bus": int(got_t.size), "loopback": loop,
+        "bus": bus, "pose": np.asarray(pose_lat), "frame": np.asarray(frame_lat),
+        "no_contact": missing_pose, "synth": (tmp / "synth.err").read_text().strip()[-200:],
+    }  # fmt: skip
+
+
+def _pct(a: np.ndarray) -> str:
+    if a.size == 0:
+        return "      -       -"
+    return f"{np.percentile(a, 50) * 1000:7.2f} {np.percentile(a, 99) * 1000:7.2f}"
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="livedrummer bench latency", description=__doc__)
+    parser.add_argument("--rates", type=float, nargs="+", default=[1.0, 100.0, 1000.0])
+    parser.add_argument("--seconds", type=float, default=2.0, help="per rate (min 5 notes)")
+    parser.add_argument("--delay-ms", type=float, default=30.0)
+    parser.add_argument("--lookahead-ms", type=float, default=30.0)
+    args = parser.parse_args(argv)
+    jack = Jack()
+    print(f"D = {args.delay_ms:g} ms, L = {args.lookahead_ms:g} ms; ms from note-on sent, p50 p99")
+    print(f"{'notes/s':>8} {'sent':>5} {'bus':>5} {'no-pose':>7} | {'JACK loop':>15} | "
+          f"{'onset on bus':>15} | {'pose at display':>15} | {'frame rendered':>15}")  # fmt: skip
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            for rate in args.rates:
+                count = max(5, int(rate * args.seconds))
+                r = run_rate(jack, rate, count, args.delay_ms, args.lookahead_ms,
+                             Path(tmp))  # fmt: skip
+                print(f"{rate:8g} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} | "
+                      f"{_pct(r['loopback'])} | {_pct(r['bus'])} | {_pct(r['pose'])} | "
+                      f"{_pct(r['frame'])}", flush=True)  # fmt: skip
+                print(f"         {r['synth']}", flush=True)
+    finally:
+        jack.close()
+    return 0

@@ -1,0 +1,113 @@
+"""``livedrummer up``: the live pipeline in one command: input → synth → display, supervised.
+
+Each stage is its own process (:mod:`services.supervisor`): started in order, each only after
+the previous one said it is ready (no sleeps), restarted with back-off when it dies, all
+stopped on Ctrl-C / SIGTERM or after ``--seconds``. ``--demo`` plays the bundled groove
+into the pipeline as if from a kit (looping). With no screen (neither ``DISPLAY`` nor
+``WAYLAND_DISPLAY``), or with ``--headless``, the display renders off screen into
+``--out`` (default ``out/live``): numbered PNG frames plus ``frames.jsonl``.
+
+Limits: a live window is not implemented yet, so the display is always headless; endpoints are
+fixed local TCP ports from ``--port-base``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+from types import FrameType
+
+from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, add_kit_option, demo_groove
+
+SYNTH_TOPICS = 4  # the synth subscribes to ONSET, CONTROL, GAP and HEARTBEAT
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "up", run, "run the live pipeline: input, synth and display")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--midi", metavar="PORT", help="MIDI input port of the kit")
+    src.add_argument("--serial", metavar="DEV", help="serial trigger board")
+    src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
+    add_kit_option(p)
+    p.add_argument("--map", help="note map (default roland-td)")
+    p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
+    p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L")
+    p.add_argument("--delay-ms", type=float, default=30.0, metavar="D")
+    p.add_argument("--seconds", type=float, metavar="S", help="stop everything after S seconds")
+    p.add_argument("--headless", action="store_true", help="render off screen even with a screen")
+    p.add_argument("--out", type=Path, default=Path("out/live"), help="headless frames folder")
+    p.add_argument("--fps", type=float, default=30.0, help="display frames per second")
+    p.add_argument("--port-base", type=int, default=5710,
+                   help="TCP ports PORT..PORT+11 on 127.0.0.1 (default 5710)")  # fmt: skip
+    p.add_argument("--no-journal", action="store_true", help="do not journal the session")
+
+
+def specs(args: argparse.Namespace) -> list:  # type: ignore[type-arg]
+    from services.supervisor import ServiceSpec
+
+    base = args.port_base
+    ep = {name: f"tcp://127.0.0.1:{base + k}" for name, k in
+          (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))}  # fmt: skip
+    map_name = args.map or DEMO_MAP
+    me = [sys.executable, "-m", "livedrummer"]
+    source: list[str]
+    if args.demo:
+        source = ["--file", str(demo_groove()), "--loop"]
+    elif args.serial:
+        source = ["--serial", args.serial, "--baud", str(args.baud)]
+    else:
+        source = ["--midi", args.midi]
+    journal = ["--no-journal"] if args.no_journal or args.demo else []
+    input_argv = [*me, "input", *source, "--map", map_name, "--pub", ep["in_pub"],
+                  "--control", ep["in_ctl"], "--wait-subscribers", str(SYNTH_TOPICS),
+                  *journal]  # fmt: skip
+    synth_argv = [*me, "synth", "--sub", ep["in_pub"], "--pub", ep["syn_pub"],
+                  "--control", ep["syn_ctl"], "--kit", args.kit, "--map", map_name,
+                  "--lookahead-ms", str(args.lookahead_ms),
+                  "--delay-ms", str(args.delay_ms)]  # fmt: skip
+    display_argv = [*me, "display", "--live", "--headless", "--sub", ep["syn_pub"],
+                    "--kit", args.kit, "--out", str(args.out), "--fps", str(args.fps)]  # fmt: skip
+    return [
+        ServiceSpec("input", input_argv),
+        ServiceSpec("synth", synth_argv),
+        ServiceSpec("display", display_argv),
+    ]
+
+
+def run(args: argparse.Namespace) -> int:
+    from livedrummer.errors import ConfigError
+    from services.supervisor import Supervisor
+
+    if args.seconds is not None and not args.seconds > 0:
+        raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
+    screen = bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    if screen and not args.headless:
+        print("up: a live window is not implemented yet; rendering headless", file=sys.stderr)
+    sup = Supervisor(specs(args))
+    stopping: list[int] = []
+
+    def on_signal(signum: int, _frame: FrameType | None) -> None:
+        stopping.append(signum)
+        sup.request_stop()
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        sup.start()
+        print(f"up: input, synth and display running; frames in {args.out}/", flush=True)
+        deadline = None if args.seconds is None else time.monotonic() + args.seconds
+        while not stopping:
+            left = 0.5 if deadline is None else min(0.5, deadline - time.monotonic())
+            if left <= 0:
+                break
+            sup.run_once(left)
+    finally:
+        sup.stop()
+        for s, handler in old.items():
+            signal.signal(s, handler)
+    restarts = sum(sup.restarts.values())
+    print(f"up: stopped ({restarts} restarts); frames in {args.out}/", file=sys.stderr)
+    return 0

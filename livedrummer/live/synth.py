@@ -1,0 +1,404 @@
+"""The online stroke synthesizer: onsets in, one at a time; pose samples out, on show time.
+
+Why this shape. The body's :func:`~livedrummer.body.animation.animate` builds a whole
+performance's curves at once (about 20 ms whatever the length, for a few seconds of notes),
+so the live synth does not re-implement strokes: it keeps a sliding window of notes and
+re-runs the body over that window whenever the set of notes changes, then samples the curves
+only for the times it has not published yet. Three timelines meet here:
+
+* *performance time* is the onset's own time on the shared clock (its arrival stamp);
+* the online sticking (:class:`~livedrummer.sticking.online.OnlineSticker`) commits a hand
+  note ``L`` (lookahead) after its onset, so at clock time ``now`` every note up to
+  ``now - L`` is decided: that is how far the synth samples (its *horizon*);
+* *show time* is performance time + ``D``: the display shows the pose sampled at ``t`` when
+  the shared clock reads ``t + D``. Poses are therefore published ``D - L`` ahead of being
+  seen, and a contact sample is always included at exactly each committed onset + D.
+
+Prediction. A :class:`~livedrummer.live.predict.HandPredictor` places at most one *guess*
+note per hand at its expected next onset; the guess takes part in the animation (so the
+upswing starts on time) but its contact is never published: when the horizon gets within
+``guard_s`` of it and no onset has arrived near it, it is dropped and the body settles back;
+when an onset has arrived (its limb still pending), the guess moves to that exact time and is
+replaced by the committed note when the horizon reaches it. With ``D > L`` arrived, pending
+notes also join the window with a guessed hand. Whenever the window's notes change, the new
+curves are cross-faded from the old ones, and the fade always ends at the next contact, so a
+surprise hit strikes fast and every contact lands exactly.
+
+Idle. With no notes the torso still sways on a slow "breathing" beat (the body's sway keyed on
+``idle_period_s``), so the drummer never freezes.
+
+Limits: re-animation costs about 20 ms each time the notes change (up to three times per
+note: arrival with ``D > L``, guess, commit); the cross-fade blends joint positions and
+quaternions linearly (bones may shorten by a few mm mid-fade); hi-hat openness comes from
+the onsets and the pedal controller of the window only.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import cast
+
+import numpy as np
+
+from livedrummer.body.animation import Animation, animate, hihat_openness
+from livedrummer.body.pose import pose_dtype
+from livedrummer.body.rig import Rig
+from livedrummer.body.sample import sample_poses
+from livedrummer.body.strokes import StrokeParams
+from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE
+from livedrummer.live.predict import Guess, HandPredictor
+from livedrummer.sticking.online import Decision, OnlineSticker
+from livedrummer.sticking.result import NOT_PLAYED, Sticking
+from livedrummer.vocabulary import INSTRUMENTS, Limb, PieceKind
+
+
+@dataclass(frozen=True)
+class SynthParams:
+    lookahead_s: float = 0.030  # L: the sticking commits a hand note this long after its onset
+    delay_s: float = 0.030  # D: the avatar is shown this long behind the sound
+    rate_hz: float = 240.0  # pose samples per second of show time
+    window_s: float = 1.0  # notes older than this (behind the horizon) leave the window
+    predict: bool = True
+    blend_s: float = 0.06  # longest cross-fade between old and new curves
+    guard_s: float = 0.025  # a guess is dropped this long before its contact
+    idle_period_s: float = 4.0  # "breathing" sway period when nothing is played
+    chunk_s: float = 0.05  # sample this far ahead of the horizon at once (dropped on change)
+    epoch_s: float = 4.0  # the torso's beat keys are rebuilt at least this often
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.lookahead_s <= self.delay_s:
+            raise ValueError(
+                f"need 0 <= lookahead ({self.lookahead_s}) <= delay ({self.delay_s}): a note must "
+                "be decided before its contact is shown"
+            )
+        if not self.rate_hz > 0 or not self.window_s > 0:
+            raise ValueError(f"rate {self.rate_hz} and window {self.window_s} must be > 0")
+
+
+@dataclass(frozen=True)
+class PoseBatch:
+    """Pose samples: ``show_s`` (float64 show times) and the matching pose records, whose
+    ``time_s`` field holds the performance time relative to ``show_s[0] - D`` (float32 cannot
+    hold clock times to the millisecond)."""
+
+    show_s: np.ndarray
+    rows: np.ndarray
+
+
+@dataclass
+class _Curves:
+    anim: Animation
+    sticking: Sticking
+    key: tuple[object, ...]
+    contacts_s: np.ndarray  # committed contacts (performance time), sorted
+
+
+@dataclass
+class _Note:
+    row: np.ndarray  # one ONSET_DTYPE record (0-d array)
+    limb: int = NOT_PLAYED
+    piece: int = -1
+    decided: bool = False
+    hand: bool = False
+
+
+class LiveSynth:
+    """See the module docstring. Feed :meth:`process` and :meth:`control`; call
+    :meth:`poses_until` with the clock's now as often as poses should go out."""
+
+    def __init__(
+        self,
+        rig: Rig,
+        params: SynthParams | None = None,
+        *,
+        strokes: StrokeParams | None = None,
+        cc_open: np.ndarray | None = None,
+    ) -> None:
+        self.rig = rig
+        self.params = params or SynthParams()
+        self.strokes = strokes or StrokeParams()
+        self.cc_open = cc_open
+        self.dtype = pose_dtype(len(rig.kit.pieces))
+        self.sticker = OnlineSticker(rig.kit, self.params.lookahead_s)
+        self.predictor = HandPredictor()
+        self.reset()
+
+    def reset(self) -> None:
+        self.sticker.reset()
+        self.predictor.reset()
+        self._notes: list[_Note] = []  # every note since the window start, by stream index
+        self._first = 0  # stream index of self._notes[0]
+        self._controls: list[np.ndarray] = []
+        self._guesses: dict[int, Guess] = {}
+        self._horizon: float | None = None  # last sampled performance time
+        self._curves: _Curves | None = None
+        self._old: _Curves | None = None
+        self._fade = (0.0, 0.0)  # start, length (performance time)
+        self.animations = 0  # how many times the body was re-run (for benchmarks)
+        self._cache_t = np.zeros(0)  # samples of the current curves ahead of the horizon
+        self._cache_rows = np.zeros(0, self.dtype)
+
+    # -- input ---------------------------------------------------------------------------------
+
+    def process(self, row: np.ndarray | np.void) -> None:
+        """One onset (ONSET_DTYPE record; its time is the arrival on the shared clock)."""
+        rec = np.array(row, dtype=ONSET_DTYPE)
+        self._notes.append(_Note(rec))
+        self._apply(self.sticker.process(cast(np.void, rec[()])))
+
+    def control(self, row: np.ndarray | np.void) -> None:
+        """One controller event (CONTROL_DTYPE record): the hi-hat pedal and chokes."""
+        self._controls.append(np.array(row, dtype=CONTROL_DTYPE))
+
+    def _apply(self, decisions: list[Decision]) -> None:
+        for d in decisions:
+            k = d.index - self._first
+            if k < 0:
+                continue
+            note = self._notes[k]
+            note.limb, note.piece, note.decided = d.limb, d.piece, True
+            note.hand = d.limb in (0, 1) and d.piece >= 0
+            if note.hand:
+                r = note.row
+                self.predictor.observe(float(r["time_s"]), d.limb, d.piece, int(r["zone"]),
+                                       int(r["velocity"]))  # fmt: skip
+
+    def next_due_s(self, after_s: float) -> float | None:
+        """The first clock time after ``after_s`` at which an undecided note gets committed
+        (a service polls :meth:`poses_until` then, not only on its tick), or None."""
+        for n in self._notes:
+            due = float(n.row["time_s"]) + self.params.lookahead_s
+            if not n.decided and due > after_s:
+                return due
+        return None
+
+    # -- output --------------------------------------------------------------------------------
+
+    def poses_until(self, now_s: float) -> PoseBatch:
+        """Commit what ``now_s`` allows and return the samples not yet published, for show
+        times up to ``now_s + D - L``."""
+        p = self.params
+        self._apply(self.sticker.advance(now_s))
+        horizon = now_s - p.lookahead_s
+        if self._horizon is None:
+            self._horizon = horizon - 1.0 / p.rate_hz
+        start = self._horizon
+        if horizon <= start:
+            return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
+        if p.predict:
+            self._update_guesses(horizon, now_s)
+        if self._refresh(start, horizon):
+            self._cache_t, self._cache_rows = np.zeros(0), np.zeros(0, self.dtype)
+        if self._cache_t.size == 0 or self._cache_t[-1] < horizon:
+            self._extend_cache(max(start, self._cache_end(start)), horizon + p.chunk_s)
+        take = (self._cache_t > start) & (self._cache_t <= horizon)
+        times, rows = self._cache_t[take], self._cache_rows[take]
+        later = self._cache_t > horizon
+        self._cache_t, self._cache_rows = self._cache_t[later], self._cache_rows[later]
+        self._horizon = horizon
+        if times.size == 0:
+            return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
+        rows = rows.copy()
+        rows["time_s"] = (times - float(times[0])).astype(np.float32)
+        return PoseBatch(times + p.delay_s, rows)
+
+    def _cache_end(self, start: float) -> float:
+        return float(self._cache_t[-1]) if self._cache_t.size else start
+
+    def _extend_cache(self, lo: float, hi: float) -> None:
+        """Sample the current curves ahead, on the rate grid plus every committed contact in
+        ``(lo, hi]``: one call per chunk costs about what one sample does."""
+        curves = self._curves
+        assert curves is not None
+        step = 1.0 / self.params.rate_hz
+        grid = np.arange(math.floor(lo / step) + 1, math.floor(hi / step) + 1) * step
+        c = curves.contacts_s
+        times = np.unique(np.concatenate([grid[grid > lo], c[(c > lo) & (c <= hi)]]))
+        if times.size == 0:
+            return
+        self._cache_t = np.concatenate([self._cache_t, times])
+        self._cache_rows = np.concatenate([self._cache_rows, self._sample(times)])
+
+    def _sample(self, times: np.ndarray) -> np.ndarray:
+        new = self._curves
+        assert new is not None
+        rows = sample_poses(new.anim, new.sticking, times)
+        old = self._old
+        f0, flen = self._fade
+        if old is None:
+            return rows
+        w = np.clip((times - f0) / flen, 0.0, 1.0) if flen > 0 else np.ones_like(times)
+        fading = w < 1.0
+        if not fading.any():
+            self._old = None
+            return rows
+        ft = times[fading]
+        prev = sample_poses(old.anim, old.sticking, ft)
+        blend_rows(prev, rows[fading], w[fading])
+        rows[fading] = prev
+        return rows
+
+    # -- the window ----------------------------------------------------------------------------
+
+    def _update_guesses(self, horizon: float, now_s: float) -> None:
+        p = self.params
+        pending = [n for n in self._notes if not n.decided]
+        for limb in (0, 1):
+            g = self._guesses.get(limb)
+            if g is not None:
+                near = [
+                    n for n in pending if abs(float(n.row["time_s"]) - g.time_s) <= g.period_s / 3
+                ]
+                done = any(
+                    n.decided and n.limb == limb and abs(float(n.row["time_s"]) - g.time_s)
+                    <= g.period_s / 3 and float(n.row["time_s"]) <= horizon
+                    for n in self._notes[-8:]
+                )  # fmt: skip
+                if done:
+                    g = None
+                elif near:
+                    # it came: it will be committed before the horizon gets there, unless it
+                    # came later than the guess, which then moves to it
+                    t = float(near[0].row["time_s"])
+                    if t > g.time_s - p.guard_s and t != g.time_s:
+                        g = Guess(t, limb, g.piece, g.zone, g.velocity, g.period_s)
+                elif horizon >= g.time_s - p.guard_s:
+                    g = None  # it did not come: settle back
+            if g is None:
+                last = max((float(n.row["time_s"]) for n in self._notes
+                            if n.decided and n.limb == limb), default=-math.inf)  # fmt: skip
+                g = self.predictor.guess(limb, max(horizon + p.guard_s, last + 1e-3, now_s))
+                if g is not None and g.time_s - horizon > 2.5:
+                    g = None
+            if g is None:
+                self._guesses.pop(limb, None)
+            else:
+                self._guesses[limb] = g
+
+    def _refresh(self, start: float, horizon: float) -> bool:
+        """Rebuild the curves if the window's notes changed; True when they were rebuilt."""
+        p = self.params
+        while (
+            self._notes
+            and float(self._notes[0].row["time_s"]) < horizon - p.window_s
+            and (self._notes[0].decided)
+        ):
+            self._notes.pop(0)
+            self._first += 1
+        self._controls = [c for c in self._controls if float(c["time_s"]) >= horizon - p.window_s]
+        keep: list[tuple[np.ndarray, int, int]] = []
+        ahead = p.delay_s > p.lookahead_s  # arrived notes can be shown before their decision
+        for n in self._notes:
+            if n.decided:
+                # feet are decided on arrival; with D = L they join with their hands' chord,
+                # which saves re-running the body for nothing the horizon can show yet
+                if n.limb >= 0 and n.piece >= 0 and (ahead or float(n.row["time_s"]) <= horizon):
+                    keep.append((n.row, n.limb, n.piece))
+            elif ahead:
+                limb, piece = self._guess_limb(n)
+                if limb >= 0:
+                    keep.append((n.row, limb, piece))
+        guesses = sorted(self._guesses.values(), key=lambda g: g.time_s)
+        epoch = math.floor(horizon / p.epoch_s)
+        key = (
+            tuple((float(r["time_s"]), li, pi) for r, li, pi in keep),
+            tuple((g.time_s, g.limb, g.piece) for g in guesses),
+            epoch,
+            len(self._controls),
+        )
+        if self._curves is not None and self._curves.key == key:
+            return False
+        rows = [r for r, _, _ in keep]
+        limbs = [li for _, li, _ in keep]
+        pieces = [pi for _, _, pi in keep]
+        for g in guesses:
+            rec = np.zeros((), ONSET_DTYPE)
+            rec["time_s"], rec["velocity"], rec["zone"] = g.time_s, g.velocity, g.zone
+            rec["instrument"] = _instrument_of(self.rig, g.piece)
+            rec["openness"] = np.nan
+            rows.append(rec)
+            limbs.append(g.limb)
+            pieces.append(g.piece)
+        onsets = np.array(rows, dtype=ONSET_DTYPE).reshape(-1)
+        order = np.argsort(onsets["time_s"], kind="stable")
+        onsets = onsets[order]
+        limb_a = np.array(limbs, np.int8).reshape(-1)[order]
+        piece_a = np.array(pieces, np.int16).reshape(-1)[order]
+        st = Sticking(onsets, limb_a, piece_a, {}, "online", self.rig.kit.name)
+        controls = (
+            np.array(self._controls, CONTROL_DTYPE).reshape(-1)
+            if self._controls
+            else np.zeros(0, CONTROL_DTYPE)
+        )
+        openness = hihat_openness(onsets, controls, cc_open=self.cc_open)
+        anim = animate(self.rig, st, self._beats(horizon, keep), openness, strokes=self.strokes)
+        self.animations += 1
+        committed = np.array(sorted(float(r["time_s"]) for r, _, _ in keep))
+        new = _Curves(anim, st, key, committed)
+        if self._curves is not None:
+            self._old = self._curves
+            nxt = committed[committed > start]
+            length = p.blend_s if nxt.size == 0 else min(p.blend_s, float(nxt[0]) - start)
+            self._fade = (start, max(length, 0.0))
+        self._curves = new
+        return True
+
+    def _guess_limb(self, note: _Note) -> tuple[int, int]:
+        """A pending note's likely hand: the guess near it, else who last played its piece."""
+        t = float(note.row["time_s"])
+        for g in self._guesses.values():
+            if abs(g.time_s - t) <= g.period_s / 3:
+                return g.limb, g.piece
+        piece = _piece_of(self.rig, int(note.row["instrument"]))
+        if piece < 0 or self.rig.kit.pieces[piece].kind is PieceKind.KICK:
+            return NOT_PLAYED, -1
+        for n in reversed(self._notes):
+            if n.decided and n.piece == piece and n.limb in (0, 1):
+                return n.limb, piece
+        return (1 if self.rig.kit.pieces[piece].preferred_limb is Limb.LH else 0), piece
+
+    def _beats(self, horizon: float, keep: list[tuple[np.ndarray, int, int]]) -> np.ndarray:
+        """Beat times for the torso's sway: the hands' pulse while playing, breathing when idle."""
+        times = np.array([float(r["time_s"]) for r, li, _ in keep if li in (0, 1)])
+        period = self.params.idle_period_s
+        anchor = math.floor(horizon / self.params.epoch_s) * self.params.epoch_s
+        if times.size >= 4 and horizon - times[-1] < 1.0:
+            ioi = np.diff(times)
+            ioi = ioi[ioi > 0.05]
+            if ioi.size:
+                period = float(np.median(ioi))
+                while period < 0.35:
+                    period *= 2.0
+                anchor = float(times[-1])
+        lo = horizon - self.params.window_s - 1.0
+        hi = horizon + 2 * self.params.epoch_s
+        k0 = math.floor((lo - anchor) / period)
+        k1 = math.ceil((hi - anchor) / period)
+        return anchor + period * np.arange(k0, k1 + 1)
+
+
+def blend_rows(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> None:
+    """``a`` becomes ``(1 - w) a + w b`` in place: positions and channels linearly, rotations
+    by normalised linear interpolation on the same hemisphere."""
+    wc = w.astype(np.float32)
+    for name in ("position", "swing", "lift", "glow"):
+        shape = (-1,) + (1,) * (a[name].ndim - 1)
+        a[name] = a[name] + (b[name] - a[name]) * wc.reshape(shape)
+    qa, qb = a["rotation"], b["rotation"].copy()
+    flip = np.sum(qa * qb, axis=-1) < 0
+    qb[flip] *= -1.0
+    q = qa + (qb - qa) * wc[:, None, None]
+    a["rotation"] = q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), 1e-12)
+
+
+def _piece_of(rig: Rig, instrument: int) -> int:
+    piece = rig.kit.resolve(INSTRUMENTS[instrument])
+    if piece is None:
+        return -1
+    return rig.kit.pieces.index(piece)
+
+
+def _instrument_of(rig: Rig, piece: int) -> int:
+    plays = rig.kit.pieces[piece].plays
+    return INSTRUMENTS.index(plays[0]) if plays else 0

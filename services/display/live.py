@@ -1,0 +1,250 @@
+"""Live display: subscribe to a synth's poses and render each frame for the time it is seen.
+
+Why a frame clock. A pose sample is stamped with its *show time* on the shared clock; a frame
+rendered now appears some milliseconds later (the swap, the projector). The display asks a
+:class:`FrameClock` for the show time of the frame it is about to render and draws the pose
+track at that time. Production uses :class:`AudioFrameClock`: the sounddevice output stream's
+time plus its reported output latency (the picture follows what the audience hears), mapped
+onto the shared clock; headless runs and CI use :class:`MonotonicFrameClock`. Calibration
+offsets (``calibration.toml``) are added: audio to the audio clock, display to every frame.
+
+Loop. One thread: drain the SUB socket (POSE messages into a
+:class:`~livedrummer.live.track.PoseTrack`), wait for the next frame time, render the track at
+the frame's show time (holding the last pose when the stream stops, resuming when it comes
+back), hand the image to a sink (PNG files, a window). ``frames.jsonl`` records, per frame,
+its render time, its show time, the show time of the pose drawn and of the newest pose
+received by then, so a test or a bench can check contacts and latency without pixels.
+
+Limits: the pose format is taken from the kit given to the display (the synth's READY also
+carries it; a mismatch is refused by hash, frame by frame); one performer; no window mode yet
+in live (headless PNGs, or ``--out`` omitted to only log frames).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any, Protocol
+
+import numpy as np
+import zmq
+
+from livedrummer.body.pose import pose_dtype
+from livedrummer.body.skeleton import J
+from livedrummer.errors import ProtocolError
+from livedrummer.kit import Kit
+from livedrummer.live.track import PoseTrack, scene_frame
+from livedrummer.protocol import Kind, Pose, PoseFormat, SeqStatus, SequenceTracker, decode, topic
+from livedrummer.vocabulary import PieceKind
+from services.net import connect, socket
+
+log = logging.getLogger("livedrummer.display")
+
+DEFAULT_SUB = "tcp://127.0.0.1:5720"
+
+
+class FrameClock(Protocol):
+    def now(self) -> float:
+        """Shared-clock time now (seconds)."""
+        ...
+
+    def latency_s(self) -> float:
+        """How long after ``now`` a frame rendered now is seen."""
+        ...
+
+
+class MonotonicFrameClock:
+    """The shared monotonic clock with a fixed latency (headless, CI)."""
+
+    def __init__(self, latency_s: float = 0.0) -> None:
+        self._latency = latency_s
+
+    def now(self) -> float:
+        return time.monotonic_ns() * 1e-9
+
+    def latency_s(self) -> float:
+        return self._latency
+
+
+class AudioFrameClock:
+    """The audio output stream's clock, mapped onto the shared clock, plus its output
+    latency. Needs sounddevice and PortAudio (libportaudio2); raises DisplayError without."""
+
+    def __init__(self, extra_latency_s: float = 0.0, sample_rate: int = 48_000) -> None:
+        from services.display.context import DisplayError
+
+        try:
+            import sounddevice as sd
+        except OSError as exc:
+            raise DisplayError(f"no audio clock: {exc} (install libportaudio2)") from None
+        try:
+            self._stream = sd.OutputStream(samplerate=sample_rate, channels=1, dtype="float32")
+            self._stream.start()
+        except sd.PortAudioError as exc:
+            raise DisplayError(f"no audio clock: cannot open an output stream: {exc}") from None
+        out_latency = self._stream.latency
+        self._latency = float(out_latency) + extra_latency_s
+        self._offset = time.monotonic_ns() * 1e-9 - float(self._stream.time)
+
+    def now(self) -> float:
+        return float(self._stream.time) + self._offset
+
+    def latency_s(self) -> float:
+        return self._latency
+
+    def close(self) -> None:
+        self._stream.stop()
+        self._stream.close()
+
+
+@dataclass
+class LiveConfig:
+    sub: str = DEFAULT_SUB
+    fps: float = 60.0
+    frames: int | None = None  # stop after this many frames (headless runs)
+    out: Path | None = None  # PNG folder (and frames.jsonl)
+    size: tuple[int, int] = (640, 360)
+    camera: str = "stage"
+    display_offset_s: float = 0.0
+    render: bool = True
+    png: bool = True  # with ``out``: write each frame as a PNG (frames.jsonl is always written)
+
+
+@dataclass
+class LiveStats:
+    pose_messages: int = 0
+    pose_samples: int = 0
+    missing: int = 0
+    bad: int = 0
+    frames: int = 0
+    held: int = 0  # frames drawn with no pose at or after their show time - 1 frame
+
+
+class LiveDisplay:
+    """See the module docstring."""
+
+    def __init__(
+        self,
+        kit: Kit,
+        config: LiveConfig,
+        clock: FrameClock,
+        ctx: zmq.Context[zmq.Socket[bytes]],
+    ) -> None:
+        self.kit = kit
+        self.config = config
+        self.clock = clock
+        self.ctx = ctx
+        self.format = PoseFormat.from_dtype(pose_dtype(len(kit.pieces)))
+        self.track = PoseTrack()
+        self.tracker = SequenceTracker()
+        self.stats = LiveStats()
+        self._kick = np.array([p.kind is PieceKind.KICK for p in kit.pieces])
+        self._sub: Any = None
+
+    def start(self) -> None:
+        sub = socket(self.ctx, zmq.SUB)
+        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.POSE))
+        try:
+            connect(sub, self.config.sub, "sub endpoint")
+        except ProtocolError:
+            sub.close(0)
+            raise
+        self._sub = sub
+
+    def run(self, stop: threading.Event) -> int:
+        cfg = self.config
+        renderer = ctx_gl = None
+        log_file: IO[str] | None = None
+        try:
+            if cfg.render:
+                from livedrummer.render.camera import pick_camera
+                from livedrummer.render.kitmesh import build_kit_mesh
+                from livedrummer.scene_rest import REST_SKELETON
+                from services.display.context import headless_context
+                from services.display.renderer import Renderer
+
+                ctx_gl = headless_context()
+                renderer = Renderer(ctx_gl, build_kit_mesh(self.kit), REST_SKELETON, cfg.size,
+                                    samples=0)  # fmt: skip
+                camera = pick_camera(self.kit, cfg.camera)
+            if cfg.out is not None:
+                cfg.out.mkdir(parents=True, exist_ok=True)
+                log_file = (cfg.out / "frames.jsonl").open("w")
+            period = 1.0 / cfg.fps
+            next_frame = self.clock.now()
+            while not stop.is_set() and (cfg.frames is None or self.stats.frames < cfg.frames):
+                wait_ms = max(0, int((next_frame - self.clock.now()) * 1000))
+                if self._sub.poll(wait_ms):
+                    self._drain()
+                now = self.clock.now()
+                if now < next_frame:
+                    continue
+                self._drain()
+                show = now + self.clock.latency_s() + cfg.display_offset_s
+                got = self.track.at(show)
+                record: dict[str, Any] = {"frame": self.stats.frames, "render_s": now,
+                                          "show_s": show, "pose_s": None,
+                                          "newest_s": self.track.newest_s}  # fmt: skip
+                if got is not None:
+                    pose_s, row = got
+                    record["pose_s"] = pose_s
+                    record["tips"] = (
+                        np.asarray(row["position"])[[J["r_tip"], J["l_tip"]]].round(5).tolist()
+                    )
+                    if show - pose_s > period:
+                        self.stats.held += 1
+                    if renderer is not None:
+                        renderer.draw(scene_frame(row, show, self._kick), camera)
+                elif renderer is not None:
+                    renderer.draw(None, camera)
+                if renderer is not None and cfg.out is not None and cfg.png:
+                    from services.display.png import write_png
+
+                    write_png(cfg.out / f"frame_{self.stats.frames:06d}.png", renderer.read_rgb())
+                record["done_s"] = self.clock.now()
+                if log_file is not None:
+                    log_file.write(json.dumps(record) + "\n")
+                self.stats.frames += 1
+                next_frame = max(next_frame + period, now)
+        finally:
+            if log_file is not None:
+                log_file.close()
+            if ctx_gl is not None:
+                ctx_gl.release()
+            if self._sub is not None:
+                self._sub.close(0)
+                self._sub = None
+        return 0
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                frames = self._sub.recv_multipart(zmq.NOBLOCK)
+            except zmq.Again:
+                return
+            try:
+                msg = decode(frames, self.format)
+            except ProtocolError as exc:
+                self.stats.bad += 1
+                log.warning("bad pose message: %s", exc)
+                continue
+            report = self.tracker.observe_message(msg)
+            if report.status is SeqStatus.GAP:
+                self.stats.missing += report.missing
+            if not isinstance(msg.body, Pose):
+                continue
+            rows = msg.body.rows
+            show = msg.body.time_s + rows["time_s"].astype(np.float64)
+            self.track.add(show, rows)
+            self.stats.pose_messages += 1
+            self.stats.pose_samples += rows.size
+
+    def summary(self) -> dict[str, int]:
+        s = self.stats
+        return {"frames": s.frames, "pose_messages": s.pose_messages,
+                "pose_samples": s.pose_samples, "missing": s.missing, "bad": s.bad,
+                "held": s.held}  # fmt: skip

@@ -1,0 +1,238 @@
+"""The synth service: subscribes to an input daemon, publishes pose samples on show time.
+
+One thread owns the SUB (events in) and PUB (poses out) sockets: it waits on the SUB socket
+until the next tick, feeds every ONSET and CONTROL row to the
+:class:`~livedrummer.live.synth.LiveSynth` as it arrives, and at each tick (``tick_hz``,
+default 120, and as soon as a note's limb is due to be committed) publishes whatever samples
+the synth has for show times up to ``now + D - L``,
+as one POSE message (header time = the first sample's show time; each record's ``time_s`` is
+its offset from it). Sequence numbers of the input stream are tracked, so a gap upstream is
+counted and logged. A second thread answers HELLO with READY on a ROUTER control socket; the
+READY carries the pose format, which a display checks against its own. ``ready()`` tells a
+launcher or systemd the service is serving once both sockets are bound.
+
+Limits: the pose socket is a plain PUB (a slow display loses samples past the high-water
+mark; it sees the gap in the sequence numbers); one performer per synth.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import zmq
+
+from livedrummer.clock import Clock
+from livedrummer.errors import ProtocolError
+from livedrummer.live.synth import LiveSynth
+from livedrummer.protocol import (
+    Hello,
+    Kind,
+    Message,
+    Pose,
+    PoseFormat,
+    SeqStatus,
+    SequenceTracker,
+    Stream,
+    decode,
+    encode,
+    topic,
+)
+from services.net import bind, connect, socket
+
+log = logging.getLogger("livedrummer.synth")
+
+DEFAULT_SUB = "tcp://127.0.0.1:5710"
+DEFAULT_PUB = "tcp://127.0.0.1:5720"
+DEFAULT_CONTROL = "tcp://127.0.0.1:5721"
+
+
+@dataclass
+class SynthConfig:
+    sub: str = DEFAULT_SUB
+    pub: str = DEFAULT_PUB
+    control: str = DEFAULT_CONTROL
+    performer: int = 0
+    tick_hz: float = 120.0
+    input_offset_s: float = 0.0
+
+
+@dataclass
+class SynthStats:
+    onsets: int = 0
+    controls: int = 0
+    missing: int = 0
+    bad: int = 0
+    pose_messages: int = 0
+    pose_samples: int = 0
+    first_seq: int | None = None
+    last_seq: int | None = None
+    seqs: list[int] = field(default_factory=list)
+
+
+class SynthService:
+    """See the module docstring. ``start`` binds and connects; ``run`` serves until ``stop``."""
+
+    def __init__(
+        self,
+        synth: LiveSynth,
+        config: SynthConfig,
+        clock: Clock,
+        ctx: zmq.Context[zmq.Socket[bytes]],
+    ) -> None:
+        self.synth = synth
+        self.config = config
+        self.clock = clock
+        self.ctx = ctx
+        self.format = PoseFormat.from_dtype(synth.dtype)
+        self.stats = SynthStats()
+        self.tracker = SequenceTracker()
+        self.endpoints: dict[str, str] = {}
+        self._sub: Any = None
+        self._pub: Any = None
+        self._seq = 0
+        self._control_stop = threading.Event()
+        self._control_thread: threading.Thread | None = None
+
+    def start(self) -> dict[str, str]:
+        cfg = self.config
+        pub = socket(self.ctx, zmq.PUB)
+        control = socket(self.ctx, zmq.ROUTER)
+        sub = socket(self.ctx, zmq.SUB)
+        try:
+            self.endpoints["pub"] = bind(pub, cfg.pub, "pub endpoint")
+            self.endpoints["control"] = bind(control, cfg.control, "control endpoint")
+            for kind in (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT):
+                sub.setsockopt(zmq.SUBSCRIBE, topic(kind))
+            connect(sub, cfg.sub, "sub endpoint")
+        except ProtocolError:
+            for s in (pub, control, sub):
+                s.close(0)
+            raise
+        self.endpoints["sub"] = cfg.sub
+        self._pub, self._sub = pub, sub
+        self._control_thread = threading.Thread(
+            target=self._serve_control, args=(control,), name="synth-control", daemon=True
+        )
+        self._control_thread.start()
+        return dict(self.endpoints)
+
+    def hello(self) -> Hello:
+        return Hello("synth", "poses", self.config.performer, dict(self.endpoints), self.format)
+
+    def run(self, stop: threading.Event) -> int:
+        period = 1.0 / self.config.tick_hz
+        next_tick = self.clock.now()
+        last = next_tick - period
+        try:
+            while not stop.is_set():
+                due = self.synth.next_due_s(last)
+                wake = next_tick if due is None else min(next_tick, due)
+                wait_ms = max(0, math.ceil((wake - self.clock.now()) * 1000))
+                if self._sub.poll(wait_ms):
+                    self._drain()
+                now = self.clock.now()
+                if now >= next_tick or (due is not None and now >= due):
+                    self.tick(now)
+                    last = now
+                    if now >= next_tick:
+                        next_tick = max(next_tick + period, now)
+        finally:
+            self.close()
+        return 0
+
+    def tick(self, now: float) -> None:
+        batch = self.synth.poses_until(now)
+        if batch.show_s.size == 0:
+            return
+        body = Pose(float(batch.show_s[0]), batch.rows)
+        msg = Message(Kind.POSE, body, self.config.performer, self._seq, self.clock.now(),
+                      Stream.POSES)  # fmt: skip
+        self._pub.send_multipart(encode(msg, self.format), copy=False)
+        self._seq += 1
+        self.stats.pose_messages += 1
+        self.stats.pose_samples += batch.show_s.size
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                frames = self._sub.recv_multipart(zmq.NOBLOCK, copy=True)
+            except zmq.Again:
+                return
+            try:
+                msg = decode(frames)
+            except ProtocolError as exc:
+                self.stats.bad += 1
+                log.warning("bad message from input: %s", exc)
+                continue
+            report = self.tracker.observe_message(msg)
+            if report.status is SeqStatus.GAP:
+                self.stats.missing += report.missing
+                log.warning("input stream: %d messages lost before #%d", report.missing, msg.seq)
+            elif report.status is SeqStatus.DUPLICATE:
+                continue
+            if self.stats.first_seq is None:
+                self.stats.first_seq = msg.seq
+            self.stats.last_seq = msg.seq
+            if msg.kind is Kind.ONSET and isinstance(msg.body, np.ndarray):
+                rows = msg.body.copy()
+                if self.config.input_offset_s:
+                    rows["time_s"] += self.config.input_offset_s
+                for row in rows:
+                    self.synth.process(row)
+                self.stats.onsets += rows.size
+                self.stats.seqs.append(msg.seq)
+            elif msg.kind is Kind.CONTROL and isinstance(msg.body, np.ndarray):
+                for row in msg.body:
+                    self.synth.control(row)
+                self.stats.controls += msg.body.size
+
+    def close(self) -> None:
+        self._control_stop.set()
+        if self._control_thread is not None:
+            self._control_thread.join(2.0)
+            self._control_thread = None
+        for s in (self._sub, self._pub):
+            if s is not None:
+                s.close(0)
+        self._sub = self._pub = None
+
+    def summary(self) -> dict[str, Any]:
+        s = self.stats
+        return {
+            "onsets": s.onsets,
+            "controls": s.controls,
+            "missing": s.missing,
+            "bad": s.bad,
+            "pose_messages": s.pose_messages,
+            "pose_samples": s.pose_samples,
+            "animations": self.synth.animations,
+        }
+
+    def _serve_control(self, sock: Any) -> None:
+        try:
+            while not self._control_stop.is_set():
+                if not sock.poll(100):
+                    continue
+                frames = sock.recv_multipart()
+                ident, rest = frames[0], frames[1:]
+                envelope = [ident]
+                if rest and rest[0] == b"":
+                    envelope.append(b"")
+                    rest = rest[1:]
+                try:
+                    msg = decode(rest)
+                except ProtocolError as exc:
+                    log.warning("bad control message: %s", exc)
+                    continue
+                if msg.kind is not Kind.HELLO:
+                    continue
+                reply = Message(Kind.READY, self.hello(), self.config.performer, 0,
+                                self.clock.now(), Stream.CONTROL)  # fmt: skip
+                sock.send_multipart([*envelope, *encode(reply)])
+        finally:
+            sock.close(0)

@@ -1,0 +1,193 @@
+"""The online synthesizer against its offline twin, prediction, idling and the pose track."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from livedrummer.body.animation import animate, hihat_openness
+from livedrummer.body.rig import Rig, build_rig
+from livedrummer.body.skeleton import J
+from livedrummer.cli.common import DEMO_MAP, demo_groove
+from livedrummer.events import CONTROL_DTYPE
+from livedrummer.kitfile import load_kit
+from livedrummer.live.calibration import Calibration, CalibrationError
+from livedrummer.live.predict import HandPredictor
+from livedrummer.live.synth import LiveSynth, PoseBatch, SynthParams
+from livedrummer.live.track import PoseTrack, scene_frame
+from livedrummer.live.upswing import upswing_visible
+from livedrummer.midifile import read_midi_file
+from livedrummer.notemap import load_note_map
+from livedrummer.performance import Performance
+from livedrummer.scene_rest import REST_SKELETON
+from livedrummer.sticking.online import stick_online
+
+TIPS = {0: J["r_tip"], 1: J["l_tip"]}
+START = 5000.0  # onsets live on the shared clock, far from 0
+
+
+@pytest.fixture(scope="module")
+def rig() -> Rig:
+    return build_rig(load_kit("rock5"))
+
+
+@pytest.fixture(scope="module")
+def groove() -> Performance:
+    return read_midi_file(demo_groove(), load_note_map(DEMO_MAP))
+
+
+def play(synth: LiveSynth, onsets: np.ndarray, tick_s: float, tail_s: float = 0.3) -> PoseBatch:
+    """Feed onsets at their times and poll like the service does; all published samples."""
+    now = float(onsets["time_s"][0]) - 0.2
+    end = float(onsets["time_s"][-1]) + tail_s
+    i, shows, rows = 0, [], []
+    while now < end:
+        while i < onsets.size and onsets["time_s"][i] <= now:
+            synth.process(onsets[i])
+            i += 1
+        batch = synth.poses_until(now)
+        shows.append(batch.show_s)
+        rows.append(batch.rows)
+        now += tick_s
+    return PoseBatch(np.concatenate(shows), np.concatenate(rows))
+
+
+@pytest.mark.parametrize(("lookahead_s", "delay_s"), [(0.03, 0.03), (0.02, 0.05)])
+def test_contacts_land_on_the_offline_contact_at_onset_plus_delay(
+    rig: Rig, groove: Performance, lookahead_s: float, delay_s: float
+) -> None:
+    onsets = groove.onsets[groove.onsets["time_s"] < 5.0].copy()
+    onsets["time_s"] += START
+    synth = LiveSynth(rig, SynthParams(lookahead_s, delay_s, predict=False))
+    out = play(synth, onsets, 1 / 120)
+    assert np.all(np.diff(out.show_s) > 0), "show times must increase, no sample twice"
+    assert np.diff(out.show_s).max() <= 1 / 240 + 1e-9, "no hole in the pose stream"
+    sticking = stick_online(onsets, rig.kit, lookahead_s)
+    beats = groove.grid.beat_s + START
+    offline = animate(rig, sticking, beats, hihat_openness(onsets, np.zeros(0, CONTROL_DTYPE)))
+    hands = np.flatnonzero((sticking.limb >= 0) & (sticking.limb <= 1) & (sticking.piece >= 0))
+    assert hands.size > 10
+    _, world = offline.world(sticking.onsets["time_s"][hands].astype(np.float64))
+    for k, i in enumerate(hands):
+        show = float(sticking.onsets["time_s"][i]) + delay_s
+        j = int(np.argmin(np.abs(out.show_s - show)))
+        assert abs(out.show_s[j] - show) < 1e-9, f"no sample at onset {i} + D"
+        tip = TIPS[int(sticking.limb[i])]
+        miss = np.linalg.norm(out.rows["position"][j, tip] - world[k, tip])
+        assert miss < 0.003, f"onset {i}: live tip {miss * 1000:.1f} mm from the offline contact"
+
+
+def test_delay_shorter_than_lookahead_is_refused() -> None:
+    with pytest.raises(ValueError, match="lookahead"):
+        SynthParams(lookahead_s=0.05, delay_s=0.03)
+
+
+def test_with_no_input_the_drummer_breathes(rig: Rig) -> None:
+    synth = LiveSynth(rig)
+    shows, heads = [], []
+    for k in range(6 * 30):
+        batch = synth.poses_until(START + k / 30)
+        shows.append(batch.show_s)
+        heads.append(batch.rows["position"][:, J["head"]])
+    show = np.concatenate(shows)
+    head = np.concatenate(heads)
+    assert np.diff(show).max() <= 1 / 240 + 1e-9
+    assert np.ptp(head[:, 1]) > 0.002, "the head should sway (never freeze)"
+    assert np.abs(np.diff(head, axis=0)).max() < 0.002, "idling is smooth"
+
+
+def test_prediction_raises_the_stick_before_regular_hits(rig: Rig, groove: Performance) -> None:
+    onsets = groove.onsets[groove.onsets["time_s"] < 7.0].copy()
+    onsets["time_s"] += START
+    prep = 0.05
+    figures = {}
+    for predict in (False, True):
+        synth = LiveSynth(rig, SynthParams(predict=predict))
+        out = play(synth, onsets, 1 / 120)
+        sticking = stick_online(onsets, rig.kit, 0.03)
+        offline = animate(rig, sticking, groove.grid.beat_s + START,
+                          hihat_openness(onsets, np.zeros(0, CONTROL_DTYPE)))  # fmt: skip
+        hands = np.flatnonzero((sticking.limb >= 0) & (sticking.limb <= 1) & (sticking.piece >= 0))
+        t = sticking.onsets["time_s"][hands].astype(np.float64)
+        _, at = offline.world(t)
+        _, before = offline.world(t - prep)
+        tip = np.array([TIPS[int(sticking.limb[i])] for i in hands])
+        j = np.searchsorted(out.show_s, t - prep + 0.03 - 1e-9)
+        live = out.rows["position"][j, tip, 2]
+        u = upswing_visible(before[np.arange(t.size), tip, 2], at[np.arange(t.size), tip, 2], live)
+        figures[predict] = u.fraction
+        assert u.notes > 10
+    assert figures[True] > figures[False]
+
+
+def test_hand_predictor_follows_a_pulse_and_gives_up_on_rests() -> None:
+    pred = HandPredictor()
+    assert pred.guess(0, 0.0) is None
+    for k in range(4):
+        pred.observe(10.0 + 0.25 * k, 0, 2, 0, 90)
+    guess = pred.guess(0, 10.75)
+    assert guess is not None and guess.time_s == pytest.approx(11.0) and guess.piece == 2
+    missed = pred.guess(0, 11.0)
+    assert missed is not None and missed.time_s == pytest.approx(11.25)
+    assert pred.guess(0, 12.0) is None  # three expectations missed: no rhythm any more
+    assert pred.guess(1, 10.0) is None  # the other hand has no history
+    pred.observe(20.0, 0, 2, 0, 90)  # after a long rest the history starts again
+    assert pred.guess(0, 20.0) is None
+
+
+def test_upswing_measure_counts_only_notes_with_a_preparation() -> None:
+    u = upswing_visible(
+        offline_prep_z=np.array([1.10, 1.10, 1.01, 1.20]),
+        offline_contact_z=np.array([1.00, 1.00, 1.00, 1.00]),
+        live_prep_z=np.array([1.06, 1.04, 1.00, 1.20]),
+    )
+    assert (u.notes, u.visible) == (3, 2)
+
+
+def test_pose_track_holds_the_last_pose_and_resumes(rig: Rig) -> None:
+    synth = LiveSynth(rig)
+    first = synth.poses_until(START)
+    track = PoseTrack(keep_s=1.0)
+    assert track.at(START) is None
+    track.add(first.show_s, first.rows)
+    newest = track.newest_s
+    assert newest is not None
+    got = track.at(newest + 10.0)  # the stream stopped: hold the last pose
+    assert got is not None and got[0] == newest
+    later = synth.poses_until(START + 0.5)
+    track.add(later.show_s, later.rows)
+    got = track.at(float(later.show_s[-1]))
+    assert got is not None and got[0] == later.show_s[-1]
+    frame = scene_frame(got[1], got[0], np.zeros(len(rig.kit.pieces), bool))
+    frame.check(REST_SKELETON, len(rig.kit.pieces))
+
+
+def test_calibration_round_trip_and_strict_keys(tmp_path: Path) -> None:
+    path = tmp_path / "calibration.toml"
+    assert Calibration.load(path) == Calibration()
+    cal = Calibration(input_ms=-3.5, audio_ms=12.0, display_ms=40.0)
+    cal.save(path)
+    assert Calibration.load(path) == cal
+    path.write_text("input_ms = 1.0\nvideo_ms = 3.0\n")
+    with pytest.raises(CalibrationError, match="video_ms"):
+        Calibration.load(path)
+    path.write_text("audio_ms = 900.0\n")
+    with pytest.raises(CalibrationError, match="audio_ms"):
+        Calibration.load(path)
+
+
+def test_next_due_is_when_a_hand_note_gets_committed(rig: Rig, groove: Performance) -> None:
+    params = SynthParams()
+    synth = LiveSynth(rig, params)
+    onsets = groove.onsets.copy()
+    onsets["time_s"] += START
+    snare = onsets[onsets["instrument"] == 1][0]
+    t = float(snare["time_s"])
+    synth.poses_until(t - 0.1)
+    assert synth.next_due_s(t - 0.1) is None
+    synth.process(snare)
+    assert synth.next_due_s(t - 0.1) == pytest.approx(t + params.lookahead_s)
+    synth.poses_until(t + params.lookahead_s)
+    assert synth.next_due_s(t) is None
