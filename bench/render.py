@@ -1,6 +1,8 @@
 """Render benchmark: ms per frame headless, with and without read-back, and export speed.
 
-Draws the rest-pose drummer and the demo groove's kit motion from the ``stage`` camera.
+Draws the demo groove as the body model performs it (optimal sticking), from the ``stage``
+camera; ``body`` is the time to sample the body's poses and map them to scene frames (per
+frame, vectorized over all frames).
 ``draw`` is draw + ``glFinish`` (what a window pays before swapping); ``draw+read`` adds the
 read-back of the frame into numpy (what export pays before encoding). Export speed is the
 whole ``livedrummer render`` job (audio mix, render, H.264/AAC encode) on the first
@@ -10,7 +12,6 @@ whole ``livedrummer render`` job (audio mix, render, H.264/AAC encode) on the fi
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import statistics
 import tempfile
 import time
@@ -19,15 +20,13 @@ from pathlib import Path
 import numpy as np
 
 from livedrummer.cli.common import DEMO_MAP, demo_groove
-from livedrummer.cli.render import parse_size
+from livedrummer.cli.render import first_seconds, parse_size
 from livedrummer.kitfile import load_kit
 from livedrummer.midifile import read_midi_file
 from livedrummer.notemap import load_note_map
-from livedrummer.render.animate import kit_channels
+from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
-from livedrummer.scene import SceneFrame
-from livedrummer.scene_rest import REST_SKELETON, rest_frame
 from services.display.context import headless_context
 from services.display.export import export
 from services.display.renderer import Renderer
@@ -44,17 +43,26 @@ def main(argv: list[str]) -> int:
     args = parser.parse_args(argv)
 
     kit = load_kit("rock5")
-    perf = read_midi_file(demo_groove(), load_note_map(DEMO_MAP))
+    note_map = load_note_map(DEMO_MAP)
+    perf = read_midi_file(demo_groove(), note_map)
+    t0 = time.perf_counter()
+    body = BodyScene.perform(perf, kit, note_map)
+    t1 = time.perf_counter()
+    all_times = np.arange(int(perf.duration_s * 60)) / 60.0
+    list(body.frames(all_times))
+    t2 = time.perf_counter()
+    print(
+        f"body: perform {t1 - t0:.2f} s for {perf.duration_s:.0f} s of music; frames "
+        f"{(t2 - t1) / all_times.size * 1e3:.3f} ms each ({all_times.size} at 60 fps)"
+    )
     ctx = headless_context()
     print(f"render: {ctx.info['GL_RENDERER']} ({ctx.info['GL_VERSION']}), aa {args.aa}")
-    rest = rest_frame(kit)
     cam = pick_camera(kit, "stage")
     times = np.arange(args.frames) / 60.0 + 4.0
-    channels = kit_channels(perf.onsets, kit, times)
-    frames = [SceneFrame(rest.joints_m, rest.sticks_m, channels[i]) for i in range(args.frames)]
+    frames = list(body.frames(times))
     for text in args.sizes.split(","):
         size = parse_size(text)
-        r = Renderer(ctx, build_kit_mesh(kit), REST_SKELETON, size, samples=args.aa)
+        r = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=args.aa)
         r.draw(frames[0], cam)
         r.read_rgba()
         draw, read = [], []
@@ -73,15 +81,12 @@ def main(argv: list[str]) -> int:
               f"draw+read {rd:6.2f} ms ({1e3 / rd:6.1f} fps)")  # fmt: skip
     ctx.release()
     if args.seconds > 0:
-        short = dataclasses.replace(
-            perf,
-            duration_s=min(perf.duration_s, args.seconds),
-            onsets=perf.onsets[perf.onsets["time_s"] < args.seconds],
-        )
+        short = first_seconds(perf, args.seconds)
+        short_body = BodyScene.perform(short, kit, note_map)
         with tempfile.TemporaryDirectory() as tmp:
             for fps in (int(v) for v in args.export_fps.split(",")):
                 settings = VideoSettings(size=(1280, 720), fps=fps)
-                report = export(short, kit, out=Path(tmp) / "bench.mp4", settings=settings,
+                report = export(short, short_body, out=Path(tmp) / "bench.mp4", settings=settings,
                                 tail_s=0.0, samples=args.aa)  # fmt: skip
                 print(f"  export 1280x720 @ {fps} fps: {report.frames} frames in "
                       f"{report.wall_s:.2f} s = {report.realtime:.2f}x real time")  # fmt: skip

@@ -1,9 +1,11 @@
 """A seated rest pose built from kit geometry: the drummer before the first stroke.
 
-This is a stand-in for the body model (``livedrummer/body/``), which computes real poses; the
-renderer, its tests and ``livedrummer render`` use it until the body is connected. It follows
-the :mod:`livedrummer.scene` contract exactly, so swapping it for the body is swapping one
-``SceneFrame`` source for another.
+A stand-in for the body model (``livedrummer/body/``), which computes the real poses:
+``livedrummer render`` and ``display`` now draw the body (:mod:`livedrummer.render.body_scene`);
+this pose and its 22-joint :data:`REST_SKELETON` remain for the live display
+(``services/display/live.py``, :mod:`livedrummer.live.track`) and renderer tests that want a
+pose without animating a performance. It follows the :mod:`livedrummer.scene` contract exactly,
+so swapping it for the body is swapping one ``SceneFrame`` source for another.
 
 The pose is placed from the kit, not typed in: the pelvis sits on the throne at
 ``kit.seat_height_m``; the right stick's tip rests just above the hi-hat and the left's above

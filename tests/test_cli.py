@@ -77,7 +77,11 @@ def test_kits_lists_kits_and_maps() -> None:
         assert f"  {name} " in proc.stdout
 
 
-def test_demo_runs_on_the_bundled_groove() -> None:
-    proc = run("demo")
+def test_demo_renders_the_bundled_groove_without_a_screen(tmp_path: Path) -> None:
+    out = tmp_path / "demo.mp4"
+    proc = run("demo", "--seconds", "3", "-o", str(out), DISPLAY="", WAYLAND_DISPLAY="")
     assert proc.returncode == 0, proc.stderr
     assert "gmd-drummer1-funk-80.mid" in proc.stdout
+    assert "sticking  optimal:" in proc.stdout
+    assert str(out) in proc.stdout
+    assert out.stat().st_size > 10_000

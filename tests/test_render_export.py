@@ -105,6 +105,7 @@ def test_frames_folder_gets_pngs(groove: Path, tmp_path: Path) -> None:
         (["--size", "big"], "WIDTHxHEIGHT"),
         (["--fps", "0"], "--fps"),
         (["--kit", "no-such-kit"], "no-such-kit"),
+        (["--sticking", "no-such-strategy"], "no-such-strategy"),
     ],
 )
 def test_bad_options_are_one_line_errors(groove: Path, tmp_path: Path, capsys, argv: list[str],  # type: ignore[no-untyped-def]

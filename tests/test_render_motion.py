@@ -1,4 +1,4 @@
-"""Kit animation from onsets and the window's transport state machine (pure logic)."""
+"""Body poses mapped to the scene's kit channels and sticks, and the window's transport (pure)."""
 
 from __future__ import annotations
 
@@ -7,73 +7,85 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from livedrummer.events import ONSET_DTYPE
+from livedrummer.body.pose import pose_dtype
+from livedrummer.body.skeleton import JOINTS, PARENTS, J
 from livedrummer.kitfile import load_kit
-from livedrummer.render.animate import BEATER_REST_RAD, HIHAT_LIFT_M, kit_channels, onset_pieces
+from livedrummer.render.body_scene import (
+    BODY_SKELETON,
+    STICK_TAIL_M,
+    scene_channels,
+    stick_segments,
+)
 from livedrummer.render.transport import KEYS, SPEEDS, Transport
-from livedrummer.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE
-from livedrummer.vocabulary import HIHATS, INSTRUMENT_CODE, ZONES, HiHat, Zone
-
-
-def onsets(*rows: tuple[float, str, int, HiHat, float]) -> np.ndarray:
-    out = np.zeros(len(rows), ONSET_DTYPE)
-    for i, (t, inst, vel, hat, openness) in enumerate(rows):
-        out[i]["time_s"] = t
-        out[i]["instrument"] = INSTRUMENT_CODE[inst]
-        out[i]["velocity"] = vel
-        out[i]["zone"] = ZONES.index(Zone.HEAD)
-        out[i]["hihat"] = HIHATS.index(hat)
-        out[i]["openness"] = openness
-    return out
-
+from livedrummer.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE, CH_WOBBLE_AZIMUTH
 
 KIT = load_kit("rock5")
 P = {p.name: i for i, p in enumerate(KIT.pieces)}
 
 
-def test_highlight_peaks_in_the_contact_frame_and_fades() -> None:
-    on = onsets((1.0, "snare", 127, HiHat.NONE, np.nan))
-    times = np.arange(0, 2.0, 1 / 60)
-    ch = kit_channels(on, KIT, times)
-    hl = ch[:, P["snare"], CH_HIGHLIGHT]
-    assert np.argmax(hl) == 60 and hl[60] == pytest.approx(1.0)
-    assert np.all(hl[:60] == 0)
-    assert np.all(np.diff(hl[60:]) <= 0) and hl[-1] < 0.01
-    others = np.delete(ch[:, :, CH_HIGHLIGHT], P["snare"], axis=1)
-    assert np.all(others == 0)
-    assert ch[61, P["snare"], CH_WOBBLE] > 0
+def records(n: int, seed: int = 0) -> np.ndarray:
+    """Pose records with random, distinct values in every channel."""
+    rng = np.random.default_rng(seed)
+    out = np.zeros(n, pose_dtype(len(KIT.pieces)))
+    for field in ("swing", "lift", "glow"):
+        out[field] = rng.uniform(0.1, 1.0, out[field].shape)
+    out["position"] = rng.normal(size=out["position"].shape)
+    return out
 
 
-def test_cymbal_swings_and_settles() -> None:
-    on = onsets((0.0, "crash1", 100, HiHat.NONE, np.nan))
-    w = kit_channels(on, KIT, np.arange(0, 4.0, 1 / 60))[:, P["crash1"], CH_WOBBLE]
-    assert w[0] > 0.1
-    assert w.min() < 0  # swings back through rest
-    assert abs(w[-1]) < 0.01
+def test_scene_skeleton_is_the_body_skeleton() -> None:
+    assert BODY_SKELETON.names == JOINTS
+    assert BODY_SKELETON.parent.tolist() == list(PARENTS)
+    # the stick tips are drawn as sticks, not as limbs
+    for tip in ("r_tip", "l_tip"):
+        assert BODY_SKELETON.segment_radius_m[J[tip]] == 0
+        assert BODY_SKELETON.joint_radius_m[J[tip]] == 0
+    drawn = BODY_SKELETON.bones[BODY_SKELETON.segment_radius_m[BODY_SKELETON.bones] > 0]
+    assert len(drawn) == len(JOINTS) - 1 - 2
 
 
-def test_hihat_opening_and_kick_beater() -> None:
-    on = onsets(
-        (0.5, "hihat", 90, HiHat.OPEN, 1.0),
-        (1.0, "hihat", 90, HiHat.CLOSED, 0.0),
-        (1.5, "kick", 110, HiHat.NONE, np.nan),
-    )
-    times = np.array([0.2, 0.7, 1.2, 1.2, 1.5, 1.52, 2.5])
-    ch = kit_channels(on, KIT, times)
-    lift = ch[:, P["hihat"], CH_TRAVEL]
-    assert lift[0] == 0 and lift[1] == pytest.approx(HIHAT_LIFT_M) and lift[2] == 0
-    beater = ch[:, P["kick"], CH_TRAVEL]
-    assert beater[0] == pytest.approx(BEATER_REST_RAD)
-    assert beater[4] == 0  # at the head in the contact frame
-    assert 0 < beater[5] < BEATER_REST_RAD
-    assert beater[6] == pytest.approx(BEATER_REST_RAD)
+def test_channels_follow_the_body_channels() -> None:
+    rec = records(5)
+    ch = scene_channels(rec, KIT)
+    assert ch.shape == (5, len(KIT.pieces), 4) and ch.dtype == np.float32
+    np.testing.assert_array_equal(ch[..., CH_HIGHLIGHT], rec["glow"])
+    for name, piece in P.items():
+        kind = KIT.pieces[piece].kind
+        wobble, travel = ch[:, piece, CH_WOBBLE], ch[:, piece, CH_TRAVEL]
+        if kind.value == "kick":  # the beater's angle back from the head
+            np.testing.assert_array_equal(travel, rec["swing"][:, piece])
+            assert np.all(wobble == 0)
+        elif kind.value == "hihat":  # top cymbal's lift; the footboard is not drawn
+            np.testing.assert_array_equal(travel, rec["lift"][:, piece])
+            assert np.all(wobble == 0)
+        elif kind.is_cymbal:
+            np.testing.assert_array_equal(wobble, rec["swing"][:, piece])
+            assert np.all(travel == 0), name
+        else:
+            assert np.all(wobble == 0) and np.all(travel == 0), name
 
 
-def test_onsets_without_a_piece_are_ignored() -> None:
-    on = onsets((0.1, "cowbell", 100, HiHat.NONE, np.nan))  # rock5 has no cowbell
-    assert onset_pieces(on, KIT).tolist() == [-1]
-    ch = kit_channels(on, KIT, np.array([0.1]))
-    assert np.all(ch[..., CH_HIGHLIGHT] == 0)
+def test_cymbal_wobble_dips_the_edge_nearest_the_drummer() -> None:
+    rec = records(1)
+    az = scene_channels(rec, KIT)[0, :, CH_WOBBLE_AZIMUTH]
+    for k, piece in enumerate(KIT.pieces):
+        axis = np.array([np.cos(az[k]), np.sin(az[k]), 0.0])
+        to_seat = -np.array(piece.position_m) * [1, 1, 0]
+        # a small positive turn about the axis moves the seat-side edge down
+        assert np.cross(axis, to_seat)[2] < 0, piece.name
+
+
+def test_sticks_run_from_behind_the_grip_to_the_tip() -> None:
+    rec = records(3)
+    sticks = stick_segments(rec["position"])
+    assert sticks.shape == (3, 2, 2, 3) and sticks.dtype == np.float32
+    for k, side in enumerate("rl"):
+        grip, tip = rec["position"][:, J[f"{side}_stick"]], rec["position"][:, J[f"{side}_tip"]]
+        np.testing.assert_allclose(sticks[:, k, 1], tip, atol=1e-6)
+        back = sticks[:, k, 0] - grip
+        np.testing.assert_allclose(np.linalg.norm(back, axis=1), STICK_TAIL_M, atol=1e-5)
+        cos = np.sum(back * (grip - tip), axis=1) / np.linalg.norm(back * 1, axis=1)
+        np.testing.assert_allclose(cos / np.linalg.norm(grip - tip, axis=1), 1.0, atol=1e-5)
 
 
 def test_transport_plays_pauses_and_stops_at_the_end() -> None:

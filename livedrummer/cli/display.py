@@ -12,7 +12,7 @@ import argparse
 from pathlib import Path
 
 from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, add_kit_option, demo_groove
-from livedrummer.cli.render import parse_size
+from livedrummer.cli.render import add_motion_options, body_scene, parse_size
 from livedrummer.render.camera import CAMERA_NAMES
 
 
@@ -27,6 +27,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
     p.add_argument("--aa", type=int, default=4, metavar="N", help="multisample N (default 4)")
     p.add_argument("--quit-after", type=float, metavar="S", help="close after S seconds")
+    add_motion_options(p)
     live = p.add_argument_group("live (poses from a running synth)")
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
     live.add_argument("--sub", default="tcp://127.0.0.1:5720",
@@ -53,12 +54,14 @@ def run(args: argparse.Namespace) -> int:
 
     source = Path(args.file) if args.file else demo_groove()
     map_name = args.map or ("general-midi" if args.file else DEMO_MAP)
-    performance = read_midi_file(source, load_note_map(map_name))
+    note_map = load_note_map(map_name)
+    performance = read_midi_file(source, note_map)
     options = WindowOptions(
         size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
         camera=args.camera, samples=args.aa, quit_after_s=args.quit_after,
     )  # fmt: skip
-    show(performance, load_kit(args.kit), options)
+    kit = load_kit(args.kit)
+    show(performance, kit, options, body=body_scene(args, performance, kit, note_map))
     return 0
 
 

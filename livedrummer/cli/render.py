@@ -1,21 +1,32 @@
 """``livedrummer render FILE.mid -o out.mp4``: the performance as a video with its drum sounds.
 
 Off-screen (EGL; Mesa llvmpipe where there is no GPU), so it works over SSH and in CI. Without
-FILE it renders the bundled demo groove with the Roland map. The progress bar goes to stderr
-and only when stderr is a terminal; the summary line goes to stdout.
+FILE it renders the bundled demo groove with the Roland map. The drummer is the body model
+(:mod:`livedrummer.body`) with the optimal limb assignment unless ``--sticking`` says otherwise;
+``--sticking``, ``--strokes`` and ``--preset`` mean what they mean for ``livedrummer check``
+(the x264 speed preset is ``--x264-preset``). The progress bar goes to stderr and only when
+stderr is a terminal; the summary line goes to stdout.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, add_kit_option, demo_groove
 from livedrummer.errors import LivedrummerError
+from livedrummer.performance import Performance
 from livedrummer.render.camera import CAMERA_NAMES
+
+if TYPE_CHECKING:
+    from livedrummer.kit import Kit
+    from livedrummer.notemap import NoteMap
+    from livedrummer.render.body_scene import BodyScene
 
 
 class RenderOptionError(LivedrummerError):
@@ -28,14 +39,56 @@ def register(sub: Subparsers) -> None:
     p.add_argument("-o", "--output", type=Path, help="video file (default: FILE's name .mp4)")
     p.add_argument("--frames", type=Path, metavar="DIR", help="write PNG frames to DIR instead")
     p.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT, even (default 1280x720)")
-    p.add_argument("--fps", type=int, default=60, help="frames per second (default 60)")
+    p.add_argument("--fps", type=int, default=30, help="frames per second (default 30)")
     p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="viewpoint")
     add_kit_option(p)
     p.add_argument("--map", help="note map (default general-midi; roland-td for the demo)")
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
     p.add_argument("--aa", type=int, default=0, metavar="N", help="multisample N (slow on CPU)")
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
-    p.add_argument("--preset", default="veryfast", help="x264 speed preset (default veryfast)")
+    p.add_argument("--x264-preset", default="veryfast", help="x264 speed (default veryfast)")
+    add_motion_options(p)
+
+
+def add_motion_options(p: argparse.ArgumentParser) -> None:
+    """``--sticking``, ``--strokes``, ``--preset``: as ``livedrummer check`` has them."""
+    p.add_argument("--preset", default=None, help="expression preset name or .toml path")
+    p.add_argument(
+        "--sticking",
+        default="optimal",
+        help="limb assignment: a livedrummer.sticking strategy (default optimal) or fallback",
+    )
+    p.add_argument(
+        "--strokes",
+        default="livedrummer",
+        choices=("livedrummer", "paper", "smed"),
+        help="stroke overlap rules (default livedrummer)",
+    )
+
+
+def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap
+               ) -> BodyScene:  # fmt: skip
+    """The performance animated on ``kit`` with the motion options of ``args``."""
+    from livedrummer.body.expression import load_expression
+    from livedrummer.body.perform import named_sticking
+    from livedrummer.body.strokes import StrokeParams
+    from livedrummer.render.body_scene import BodyScene
+
+    expression = load_expression(args.preset) if args.preset else None
+    return BodyScene.perform(performance, kit, note_map, named_sticking(args.sticking),
+                             expression, StrokeParams(model=args.strokes))  # fmt: skip
+
+
+def first_seconds(performance: Performance, seconds: float) -> Performance:
+    """The performance cut to its first ``seconds`` (onsets and controls before the cut)."""
+    if seconds >= performance.duration_s:
+        return performance
+    return dataclasses.replace(
+        performance,
+        duration_s=max(seconds, 0.0),
+        onsets=performance.onsets[performance.onsets["time_s"] < seconds],
+        controls=performance.controls[performance.controls["time_s"] < seconds],
+    )
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -49,28 +102,32 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 class ProgressBar:
-    """One self-rewriting stderr line: bar, percent, frames, speed and time left."""
+    """Progress on stderr: one self-rewriting line on a terminal (every ``every_s``), else one
+    plain line every ``every_s`` seconds. Bar, percent, frames, speed and time left."""
 
-    def __init__(self, label: str, enabled: bool, fps: int) -> None:
-        self.label, self.enabled, self.fps = label, enabled, fps
+    def __init__(self, label: str, enabled: bool, fps: int, every_s: float = 0.2) -> None:
+        self.label, self.enabled, self.fps, self.every_s = label, enabled, fps, every_s
+        self.tty = sys.stderr.isatty()
         self.start = time.perf_counter()
-        self.last = 0.0
+        self.last = self.start if not self.tty else 0.0
 
     def __call__(self, done: int, total: int) -> None:
         now = time.perf_counter()
-        if not self.enabled or (now - self.last < 0.2 and done < total):
+        if not self.enabled or (now - self.last < self.every_s and done < total):
             return
         self.last = now
         elapsed = max(now - self.start, 1e-9)
         filled = int(30 * done / total)
         speed = done / self.fps / elapsed
         eta = (total - done) / max(done / elapsed, 1e-9)
-        sys.stderr.write(
-            f"\r{self.label} [{'#' * filled}{'.' * (30 - filled)}] {100 * done // total:3d}%"
+        line = (
+            f"{self.label} [{'#' * filled}{'.' * (30 - filled)}] {100 * done // total:3d}%"
             f"  {done}/{total} frames  {speed:4.2f}x real time  {eta:4.0f} s left "
         )
-        if done == total:
-            sys.stderr.write("\n")
+        if self.tty:
+            sys.stderr.write("\r" + line + ("\n" if done == total else ""))
+        else:
+            sys.stderr.write(line.rstrip() + "\n")
         sys.stderr.flush()
 
 
@@ -86,21 +143,24 @@ def run(args: argparse.Namespace) -> int:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
     source = Path(args.file) if args.file else demo_groove()
     map_name = args.map or ("general-midi" if args.file else DEMO_MAP)
-    performance = read_midi_file(source, load_note_map(map_name))
+    note_map = load_note_map(map_name)
+    performance = read_midi_file(source, note_map)
     kit = load_kit(args.kit)
+    body = body_scene(args, performance, kit, note_map)
     out = args.output
     if out is None and args.frames is None:
         out = Path(source.stem + ".mp4")
-    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.preset)
+    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset)
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
-        performance, kit, out=out, frames_dir=args.frames, settings=settings,
+        performance, body, out=out, frames_dir=args.frames, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames) if p is not None)
     print(
         f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s, "
-        f"{size[0]}x{size[1]} @ {args.fps} fps, camera {args.camera}, kit {kit.name}"
+        f"{size[0]}x{size[1]} @ {args.fps} fps, camera {args.camera}, kit {kit.name}, "
+        f"sticking {args.sticking}"
         f"{', drum track 48 kHz stereo' if out is not None else ''}; "
         f"{report.realtime:.2f}x real time"
     )

@@ -1,11 +1,11 @@
 """Headless export: a performance to an MP4 with sound, or to numbered PNG frames.
 
 One function, :func:`export`, does the whole job: it makes the EGL context and the renderer,
-computes all kit channels up front (:func:`livedrummer.render.animate.kit_channels`), mixes the
-drum track (:func:`livedrummer.audio.mix.mix_onsets`) to exactly the video's length, then
-renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or the PNG writer. The
-drummer comes from a :data:`PoseFn` (time -> joints, sticks); the default is the rest pose of
-:mod:`livedrummer.scene_rest` until the body model is connected.
+mixes the drum track (:func:`livedrummer.audio.mix.mix_onsets`) to exactly the video's length,
+then renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or the PNG
+writer. The drummer and the kit's motion come from a
+:class:`~livedrummer.render.body_scene.BodyScene` (the body model), sampled in chunks of frames
+as the render goes, so memory stays bounded however long the file.
 
 The frame count is ``ceil((performance.duration_s + tail_s) * fps)`` and the audio track is
 exactly that many frames long, so video and audio durations agree to the sample.
@@ -22,20 +22,15 @@ from pathlib import Path
 import numpy as np
 
 from livedrummer.audio.mix import mix_onsets
-from livedrummer.kit import Kit
 from livedrummer.performance import Performance
-from livedrummer.render.animate import kit_channels
+from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
-from livedrummer.scene import SceneFrame, Skeleton
-from livedrummer.scene_rest import REST_SKELETON, rest_frame
 from services.display.context import DisplayError, headless_context
 from services.display.png import write_png
 from services.display.renderer import Renderer
 from services.display.video import VideoSettings, VideoWriter
 
-#: time_s -> (joints (J, 3) float32, sticks (2, 2, 3) float32)
-PoseFn = Callable[[float], tuple[np.ndarray, np.ndarray]]
 Progress = Callable[[int, int], None]
 DEFAULT_SETTINGS = VideoSettings()
 
@@ -58,7 +53,7 @@ def frame_count(duration_s: float, fps: int) -> int:
 
 def export(
     performance: Performance,
-    kit: Kit,
+    body: BodyScene,
     *,
     out: Path | None,
     frames_dir: Path | None = None,
@@ -66,8 +61,6 @@ def export(
     camera: str = "stage",
     tail_s: float = 1.0,
     samples: int = 0,
-    pose: PoseFn | None = None,
-    skeleton: Skeleton = REST_SKELETON,
     progress: Progress | None = None,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``."""
@@ -77,8 +70,7 @@ def export(
     fps = settings.fps
     n = frame_count(performance.duration_s + tail_s, fps)
     times = np.arange(n) / fps
-    channels = kit_channels(performance.onsets, kit, times)
-    rest = rest_frame(kit, skeleton)
+    kit = body.kit
     cam = pick_camera(kit, camera)
     if frames_dir is not None:
         try:
@@ -93,10 +85,9 @@ def export(
     ctx = None
     try:
         ctx = headless_context()
-        renderer = Renderer(ctx, build_kit_mesh(kit), skeleton, settings.size, samples=samples)
-        for i in range(n):
-            joints, sticks = (rest.joints_m, rest.sticks_m) if pose is None else pose(times[i])
-            frame = SceneFrame(joints, sticks, channels[i], float(times[i]))
+        renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
+                            samples=samples)  # fmt: skip
+        for i, frame in enumerate(body.frames(times)):
             renderer.draw(frame, cam)
             if writer is not None:
                 writer.write(renderer.read_rgba())

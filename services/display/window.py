@@ -4,7 +4,8 @@ GLFW makes the window and its OpenGL 3.3 core context (windowed, or full screen 
 monitor for a projector); the same :class:`~services.display.renderer.Renderer` draws into the
 window's framebuffer. Each frame the loop asks its clock how much time passed, advances the
 :class:`~livedrummer.render.transport.Transport`, evaluates the scene at the transport's
-position and swaps; keys go through :data:`~livedrummer.render.transport.KEYS` (transport),
+position (the body model, :class:`~livedrummer.render.body_scene.BodyScene`, sampled at that
+one time) and swaps; keys go through :data:`~livedrummer.render.transport.KEYS` (transport),
 1..8 (cameras, with a smooth move), F (full screen) and Q/Esc (quit). The clock is injected
 (default ``time.monotonic``) as the style guide asks; with sound it would be the audio stream's.
 
@@ -20,16 +21,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from livedrummer.kit import Kit
 from livedrummer.performance import Performance
-from livedrummer.render.animate import kit_channels
+from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CAMERA_NAMES, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.transport import KEYS, Transport
-from livedrummer.scene import SceneFrame
-from livedrummer.scene_rest import REST_SKELETON, rest_frame
 from services.display.context import DisplayError
 from services.display.renderer import Renderer
 
@@ -75,8 +72,16 @@ def show(
     kit: Kit,
     options: WindowOptions = DEFAULT_OPTIONS,
     clock: Callable[[], float] = time.monotonic,
+    body: BodyScene | None = None,
 ) -> None:
-    """Open the window and play ``performance`` until the user quits."""
+    """Open the window and play ``performance`` until the user quits.
+
+    ``body`` is the performance animated on ``kit``; without it the body is animated here with
+    the defaults (optimal sticking) and the note map the performance was read with."""
+    if body is None:
+        from livedrummer.notemap import load_note_map
+
+        body = BodyScene.perform(performance, kit, load_note_map(performance.map_name))
     import glfw
     import moderngl
 
@@ -104,7 +109,7 @@ def show(
         glfw.make_context_current(window)
         glfw.swap_interval(1 if options.vsync else 0)
         ctx = moderngl.create_context()
-        _loop(glfw, window, ctx, performance, kit, options, clock)
+        _loop(glfw, window, ctx, performance, body, options, clock)
     finally:
         glfw.terminate()
 
@@ -114,17 +119,17 @@ def _loop(
     window: Any,
     ctx: Any,
     performance: Performance,
-    kit: Kit,
+    body: BodyScene,
     options: WindowOptions,
     clock: Callable[[], float],
 ) -> None:
+    kit = body.kit
     transport = Transport(performance.duration_s + 1.0)
     cameras = kit_cameras(kit)
     move = CameraMove(cameras[options.camera], cameras[options.camera], 0.0, 0.0)
-    rest = rest_frame(kit)
     mesh = build_kit_mesh(kit)
     size = glfw.get_framebuffer_size(window)
-    renderer = Renderer(ctx, mesh, REST_SKELETON, size, offscreen=False)
+    renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False)
     pending: list[str] = []
 
     def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
@@ -154,9 +159,7 @@ def _loop(
         fb = glfw.get_framebuffer_size(window)
         if fb != renderer.size and fb[0] > 0 and fb[1] > 0:
             renderer.size = fb
-        channels = kit_channels(performance.onsets, kit, np.array([t]))[0]
-        frame = SceneFrame(rest.joints_m, rest.sticks_m, channels, t)
-        renderer.draw(frame, move.at(now), target=ctx.screen)
+        renderer.draw(body.frame_at(t), move.at(now), target=ctx.screen)
         glfw.swap_buffers(window)
         frames += 1
     elapsed = clock() - started

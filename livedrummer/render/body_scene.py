@@ -1,0 +1,168 @@
+"""The body model as the renderer's scene: skeleton, joints, sticks and kit channels per frame.
+
+The body (:mod:`livedrummer.body`) samples a performance into pose records
+(:mod:`livedrummer.body.pose`); the renderer draws :class:`~livedrummer.scene.SceneFrame` s. This
+module is the whole mapping between the two, so there is one motion model and one kit-channel
+model (the body's), and the renderer never learns how either is computed.
+
+* Joints: the scene :data:`BODY_SKELETON` has the body's 24 joints in the body's order with the
+  body's parents, so a frame's ``joints_m`` *is* the record's ``position`` field (no gather).
+  Radii and tones are drawing choices made here; the stick-tip joints get zero radii (the
+  sticks are drawn as sticks).
+* Sticks: from the tip through the grip fulcrum (the body's ``*_stick`` joint) and on past it by
+  the stick's tail behind the hand (:data:`STICK_TAIL_M`), right stick first.
+* Kit channels: ``glow`` is the highlight; ``swing`` is a cymbal's wobble, and for the kick the
+  beater's angle back from the head, which the scene calls travel; ``lift`` (the hi-hat top
+  cymbal's height above closed, metres) is the hi-hat's travel. The hi-hat footboard's angle
+  (``swing`` on the hi-hat) has no scene channel and is not drawn. A cymbal wobbles about the
+  horizontal axis across the line from it to the throne, so a positive swing dips the edge
+  nearest the drummer, where the stick lands.
+
+Frames are made for many times at once (:meth:`BodyScene.frames` samples in chunks, so memory
+stays bounded on long files). Limits: the body's pose is used as given (no smoothing between
+samples); a performance with no onsets is drawn in the body's neutral pose.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from livedrummer.body.expression import Expression
+from livedrummer.body.perform import Performed, StickingFn, named_sticking, perform
+from livedrummer.body.rig import build_rig
+from livedrummer.body.sample import sample_poses
+from livedrummer.body.skeleton import JOINTS, PARENTS, J
+from livedrummer.body.strokes import StrokeParams
+from livedrummer.kit import Kit
+from livedrummer.notemap import NoteMap
+from livedrummer.performance import Performance
+from livedrummer.scene import (
+    CH_HIGHLIGHT,
+    CH_TRAVEL,
+    CH_WOBBLE,
+    CH_WOBBLE_AZIMUTH,
+    N_CHANNELS,
+    SceneFrame,
+    Skeleton,
+    Tone,
+)
+from livedrummer.vocabulary import PieceKind
+
+#: A 16" stick held a third of the way up: the part behind the grip fulcrum (m).
+STICK_TAIL_M = 0.11
+CHUNK_FRAMES = 2048
+
+#: joint -> (segment radius from its parent, ball radius at the joint, tone), in metres.
+_LOOK: dict[str, tuple[float, float, Tone]] = {
+    "pelvis": (0.0, 0.12, Tone.TROUSERS),
+    "lower_back": (0.12, 0.12, Tone.SHIRT),
+    "chest": (0.13, 0.12, Tone.SHIRT),
+    "neck": (0.12, 0.05, Tone.SKIN),
+    "head": (0.05, 0.0, Tone.SKIN),
+    "head_top": (0.085, 0.088, Tone.HAIR),
+    "shoulder": (0.06, 0.06, Tone.SHIRT),
+    "elbow": (0.05, 0.045, Tone.SHIRT),
+    "wrist": (0.038, 0.034, Tone.SKIN),
+    "stick": (0.034, 0.036, Tone.SKIN),
+    "tip": (0.0, 0.0, Tone.SKIN),
+    "hip": (0.09, 0.08, Tone.TROUSERS),
+    "knee": (0.075, 0.06, Tone.TROUSERS),
+    "ankle": (0.055, 0.045, Tone.TROUSERS),
+    "toe": (0.045, 0.04, Tone.SHOES),
+}
+
+
+def _body_skeleton() -> Skeleton:
+    rows: list[tuple[str, str | None, float, float, Tone]] = []
+    for name, parent in zip(JOINTS, PARENTS, strict=True):
+        seg, ball, tone = _LOOK.get(name) or _LOOK[name.split("_", 1)[1]]
+        # the tone of a segment is its child's; the upper chest (chest -> neck) is shirt
+        if name == "neck":
+            tone = Tone.SHIRT
+        rows.append((name, None if parent < 0 else JOINTS[parent], seg, ball, tone))
+    return Skeleton.build(rows)
+
+
+#: The body's joints as a scene skeleton (see the module docstring).
+BODY_SKELETON = _body_skeleton()
+_STICKS = np.array([[J["r_stick"], J["r_tip"]], [J["l_stick"], J["l_tip"]]])
+
+
+def stick_segments(position: np.ndarray) -> np.ndarray:
+    """(..., 2, 2, 3) float32 ``[stick, butt|tip, xyz]`` from body positions (..., 24, 3)."""
+    grip = position[..., _STICKS[:, 0], :]
+    tip = position[..., _STICKS[:, 1], :]
+    along = tip - grip
+    length = np.linalg.norm(along, axis=-1, keepdims=True)
+    butt = grip - STICK_TAIL_M * along / np.maximum(length, 1e-9)
+    return np.stack([butt, tip], axis=-2).astype(np.float32)
+
+
+def channel_roles(kit: Kit) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per piece: swing is wobble, swing is travel, lift is travel (bool (P,)), wobble azimuth."""
+    kinds = [p.kind for p in kit.pieces]
+    wobbles = np.array([k.is_cymbal and k is not PieceKind.HIHAT for k in kinds])
+    beater = np.array([k is PieceKind.KICK for k in kinds])
+    lifts = np.array([k is PieceKind.HIHAT for k in kinds])
+    pos = np.array([p.position_m for p in kit.pieces], np.float64).reshape(-1, 3)
+    azimuth = np.arctan2(-pos[:, 1], -pos[:, 0]) + np.pi / 2
+    return wobbles, beater, lifts, azimuth
+
+
+def scene_channels(poses: np.ndarray, kit: Kit) -> np.ndarray:
+    """Kit channels (F, P, 4) float32 of the scene from pose records (F,)."""
+    wobbles, beater, lifts, azimuth = channel_roles(kit)
+    out = np.zeros((poses.size, len(kit.pieces), N_CHANNELS), np.float32)
+    out[..., CH_HIGHLIGHT] = poses["glow"]
+    out[..., CH_WOBBLE] = np.where(wobbles, poses["swing"], 0.0)
+    out[..., CH_WOBBLE_AZIMUTH] = azimuth
+    out[..., CH_TRAVEL] = np.where(beater, poses["swing"], np.where(lifts, poses["lift"], 0.0))
+    return out
+
+
+@dataclass(frozen=True)
+class BodyScene:
+    """A performed performance on a kit, as scene frames at any times."""
+
+    kit: Kit
+    performed: Performed
+
+    @classmethod
+    def perform(
+        cls,
+        performance: Performance,
+        kit: Kit,
+        note_map: NoteMap,
+        sticking: StickingFn | None = None,
+        expression: Expression | None = None,
+        strokes: StrokeParams | None = None,
+    ) -> BodyScene:
+        """Fit the body to ``kit`` and animate ``performance`` (optimal sticking by default)."""
+        return cls(kit, perform(performance, build_rig(kit), note_map, expression, strokes,
+                                sticking=sticking or named_sticking("optimal")))  # fmt: skip
+
+    def poses(self, times: np.ndarray) -> np.ndarray:
+        """The body's pose records at ``times`` (seconds, float64)."""
+        p = self.performed
+        return sample_poses(p.animation, p.sticking, np.asarray(times, np.float64), p.chokes)
+
+    def arrays(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Joints (F, 24, 3), sticks (F, 2, 2, 3) and channels (F, P, 4), all float32."""
+        poses = self.poses(times)
+        position = np.ascontiguousarray(poses["position"], np.float32)
+        return position, stick_segments(position), scene_channels(poses, self.kit)
+
+    def frames(self, times: np.ndarray, chunk: int = CHUNK_FRAMES) -> Iterator[SceneFrame]:
+        """One frame per time, sampled ``chunk`` times at a go."""
+        times = np.asarray(times, np.float64)
+        for start in range(0, times.size, chunk):
+            t = times[start : start + chunk]
+            joints, sticks, channels = self.arrays(t)
+            for i in range(t.size):
+                yield SceneFrame(joints[i], sticks[i], channels[i], float(t[i]))
+
+    def frame_at(self, time_s: float) -> SceneFrame:
+        return next(self.frames(np.array([time_s])))
