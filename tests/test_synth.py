@@ -16,12 +16,12 @@ from livedrummer.kitfile import load_kit
 from livedrummer.live.calibration import Calibration, CalibrationError
 from livedrummer.live.predict import HandPredictor
 from livedrummer.live.synth import LiveSynth, PoseBatch, SynthParams
-from livedrummer.live.track import PoseTrack, scene_frame
+from livedrummer.live.track import PoseTrack
 from livedrummer.live.upswing import upswing_visible
 from livedrummer.midifile import read_midi_file
 from livedrummer.notemap import load_note_map
 from livedrummer.performance import Performance
-from livedrummer.scene_rest import REST_SKELETON
+from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
 from livedrummer.sticking.online import stick_online
 
 TIPS = {0: J["r_tip"], 1: J["l_tip"]}
@@ -160,8 +160,8 @@ def test_pose_track_holds_the_last_pose_and_resumes(rig: Rig) -> None:
     track.add(later.show_s, later.rows)
     got = track.at(float(later.show_s[-1]))
     assert got is not None and got[0] == later.show_s[-1]
-    frame = scene_frame(got[1], got[0], np.zeros(len(rig.kit.pieces), bool))
-    frame.check(REST_SKELETON, len(rig.kit.pieces))
+    frame = frame_from_pose(got[1], got[0], rig.kit)
+    frame.check(BODY_SKELETON, len(rig.kit.pieces))
 
 
 def test_calibration_round_trip_and_strict_keys(tmp_path: Path) -> None:

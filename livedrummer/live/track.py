@@ -5,8 +5,8 @@ frame will be seen. :class:`PoseTrack` keeps the last few seconds of samples (bo
 answers with the latest sample at or before ``t`` (poses are sampled at 240 Hz and every
 contact is a sample of its own, so holding one is at most 4 ms off and never skips a
 contact). When the stream stops, the last pose is held; when it resumes, newer samples win.
-:func:`scene_frame` maps the body's pose record onto the renderer's rest skeleton (same
-joints, other names) and the kit channels.
+Records become renderer frames through :func:`livedrummer.render.body_scene.frame_from_pose`,
+the same mapping the file renderer uses.
 
 Limits: no interpolation between samples; samples older than ``keep_s`` behind the newest
 are forgotten.
@@ -15,20 +15,6 @@ are forgotten.
 from __future__ import annotations
 
 import numpy as np
-
-from livedrummer.body.skeleton import J
-from livedrummer.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE, N_CHANNELS, SceneFrame
-
-#: Renderer (scene_rest) joint order, as body joints.
-SCENE_JOINTS = (
-    "pelvis", "lower_back", "chest", "neck", "head", "head_top",
-    "r_shoulder", "r_elbow", "r_wrist", "r_stick",
-    "l_shoulder", "l_elbow", "l_wrist", "l_stick",
-    "r_hip", "r_knee", "r_ankle", "r_toe",
-    "l_hip", "l_knee", "l_ankle", "l_toe",
-)  # fmt: skip
-_INDEX = np.array([J[n] for n in SCENE_JOINTS])
-_STICKS = np.array([[J["r_stick"], J["r_tip"]], [J["l_stick"], J["l_tip"]]])
 
 
 class PoseTrack:
@@ -68,14 +54,3 @@ class PoseTrack:
             return None
         i = max(int(np.searchsorted(self._show, show_s, side="right")) - 1, 0)
         return float(self._show[i]), self._rows[i]
-
-
-def scene_frame(row: np.ndarray, time_s: float, travel_is_swing: np.ndarray) -> SceneFrame:
-    """A renderer frame from one pose record; ``travel_is_swing`` (P,) marks the pieces whose
-    travel channel is the beater's swing (the kick) rather than the hi-hat's lift."""
-    pos = np.asarray(row["position"], np.float32)
-    channels = np.zeros((row["glow"].shape[0], N_CHANNELS), np.float32)
-    channels[:, CH_HIGHLIGHT] = row["glow"]
-    channels[:, CH_WOBBLE] = np.where(travel_is_swing, 0.0, row["swing"])
-    channels[:, CH_TRAVEL] = np.where(travel_is_swing, row["swing"], row["lift"])
-    return SceneFrame(pos[_INDEX].copy(), pos[_STICKS].copy(), channels, time_s)

@@ -123,6 +123,15 @@ def scene_channels(poses: np.ndarray, kit: Kit) -> np.ndarray:
     return out
 
 
+def frame_from_pose(pose: np.ndarray, time_s: float, kit: Kit) -> SceneFrame:
+    """The scene frame of one pose record (a live pose received over the wire)."""
+    poses = np.asarray(pose).reshape(1)
+    position = np.ascontiguousarray(poses["position"], np.float32)
+    return SceneFrame(
+        position[0], stick_segments(position)[0], scene_channels(poses, kit)[0], time_s
+    )
+
+
 @dataclass(frozen=True)
 class BodyScene:
     """A performed performance on a kit, as scene frames at any times."""

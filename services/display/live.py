@@ -37,9 +37,9 @@ from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
 from livedrummer.errors import ProtocolError
 from livedrummer.kit import Kit
-from livedrummer.live.track import PoseTrack, scene_frame
+from livedrummer.live.track import PoseTrack
 from livedrummer.protocol import Kind, Pose, PoseFormat, SeqStatus, SequenceTracker, decode, topic
-from livedrummer.vocabulary import PieceKind
+from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
 from services.net import connect, socket
 
 log = logging.getLogger("livedrummer.display")
@@ -142,7 +142,6 @@ class LiveDisplay:
         self.track = PoseTrack()
         self.tracker = SequenceTracker()
         self.stats = LiveStats()
-        self._kick = np.array([p.kind is PieceKind.KICK for p in kit.pieces])
         self._sub: Any = None
 
     def start(self) -> None:
@@ -163,12 +162,11 @@ class LiveDisplay:
             if cfg.render:
                 from livedrummer.render.camera import pick_camera
                 from livedrummer.render.kitmesh import build_kit_mesh
-                from livedrummer.scene_rest import REST_SKELETON
                 from services.display.context import headless_context
                 from services.display.renderer import Renderer
 
                 ctx_gl = headless_context()
-                renderer = Renderer(ctx_gl, build_kit_mesh(self.kit), REST_SKELETON, cfg.size,
+                renderer = Renderer(ctx_gl, build_kit_mesh(self.kit), BODY_SKELETON, cfg.size,
                                     samples=0)  # fmt: skip
                 camera = pick_camera(self.kit, cfg.camera)
             if cfg.out is not None:
@@ -198,7 +196,7 @@ class LiveDisplay:
                     if show - pose_s > period:
                         self.stats.held += 1
                     if renderer is not None:
-                        renderer.draw(scene_frame(row, show, self._kick), camera)
+                        renderer.draw(frame_from_pose(row, show, self.kit), camera)
                 elif renderer is not None:
                     renderer.draw(None, camera)
                 if renderer is not None and cfg.out is not None and cfg.png:
