@@ -13,12 +13,9 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
 import signal
 import subprocess
 import sys
-import uuid
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -39,38 +36,6 @@ DELAY_S = 0.03
 LOOKAHEAD_MS = 10  # D - L = 20 ms for the synth to re-run the body before a contact is due
 FPS = 30.0
 REPO = Path(__file__).resolve().parent.parent
-
-
-@pytest.fixture
-def jack_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str]:
-    if shutil.which("jackd") is None or shutil.which("jack_wait") is None:
-        pytest.skip("jackd not installed (Debian: apt-get install jackd2)")
-    name = f"ldlive-{uuid.uuid4().hex[:8]}"
-    env = {**os.environ, "JACK_NO_AUDIO_RESERVATION": "1", "JACK_DEFAULT_SERVER": name}
-    log = (tmp_path / "jackd.log").open("w")
-    proc = subprocess.Popen(
-        ["jackd", "--no-realtime", "-S", "-n", name, "-d", "dummy", "-r", "48000", "-p", "128"],
-        stdout=log, stderr=subprocess.STDOUT, env=env,
-    )  # fmt: skip
-    try:
-        waited = subprocess.run(
-            ["jack_wait", "-s", name, "-w", "-t", "10"], capture_output=True, env=env
-        )
-        if waited.returncode != 0 or proc.poll() is not None:
-            pytest.skip(
-                f"jackd -d dummy did not start: {(tmp_path / 'jackd.log').read_text()[-300:]}"
-            )
-        monkeypatch.setenv("JACK_DEFAULT_SERVER", name)
-        monkeypatch.setenv("JACK_NO_AUDIO_RESERVATION", "1")
-        yield name
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-        log.close()
 
 
 @pytest.fixture

@@ -15,7 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from livedrummer.cli.common import Subparsers, add_command, add_kit_option, add_map_option
+from livedrummer.cli.common import (
+    Subparsers,
+    add_command,
+    add_kit_option,
+    add_map_option,
+    add_motion_options,
+)
 from livedrummer.errors import LivedrummerError
 
 
@@ -24,18 +30,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("files", nargs="+", help="Standard MIDI File(s) or folders of them")
     add_kit_option(p)
     add_map_option(p)
-    p.add_argument("--preset", default=None, help="expression preset name or .toml path")
-    p.add_argument(
-        "--sticking",
-        default="optimal",
-        help="limb assignment: a livedrummer.sticking strategy (default optimal) or fallback",
-    )
-    p.add_argument(
-        "--strokes",
-        default="livedrummer",
-        choices=("livedrummer", "paper", "smed"),
-        help="stroke overlap rules (default livedrummer)",
-    )
+    add_motion_options(p)
     p.add_argument("--fps", type=float, default=200.0, help="frames per second checked")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 

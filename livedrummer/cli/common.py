@@ -35,3 +35,19 @@ def add_map_option(parser: argparse.ArgumentParser) -> None:
 
 def add_kit_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--kit", default="rock5", help="kit name or .toml path (default rock5)")
+
+
+def add_motion_options(p: argparse.ArgumentParser) -> None:
+    """``--sticking``, ``--strokes``, ``--preset``: how the body is animated (check, export...)."""
+    p.add_argument("--preset", default=None, help="expression preset name or .toml path")
+    p.add_argument(
+        "--sticking",
+        default="optimal",
+        help="limb assignment: a livedrummer.sticking strategy (default optimal) or fallback",
+    )
+    p.add_argument(
+        "--strokes",
+        default="livedrummer",
+        choices=("livedrummer", "paper", "smed"),
+        help="stroke overlap rules (default livedrummer)",
+    )

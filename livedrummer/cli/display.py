@@ -11,8 +11,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, add_kit_option, demo_groove
-from livedrummer.cli.render import add_motion_options, body_scene, parse_size
+from livedrummer.cli.common import (
+    DEMO_MAP,
+    Subparsers,
+    add_command,
+    add_kit_option,
+    add_motion_options,
+    demo_groove,
+)
+from livedrummer.cli.render import body_scene, parse_size
 from livedrummer.render.camera import CAMERA_NAMES
 
 

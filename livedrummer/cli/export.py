@@ -11,7 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
-from livedrummer.cli.common import Subparsers, add_command, add_kit_option, add_map_option
+from livedrummer.cli.common import (
+    Subparsers,
+    add_command,
+    add_kit_option,
+    add_map_option,
+    add_motion_options,
+)
 from livedrummer.errors import LivedrummerError
 
 
@@ -22,18 +28,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
     add_kit_option(p)
     add_map_option(p)
-    p.add_argument("--preset", default=None, help="expression preset name or .toml path")
-    p.add_argument(
-        "--sticking",
-        default="optimal",
-        help="limb assignment: a livedrummer.sticking strategy (default optimal) or fallback",
-    )
-    p.add_argument(
-        "--strokes",
-        default="livedrummer",
-        choices=("livedrummer", "paper", "smed"),
-        help="stroke overlap rules (default livedrummer)",
-    )
+    add_motion_options(p)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -18,7 +18,14 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, add_kit_option, demo_groove
+from livedrummer.cli.common import (
+    DEMO_MAP,
+    Subparsers,
+    add_command,
+    add_kit_option,
+    add_motion_options,
+    demo_groove,
+)
 from livedrummer.errors import LivedrummerError
 from livedrummer.performance import Performance
 from livedrummer.render.camera import CAMERA_NAMES
@@ -48,22 +55,6 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
     p.add_argument("--x264-preset", default="veryfast", help="x264 speed (default veryfast)")
     add_motion_options(p)
-
-
-def add_motion_options(p: argparse.ArgumentParser) -> None:
-    """``--sticking``, ``--strokes``, ``--preset``: as ``livedrummer check`` has them."""
-    p.add_argument("--preset", default=None, help="expression preset name or .toml path")
-    p.add_argument(
-        "--sticking",
-        default="optimal",
-        help="limb assignment: a livedrummer.sticking strategy (default optimal) or fallback",
-    )
-    p.add_argument(
-        "--strokes",
-        default="livedrummer",
-        choices=("livedrummer", "paper", "smed"),
-        help="stroke overlap rules (default livedrummer)",
-    )
 
 
 def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap
