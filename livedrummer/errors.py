@@ -47,3 +47,7 @@ class PresetError(ConfigError):
 
 class UnreachableError(KitError):
     """A piece of a kit lies out of the drummer's reach (named with the limb and the gap)."""
+
+
+class KeyFileError(LivedrummerError):
+    """A CURVE key file is missing, malformed, or its two keys do not belong together."""

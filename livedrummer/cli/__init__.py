@@ -37,6 +37,7 @@ COMMANDS: tuple[str, ...] = (
     "display",
     "synth",
     "up",
+    "keys",
 )
 
 

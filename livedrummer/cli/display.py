@@ -19,6 +19,7 @@ from livedrummer.cli.common import (
     add_motion_options,
     demo_groove,
 )
+from livedrummer.cli.keys import add_curve_options, security_from_args
 from livedrummer.cli.render import body_scene, parse_size
 from livedrummer.render.camera import CAMERA_NAMES
 
@@ -49,6 +50,7 @@ def register(sub: Subparsers) -> None:
     live.add_argument("--no-png", action="store_true", help="--out: frames.jsonl only, no PNGs")
     live.add_argument("--no-render", action="store_true",
                       help="only log frames (benchmarks without a GPU context)")  # fmt: skip
+    add_curve_options(p, server=False, client=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -110,7 +112,7 @@ def run_live(args: argparse.Namespace) -> int:
         sub=args.sub, fps=args.fps, frames=args.frames, out=args.out,
         size=parse_size(args.size), camera=args.camera,
         display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
-        png=not args.no_png,
+        png=not args.no_png, security=security_from_args(args),
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     display = LiveDisplay(load_kit(args.kit), config, clock, ctx)

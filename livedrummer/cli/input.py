@@ -17,6 +17,7 @@ from pathlib import Path
 from types import FrameType
 
 from livedrummer.cli.common import Subparsers, add_command, add_map_option
+from livedrummer.cli.keys import add_curve_options, security_from_args
 
 
 def register(sub: Subparsers) -> None:
@@ -46,6 +47,7 @@ def register(sub: Subparsers) -> None:
     )
     p.add_argument("--fsync-interval", type=float, default=1.0, metavar="S",
                    help="fsync the journal at most every S s (0: every batch)")  # fmt: skip
+    add_curve_options(p, server=True, client=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -61,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
 
     if not 0 <= args.performer <= 0xFFFF:
         raise ConfigError(f"--performer: expected 0..65535 (got {args.performer})")
+    security = security_from_args(args)
     clock = MonotonicClock()
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     note_map = load_note_map(args.map)
@@ -73,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.remote is not None:
         from services.input.remote import RemoteSource
 
-        source = RemoteSource(args.remote, clock, ctx)
+        source = RemoteSource(args.remote, clock, ctx, security=security)
     elif args.serial is not None:
         from services.input.serialport import BAUD_RATES, SerialSource
 
@@ -96,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
         sessions_dir=args.sessions_dir,
         fsync_interval_s=args.fsync_interval,
         meta={"map": note_map.name},
+        security=security,
     )
     daemon = InputDaemon(source, config, clock, ctx)
     stop = threading.Event()

@@ -15,6 +15,7 @@ import threading
 from types import FrameType
 
 from livedrummer.cli.common import Subparsers, add_command, add_kit_option
+from livedrummer.cli.keys import add_curve_options, security_from_args
 
 
 def register(sub: Subparsers) -> None:
@@ -36,6 +37,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--tick-hz", type=float, default=120.0, help="pose messages per second")
     p.add_argument("--no-predict", action="store_true", help="no upswing before expected hits")
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
+    add_curve_options(p, server=True, client=True)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,6 +73,7 @@ def run(args: argparse.Namespace) -> int:
     config = SynthConfig(
         sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
         tick_hz=args.tick_hz, input_offset_s=calibration.input_ms / 1000.0,
+        security=security_from_args(args),
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)

@@ -17,7 +17,8 @@ received by then, so a test or a bench can check contacts and latency without pi
 
 Limits: the pose format is taken from the kit given to the display (the synth's READY also
 carries it; a mismatch is refused by hash, frame by frame); one performer; no window mode yet
-in live (headless PNGs, or ``--out`` omitted to only log frames).
+in live (headless PNGs, or ``--out`` omitted to only log frames). A remote display sets
+``config.security`` (our key pair and the synth's public key) to subscribe over CURVE.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import json
 import logging
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any, Protocol
 
@@ -35,12 +36,12 @@ import zmq
 
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
-from livedrummer.errors import ProtocolError
+from livedrummer.errors import KeyFileError, ProtocolError
 from livedrummer.kit import Kit
 from livedrummer.live.track import PoseTrack
 from livedrummer.protocol import Kind, Pose, PoseFormat, SeqStatus, SequenceTracker, decode, topic
 from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
-from services.net import connect, socket
+from services.net import Security, connect, socket
 
 log = logging.getLogger("livedrummer.display")
 
@@ -112,6 +113,7 @@ class LiveConfig:
     display_offset_s: float = 0.0
     render: bool = True
     png: bool = True  # with ``out``: write each frame as a PNG (frames.jsonl is always written)
+    security: Security = field(default_factory=Security)
 
 
 @dataclass
@@ -148,8 +150,8 @@ class LiveDisplay:
         sub = socket(self.ctx, zmq.SUB)
         sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.POSE))
         try:
-            connect(sub, self.config.sub, "sub endpoint")
-        except ProtocolError:
+            connect(sub, self.config.sub, "sub endpoint", self.config.security)
+        except (ProtocolError, KeyFileError):
             sub.close(0)
             raise
         self._sub = sub

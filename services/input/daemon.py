@@ -22,6 +22,10 @@ returns, a GAP (reason SOURCE_LOST, dropped 0: unknown) spans the outage. Device
 remote messages, unmapped notes and journal write errors are logged once per kind and
 counted; the counts go to the log and into the journal's END record at shutdown. The daemon
 keeps running through all of them.
+
+Security. With ``config.security`` holding a key pair, both sockets are CURVE servers; with
+an allow folder, a ZAP authenticator (started here, stopped in ``close``) lets in only the
+clients whose public keys are there (see :mod:`services.net`).
 """
 
 from __future__ import annotations
@@ -51,7 +55,7 @@ from livedrummer.protocol import (
 )
 from services.input.base import Event, Source
 from services.journal import JournalWriter
-from services.net import bind, socket
+from services.net import Security, bind, socket, start_authenticator
 
 log = logging.getLogger("livedrummer.input")
 
@@ -73,6 +77,7 @@ class DaemonConfig:
     sessions_dir: Path | None = None
     fsync_interval_s: float = 1.0
     meta: dict[str, Any] = field(default_factory=dict)
+    security: Security = field(default_factory=Security)
 
 
 @dataclass
@@ -112,26 +117,32 @@ class InputDaemon:
         self._control_thread: threading.Thread | None = None
         self._control_stop = threading.Event()
         self._unknown_seen = 0
+        self._auth: Any = None
 
     # ---------------------------------------------------------------- lifecycle
 
     def start(self) -> dict[str, str]:
         """Bind the sockets, open the journal, start answering HELLO; return the endpoints."""
         cfg = self.config
+        if cfg.security.allow is not None:
+            self._auth = start_authenticator(self.ctx, cfg.security.allow)
         pub = socket(self.ctx, zmq.XPUB)
         pub.setsockopt(zmq.XPUB_VERBOSE, 1)
         try:
-            self.endpoints["pub"] = bind(pub, cfg.pub, "pub endpoint")
+            self.endpoints["pub"] = bind(pub, cfg.pub, "pub endpoint", cfg.security)
         except ProtocolError:
             pub.close(0)
+            self._stop_auth()
             raise
         self._pub = pub
         control = socket(self.ctx, zmq.ROUTER)
         try:
-            self.endpoints["control"] = bind(control, cfg.control, "control endpoint")
+            self.endpoints["control"] = bind(control, cfg.control, "control endpoint", cfg.security)
         except ProtocolError:
             control.close(0)
             pub.close(0)
+            self._pub = None
+            self._stop_auth()
             raise
         if cfg.journal:
             meta = {
@@ -148,6 +159,7 @@ class InputDaemon:
                 control.close(0)
                 pub.close(0)
                 self._pub = None
+                self._stop_auth()
                 raise
             self.endpoints["journal"] = str(self.journal.path)
         self._control_thread = threading.Thread(
@@ -214,7 +226,13 @@ class InputDaemon:
         if self._pub is not None:
             self._pub.close(0)
             self._pub = None
+        self._stop_auth()
         log.info("input stopped: %s", summary)
+
+    def _stop_auth(self) -> None:
+        if self._auth is not None:
+            self._auth.stop()
+            self._auth = None
 
     def summary(self) -> dict[str, Any]:
         out: dict[str, Any] = {

@@ -7,8 +7,11 @@ message is validated by :func:`livedrummer.protocol.decode`; bad ones are droppe
 (logged once per kind). A sequence gap on the remote stream, or a GAP the remote published,
 becomes a local GAP with reason UPSTREAM, so loss stays visible end to end.
 
-Limits: no clock-offset estimation between sites; authentication (CURVE) is set on the
-socket by the hardening work, not here. The remote daemon going away looks like silence
+Security: with a :class:`~services.net.Security` holding our key pair and the remote
+daemon's public key, the SUB socket is a CURVE client (encrypted; refused by a daemon whose
+allow folder lacks our key, which looks like silence here).
+
+Limits: no clock-offset estimation between sites. The remote daemon going away looks like silence
 (ZeroMQ reconnects by itself); heartbeats let a caller notice it.
 """
 
@@ -19,11 +22,11 @@ from typing import Any
 import zmq
 
 from livedrummer.clock import Clock
-from livedrummer.errors import MidiInputError, ProtocolError
+from livedrummer.errors import KeyFileError, MidiInputError, ProtocolError
 from livedrummer.events import Control, ControlKind, Onset
 from livedrummer.protocol import Gap, GapReason, Kind, SeqStatus, SequenceTracker, decode, topic
 from services.input.base import Event, Problems, Source
-from services.net import check_endpoint, connect, socket
+from services.net import Security, check_endpoint, connect, socket
 
 MAX_BATCH = 1000
 
@@ -37,10 +40,12 @@ class RemoteSource(Source):
         clock: Clock,
         ctx: zmq.Context[zmq.Socket[bytes]],
         problems: Problems | None = None,
+        security: Security | None = None,
     ) -> None:
         super().__init__(f"remote:{endpoint}", clock, problems)
         self.endpoint = check_endpoint(endpoint, "remote endpoint")
         self.ctx = ctx
+        self.security = security
         self.tracker = SequenceTracker()
         self._sock: Any = None
 
@@ -49,8 +54,8 @@ class RemoteSource(Source):
         try:
             for kind in (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT):
                 sock.setsockopt(zmq.SUBSCRIBE, topic(kind))
-            connect(sock, self.endpoint, "remote endpoint")
-        except ProtocolError as exc:
+            connect(sock, self.endpoint, "remote endpoint", self.security)
+        except (ProtocolError, KeyFileError) as exc:
             sock.close(0)
             raise MidiInputError(str(exc)) from exc
         self._sock = sock

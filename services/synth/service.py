@@ -13,6 +13,10 @@ launcher or systemd the service is serving once both sockets are bound.
 
 Limits: the pose socket is a plain PUB (a slow display loses samples past the high-water
 mark; it sees the gap in the sequence numbers); one performer per synth.
+
+Security: ``config.security`` with a key pair makes the pose and control sockets CURVE
+servers (an allow folder starts a ZAP authenticator, stopped in ``close``); with the input
+daemon's public key too, the SUB socket is a CURVE client of it (see :mod:`services.net`).
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ import numpy as np
 import zmq
 
 from livedrummer.clock import Clock
-from livedrummer.errors import ProtocolError
+from livedrummer.errors import KeyFileError, ProtocolError
 from livedrummer.live.synth import LiveSynth
 from livedrummer.protocol import (
     Hello,
@@ -42,7 +46,7 @@ from livedrummer.protocol import (
     encode,
     topic,
 )
-from services.net import bind, connect, socket
+from services.net import Security, bind, connect, socket, start_authenticator
 
 log = logging.getLogger("livedrummer.synth")
 
@@ -59,6 +63,7 @@ class SynthConfig:
     performer: int = 0
     tick_hz: float = 120.0
     input_offset_s: float = 0.0
+    security: Security = field(default_factory=Security)
 
 
 @dataclass
@@ -97,21 +102,25 @@ class SynthService:
         self._seq = 0
         self._control_stop = threading.Event()
         self._control_thread: threading.Thread | None = None
+        self._auth: Any = None
 
     def start(self) -> dict[str, str]:
         cfg = self.config
+        if cfg.security.allow is not None:
+            self._auth = start_authenticator(self.ctx, cfg.security.allow)
         pub = socket(self.ctx, zmq.PUB)
         control = socket(self.ctx, zmq.ROUTER)
         sub = socket(self.ctx, zmq.SUB)
         try:
-            self.endpoints["pub"] = bind(pub, cfg.pub, "pub endpoint")
-            self.endpoints["control"] = bind(control, cfg.control, "control endpoint")
+            self.endpoints["pub"] = bind(pub, cfg.pub, "pub endpoint", cfg.security)
+            self.endpoints["control"] = bind(control, cfg.control, "control endpoint", cfg.security)
             for kind in (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT):
                 sub.setsockopt(zmq.SUBSCRIBE, topic(kind))
-            connect(sub, cfg.sub, "sub endpoint")
-        except ProtocolError:
+            connect(sub, cfg.sub, "sub endpoint", cfg.security)
+        except (ProtocolError, KeyFileError):
             for s in (pub, control, sub):
                 s.close(0)
+            self._stop_auth()
             raise
         self.endpoints["sub"] = cfg.sub
         self._pub, self._sub = pub, sub
@@ -200,6 +209,12 @@ class SynthService:
             if s is not None:
                 s.close(0)
         self._sub = self._pub = None
+        self._stop_auth()
+
+    def _stop_auth(self) -> None:
+        if self._auth is not None:
+            self._auth.stop()
+            self._auth = None
 
     def summary(self) -> dict[str, Any]:
         s = self.stats
