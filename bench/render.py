@@ -4,7 +4,8 @@ Draws the demo groove as the body model performs it (optimal sticking), from the
 camera; ``body`` is the time to sample the body's poses and map them to scene frames (per
 frame, vectorized over all frames).
 ``draw`` is draw + ``glFinish`` (what a window pays before swapping); ``draw+read`` adds the
-read-back of the frame into numpy (what export pays before encoding). Export speed is the
+RGBA read-back of the frame into numpy, ``draw+i420`` the GPU conversion to YUV 4:2:0 and its
+read-back (what export pays before encoding). Export speed is the
 whole ``livedrummer render`` job (audio mix, render, H.264/AAC encode) on the first
 ``--seconds`` of the demo groove, as a multiple of real time. Prints medians of one run.
 """
@@ -29,7 +30,7 @@ from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
 from services.display.context import headless_context
 from services.display.export import export
-from services.display.renderer import Renderer
+from services.display.renderer import Renderer, i420_ok
 from services.display.video import VideoSettings
 
 
@@ -65,7 +66,7 @@ def main(argv: list[str]) -> int:
         r = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=args.aa)
         r.draw(frames[0], cam)
         r.read_rgba()
-        draw, read = [], []
+        draw, read, i420 = [], [], []
         for f in frames:
             t0 = time.perf_counter()
             r.draw(f, cam)
@@ -76,9 +77,17 @@ def main(argv: list[str]) -> int:
             r.draw(f, cam)
             r.read_rgba()
             read.append(time.perf_counter() - t0)
+        if i420_ok(size):
+            r.read_i420()
+            for f in frames:
+                t0 = time.perf_counter()
+                r.draw(f, cam)
+                r.read_i420()
+                i420.append(time.perf_counter() - t0)
         d, rd = statistics.median(draw) * 1e3, statistics.median(read) * 1e3
+        yuv = f"   draw+i420 {statistics.median(i420) * 1e3:6.2f} ms" if i420 else ""
         print(f"  {text:>9}  draw {d:6.2f} ms ({1e3 / d:6.1f} fps)   "
-              f"draw+read {rd:6.2f} ms ({1e3 / rd:6.1f} fps)")  # fmt: skip
+              f"draw+read {rd:6.2f} ms ({1e3 / rd:6.1f} fps){yuv}")  # fmt: skip
     ctx.release()
     if args.seconds > 0:
         short = first_seconds(perf, args.seconds)

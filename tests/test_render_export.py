@@ -46,7 +46,10 @@ def groove(write_midi) -> Path:  # type: ignore[no-untyped-def]
 def read_back(path: Path) -> tuple[int, float, np.ndarray, int, tuple[int, int]]:
     with av.open(str(path)) as c:
         vs = c.streams.video[0]
-        pts = [float(f.pts * f.time_base) for f in c.decode(vs)]
+        pts: list[float] = []
+        for f in c.decode(vs):
+            assert f.pts is not None and f.time_base is not None
+            pts.append(float(f.pts * f.time_base))
         size = (vs.codec_context.width, vs.codec_context.height)
     with av.open(str(path)) as c:
         a = c.streams.audio[0]
@@ -129,3 +132,38 @@ def test_missing_midi_file_is_an_error(tmp_path: Path, capsys) -> None:  # type:
     code = main(["render", str(tmp_path / "none.mid"), "-o", str(tmp_path / "x.mp4")])
     assert code == 2
     assert "none.mid" in capsys.readouterr().err
+
+
+def block_means(image: np.ndarray, blocks: int = 8) -> np.ndarray:
+    """Mean RGB of each cell of a blocks x blocks grid over an (H, W, 3) image."""
+    h, w = (n // blocks * blocks for n in image.shape[:2])
+    cells = image[:h, :w].astype(np.float64).reshape(blocks, h // blocks, blocks, w // blocks, 3)
+    means: np.ndarray = cells.mean(axis=(1, 3))
+    return means
+
+
+@pytest.mark.parametrize("size", ["160x96", "164x96"])
+def test_video_colours_match_the_rendered_frames(groove: Path, tmp_path: Path, size: str) -> None:
+    # The same frames twice: as PNGs (the renderer's RGB read-back) and as H.264 (converted to
+    # I420 on the GPU; a width that is not a multiple of 8 takes the CPU conversion). PyAV
+    # decodes the video back to RGB with the stream's own colour metadata; 4:2:0 and x264 blur
+    # edges, so compare the mean colour of a grid of regions.
+    argv = ["render", str(groove), "--size", size, "--fps", "10", "--tail", "0",
+            "--camera", "front", "--crf", "16"]  # fmt: skip
+    out = tmp_path / "out.mp4"
+    assert main([*argv, "-o", str(out)]) == 0
+    assert main([*argv, "--frames", str(tmp_path / "frames")]) == 0
+    pngs = sorted((tmp_path / "frames").glob("*.png"))
+    with av.open(str(out)) as c:
+        decoded = list(c.decode(video=0))
+    assert len(decoded) == len(pngs) > 4
+    for i in (0, len(pngs) // 2, len(pngs) - 1):
+        frame = decoded[i]
+        assert (frame.colorspace, frame.color_range) == (1, 1)  # BT.709, limited range
+        video = frame.to_ndarray(format="rgb24")
+        with av.open(str(pngs[i])) as c:
+            rendered = next(iter(c.decode(video=0))).to_ndarray(format="rgb24")
+        assert rendered.std() > 5  # a scene, not a blank frame
+        want, got = block_means(rendered), block_means(video)
+        assert np.abs(got - want).max() < 4.0, (i, np.abs(got - want).max())
+        assert np.abs(got - want).mean() < 1.5, (i, np.abs(got - want).mean())

@@ -3,7 +3,9 @@
 One function, :func:`export`, does the whole job: it makes the EGL context and the renderer,
 mixes the drum track (:func:`livedrummer.audio.mix.mix_onsets`) to exactly the video's length,
 then renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or the PNG
-writer. The drummer and the kit's motion come from a
+writer. The video gets each frame as I420, converted to YUV on the GPU, where the width is a
+multiple of 8 (other widths: RGBA, converted on the encoder thread); the PNGs get RGB. The
+drummer and the kit's motion come from a
 :class:`~livedrummer.render.body_scene.BodyScene` (the body model), sampled in chunks of frames
 as the render goes, so memory stays bounded however long the file.
 
@@ -28,7 +30,7 @@ from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
 from services.display.context import DisplayError, headless_context
 from services.display.png import write_png
-from services.display.renderer import Renderer
+from services.display.renderer import Renderer, i420_ok
 from services.display.video import VideoSettings, VideoWriter
 
 Progress = Callable[[int, int], None]
@@ -87,10 +89,11 @@ def export(
         ctx = headless_context()
         renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
                             samples=samples)  # fmt: skip
+        gpu_yuv = i420_ok(settings.size)
         for i, frame in enumerate(body.frames(times)):
             renderer.draw(frame, cam)
             if writer is not None:
-                writer.write(renderer.read_rgba())
+                writer.write(renderer.read_i420() if gpu_yuv else renderer.read_rgba())
             if frames_dir is not None:
                 write_png(frames_dir / f"frame_{i:06d}.png", renderer.read_rgb())
             if progress is not None:

@@ -10,7 +10,9 @@ Off-screen, it draws into a texture framebuffer, or with ``samples > 0`` into a 
 one resolved into it (multisampling costs about 4x on llvmpipe, so export defaults to none).
 :meth:`Renderer.read_rgb` returns top-down RGB rows as PNG writers expect;
 :meth:`Renderer.read_rgba` returns the driver's own bottom-up RGBA, the cheapest read-back,
-which the video encoder flips while converting to YUV. A window passes its framebuffer to
+and :meth:`Renderer.read_i420` converts the frame to the video encoder's planar YUV 4:2:0 on
+the GPU first (full-screen passes, ``shaders/i420_*.frag``), so the encoder gets 1.5 bytes a
+pixel, already top-down, and the CPU neither flips nor converts. A window passes its framebuffer to
 :meth:`Renderer.draw`. Limits: no shadows, no transparency; every surface is opaque and lit by
 the same rig; the window must set :attr:`Renderer.size` when its framebuffer is resized.
 """
@@ -24,7 +26,7 @@ import numpy as np
 from livedrummer.render.camera import Camera
 from livedrummer.render.geometry import Mesh, all_meshes
 from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
-from livedrummer.render.shaders import PROGRAMS, program_sources
+from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
 from livedrummer.scene import SceneFrame, Skeleton, Tone
 
 BACKGROUND = (0.02, 0.02, 0.035)
@@ -94,6 +96,7 @@ class Renderer:
                 self._fbo = ctx.framebuffer(color_attachments=[self._rgb], depth_attachment=depth)
                 self._resolve = self._fbo
         self.samples = samples
+        self._i420: tuple[list[tuple[Any, Any]], Any] | None = None  # made on first use
 
     def _vao(self, program: str, mesh: Mesh, inst: Any, fmt: str, *names: str) -> Any:
         prog = self.programs[program]
@@ -227,8 +230,58 @@ class Renderer:
             h, w, 4
         )
 
+    def read_i420(self) -> np.ndarray:
+        """The last off-screen frame as I420, (H*3/2, W) uint8, top row first.
+
+        Rows ``[0, H)`` are the luma plane; the rest hold the Cb then the Cr plane, each
+        (W/2) x (H/2) bytes laid end to end (BT.709, limited range; see ``shaders/bt709.glsl``).
+        Two full-screen passes write it into an RGBA8 target W/4 wide, four bytes a fragment,
+        whose read-back is the same bytes as a W-wide single-channel one; W must be a multiple
+        of 8 (:func:`i420_ok`).
+        """
+        import moderngl
+
+        w, h = self.size
+        if not i420_ok(self.size):
+            raise ValueError(f"I420 read-back needs a width that is a multiple of 8, not {w}")
+        self._resolved()
+        if self._i420 is None:
+            self._i420 = self._i420_setup()
+        passes, fbo = self._i420
+        fbo.use()
+        self.ctx.disable(moderngl.DEPTH_TEST)
+        for (vao, sampler), rows in zip(passes, ((0, h), (h, h // 2)), strict=True):
+            sampler.use(location=0)
+            vao.program["u_size"].value = (w, h)
+            self.ctx.viewport = (0, rows[0], w // 4, rows[1])
+            vao.render(moderngl.TRIANGLES, vertices=3)
+            sampler.clear(location=0)  # leave unit 0 to the texture's own filtering
+        data = fbo.read(components=4, alignment=1)
+        return np.frombuffer(data, np.uint8).reshape(h * 3 // 2, w)
+
+    def _i420_setup(self) -> tuple[list[tuple[Any, Any]], Any]:
+        import moderngl
+
+        w, h = self.size
+        passes = []
+        for frag, filt in (("i420_luma.frag", moderngl.NEAREST),
+                           ("i420_chroma.frag", moderngl.LINEAR)):  # fmt: skip
+            prog = self.ctx.program(vertex_shader=shader_source("fullscreen.vert"),
+                                    fragment_shader=shader_source(frag))  # fmt: skip
+            prog["u_image"].value = 0
+            sampler = self.ctx.sampler(texture=self._rgb, filter=(filt, filt), repeat_x=False,
+                                       repeat_y=False)  # fmt: skip
+            passes.append((self.ctx.vertex_array(prog, []), sampler))
+        target = self.ctx.texture((w // 4, h * 3 // 2), 4)
+        return passes, self.ctx.framebuffer(color_attachments=[target])
+
     def finish(self) -> None:
         self.ctx.finish()
+
+
+def i420_ok(size: tuple[int, int]) -> bool:
+    """Whether :meth:`Renderer.read_i420` can convert frames of ``size`` (W, H)."""
+    return size[0] % 8 == 0 and size[1] % 2 == 0
 
 
 def _used(prog: Any, buf: Any, fmt: str, names: tuple[str, ...]) -> tuple[Any, ...]:

@@ -3,8 +3,11 @@
 Why PyAV and not a pipe to an ``ffmpeg`` binary: the wheels carry FFmpeg with libx264 and the
 AAC encoder, so a clean clone needs no system FFmpeg, and frames go in as numpy arrays without
 a subprocess. The audio track is encoded first, whole (the muxer interleaves it with video by
-timestamp); video frames are converted RGBA -> YUV 4:2:0 (BT.709) and encoded on a worker
-thread (:class:`VideoWriter`), so the next frame renders while this one encodes.
+timestamp); video frames are encoded on a worker thread (:class:`VideoWriter`), so the next
+frame renders while this one encodes. Frames come as I420 (planar YUV 4:2:0, BT.709, limited
+range) already converted on the GPU (:meth:`Renderer.read_i420`), so this thread only copies
+the planes into FFmpeg's and runs x264; bottom-up RGBA is still accepted and converted here with
+swscale to the same colours. The stream's colour metadata says BT.709 limited range either way.
 
 Limits: even width and height (4:2:0 chroma); constant frame rate; one stereo audio track;
 AAC pads its last frame, so a decoder may return up to 1024 samples (21 ms) more than was
@@ -26,6 +29,8 @@ from services.display.context import DisplayError
 
 AUDIO_FRAME = 1024  # samples per AAC frame
 CONTAINERS = (".mp4", ".m4v", ".mov", ".mkv")
+BT709 = 1  # FFmpeg's AVCOL_SPC / AVCOL_PRI / AVCOL_TRC code for BT.709
+LIMITED_RANGE = 1  # AVCOL_RANGE_MPEG: luma 16..235, chroma 16..240
 
 
 @dataclass(frozen=True)
@@ -73,12 +78,19 @@ class _Encoder:
         for packet in self.audio.encode(None):
             self.container.mux(packet)
 
-    def write(self, rgba_bottom_up: np.ndarray) -> None:
+    def write(self, image: np.ndarray) -> None:
         import av
 
-        frame = av.VideoFrame.from_ndarray(
-            np.ascontiguousarray(rgba_bottom_up[::-1]), format="rgba"
-        ).reformat(format="yuv420p", dst_colorspace="ITU709")
+        if image.ndim == 2:  # I420, top row first
+            frame = av.VideoFrame.from_ndarray(image, format="yuv420p")
+        else:
+            frame = av.VideoFrame.from_ndarray(
+                np.ascontiguousarray(image[::-1]), format="rgba"
+            ).reformat(format="yuv420p", dst_colorspace="ITU709")
+        frame.colorspace = BT709
+        frame.color_primaries = BT709
+        frame.color_trc = BT709
+        frame.color_range = LIMITED_RANGE
         for packet in self.video.encode(frame):
             self.container.mux(packet)
 
@@ -89,7 +101,7 @@ class _Encoder:
 
 
 class VideoWriter:
-    """Writes bottom-up RGBA frames and one stereo track to an MP4, encoding on a thread.
+    """Writes video frames and one stereo track to an MP4, encoding on a thread.
 
     PyAV releases the GIL while FFmpeg converts and encodes, so the thread runs beside the
     renderer. (A child process was tried: on a two-core machine it was slower, because the
@@ -126,11 +138,21 @@ class VideoWriter:
         except (OSError, ValueError) as exc:
             raise DisplayError(f"cannot write video {self.path}: {exc}") from None
 
-    def write(self, rgba_bottom_up: np.ndarray) -> None:
-        """Queue one (H, W, 4) uint8 frame in OpenGL row order (bottom row first)."""
+    def write(self, image: np.ndarray) -> None:
+        """Queue one frame: (H*3/2, W) uint8 I420, top row first (see :meth:`Renderer.read_i420`),
+        or (H, W, 4) uint8 RGBA in OpenGL row order (bottom row first).
+
+        The array must not change afterwards: the worker thread reads it later.
+        """
+        w, h = self.settings.size
+        if image.shape not in ((h * 3 // 2, w), (h, w, 4)) or image.dtype != np.uint8:
+            raise DisplayError(
+                f"video frame {image.shape} {image.dtype}: want uint8 ({h * 3 // 2}, {w}) I420 "
+                f"or ({h}, {w}, 4) RGBA"
+            )
         if self._error is not None:
             raise DisplayError(f"video encoding failed: {self._error}")
-        self._queue.put(rgba_bottom_up)
+        self._queue.put(image)
         self.frames += 1
 
     def _loop(self) -> None:
