@@ -5,9 +5,10 @@ camera; ``body`` is the time to sample the body's poses and map them to scene fr
 frame, vectorized over all frames).
 ``draw`` is draw + ``glFinish`` (what a window pays before swapping); ``draw+read`` adds the
 RGBA read-back of the frame into numpy, ``draw+i420`` the GPU conversion to YUV 4:2:0 and its
-read-back (what export pays before encoding). Export speed is the
-whole ``livedrummer render`` job (audio mix, render, H.264/AAC encode) on the first
-``--seconds`` of the demo groove, as a multiple of real time. Prints medians of one run.
+read-back (what export pays before encoding); ``pipelined`` issues all the frames' draws and
+waits once at the end (the frame rate a GPU sustains when nothing stalls it on a finish).
+Export speed is the whole ``livedrummer render`` job (audio mix, render, H.264/AAC encode)
+on the first ``--seconds`` of the demo groove, as a multiple of real time. Medians of one run.
 """
 
 from __future__ import annotations
@@ -84,10 +85,19 @@ def main(argv: list[str]) -> int:
                 r.draw(f, cam)
                 r.read_i420()
                 i420.append(time.perf_counter() - t0)
+        piped = []
+        for _ in range(5):
+            t0 = time.perf_counter()
+            for f in frames:
+                r.draw(f, cam)
+            ctx.finish()
+            piped.append((time.perf_counter() - t0) / len(frames))
         d, rd = statistics.median(draw) * 1e3, statistics.median(read) * 1e3
+        pd = statistics.median(piped) * 1e3
         yuv = f"   draw+i420 {statistics.median(i420) * 1e3:6.2f} ms" if i420 else ""
         print(f"  {text:>9}  draw {d:6.2f} ms ({1e3 / d:6.1f} fps)   "
-              f"draw+read {rd:6.2f} ms ({1e3 / rd:6.1f} fps){yuv}")  # fmt: skip
+              f"draw+read {rd:6.2f} ms ({1e3 / rd:6.1f} fps){yuv}   "
+              f"pipelined {pd:6.3f} ms ({1e3 / pd:7.1f} fps)")  # fmt: skip
     ctx.release()
     if args.seconds > 0:
         short = first_seconds(perf, args.seconds)
