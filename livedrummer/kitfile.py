@@ -31,6 +31,7 @@ File layout (every key is checked; unknown keys are errors naming file, table an
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from livedrummer.catalog import entries, looks_like_path
@@ -41,6 +42,7 @@ from livedrummer.vocabulary import DEFAULT_ZONES, INSTRUMENTS, Limb, PieceKind, 
 
 _MIRROR_SUFFIX = {"-left": "left", "-right": "right"}
 _MAX_REACH_M = 3.0  # no piece of a playable kit is further than this from the seat
+_FLOOR_TOLERANCE_M = 0.01  # a rim or footboard may touch the floor (z = 0), not sink into it
 
 
 def parse_kit(data: dict[str, object], source: str) -> Kit:
@@ -88,6 +90,8 @@ def _pair_names(t: Table, names: set[str]) -> tuple[str, str]:
 
 def _parse_piece(t: Table) -> Piece:
     name = t.text("name")
+    if not name.strip():
+        raise t.fail("name", "a piece needs a name", name)
     kind = PieceKind(t.text("kind", choices=[k.value for k in PieceKind]))
     position = t.vector("position_m", 3)
     if sum(c * c for c in position) ** 0.5 > _MAX_REACH_M:
@@ -115,8 +119,29 @@ def _parse_piece(t: Table) -> Piece:
         pedal_position_m=pedal,
         double_pedal=double,
     )
+    _check_above_floor(t, piece)
     t.done()
     return piece
+
+
+def _check_above_floor(t: Table, piece: Piece) -> None:
+    """The playing surface's lowest rim point and the footboard must not be under the floor.
+
+    The floor is z = 0 (see :mod:`livedrummer.kit`). Hands cannot strike through it and a
+    foot cannot press a pedal sunk into it, yet the IK (:func:`livedrummer.body.rig.build_rig`)
+    reaches below z = 0 (a foot finds a footboard 0.3 m under it), so it would not refuse
+    such a kit by itself.
+    """
+    lowest = piece.position_m[2] - piece.radius_m * math.sin(math.radians(piece.tilt_deg))
+    if lowest < -_FLOOR_TOLERANCE_M:
+        raise t.fail(
+            "position_m",
+            f"the playing surface's rim reaches {-lowest:.3f} m below the floor (z = 0)",
+            list(piece.position_m),
+        )
+    pedal = piece.pedal_position_m
+    if pedal is not None and pedal[2] < -_FLOOR_TOLERANCE_M:
+        raise t.fail("pedal_position_m", f"is {-pedal[2]:.3f} m below the floor", list(pedal))
 
 
 def _choices(t: Table, key: str, allowed: list[str], default: list[str]) -> list[str]:

@@ -10,8 +10,21 @@ the rest of the library needs when it is good:
   merged in time order; every channel message then goes through the same
   :class:`~livedrummer.decode.MessageDecoder` the live input daemon uses.
 
-Bounded work on absurd input: zero tempo is an error, grids are capped
-(:data:`livedrummer.tempo.MAX_BEATS`), and so is the message count (:data:`MAX_MESSAGES`).
+Bounded work on absurd input. mido builds one Python object per message (about 0.5 KB and
+a few microseconds each), so the bounds are checked as early as they can be:
+
+* the file size, before mido sees it (:data:`MAX_FILE_BYTES`, 4 MiB: 27 times the largest
+  Groove MIDI Dataset file, over two hours of playing at its density). Every event takes at
+  least two bytes, so mido never holds more than ~2.1 M messages; the worst file under the
+  limit, 1.4 M distinct note-ons, reads in ~18 s and ~0.75 GB on a 2-core machine;
+* the message count, before tracks are merged and decoded (:data:`MAX_MESSAGES`);
+* the length in seconds (:data:`MAX_DURATION_S`, 24 h): a delta time of 0x0FFFFFFF ticks,
+  the largest a file can hold, is 78 hours at 480 ticks per beat and 120 bpm. Such a file is
+  refused, naming the track and the tick, instead of yielding a day of silence to render;
+* zero tempo is an error, and grids are capped (:data:`livedrummer.tempo.MAX_BEATS`).
+
+Many notes at one tick are a correct, bounded result: the decoder keeps one onset per
+(channel, note, velocity) and counts the rest as duplicates.
 """
 
 from __future__ import annotations
@@ -34,7 +47,9 @@ from livedrummer.tempo import Grid, TempoMap
 
 log = logging.getLogger(__name__)
 
-MAX_MESSAGES = 20_000_000
+MAX_FILE_BYTES = 4 * 1024 * 1024
+MAX_MESSAGES = 2_000_000
+MAX_DURATION_S = 24 * 3600.0
 # mido raises a wide, undocumented set of exception types on bad bytes (ValueError, EOFError,
 # KeySignatureError, IndexError, ...). Around the parse call only, any Exception is bad input.
 _MIDO_ERRORS = (Exception,)
@@ -105,10 +120,21 @@ def check_layout(data: bytes, name: str) -> SmfLayout:
 def parse_smf(data: bytes, name: str) -> tuple[mido.MidiFile, SmfLayout]:
     """Check the layout, then parse with mido; errors name the file, track and bytes."""
     layout = check_layout(data, name)
+    # mido gets the track chunks only, under a header that counts them: it reads the declared
+    # count as a *signed* 16-bit number (0x8000 and more read no track at all, silently) and
+    # fails on chunks of other kinds, which the SMF specification says to skip.
+    header = struct.pack(">IHHH", 6, layout.format, len(layout.tracks), layout.division)
+    body = b"".join(data[c.offset : c.offset + 8 + c.length] for c in layout.tracks)
     try:
-        return mido.MidiFile(file=io.BytesIO(data), clip=False), layout
+        return mido.MidiFile(file=io.BytesIO(b"MThd" + header + body), clip=False), layout
     except _MIDO_ERRORS as exc:
-        raise MidiFileError(f"{name}: {_locate_mido_error(data, layout)}: {exc}") from exc
+        # Some mido errors carry no text (an EOFError when an event runs past its track).
+        what = str(exc) or (
+            "an event runs past the end of its track"
+            if isinstance(exc, EOFError)
+            else type(exc).__name__
+        )
+        raise MidiFileError(f"{name}: {_locate_mido_error(data, layout)}: {what}") from exc
 
 
 def _locate_mido_error(data: bytes, layout: SmfLayout) -> str:
@@ -142,6 +168,19 @@ def merge_tracks(tracks: list[list[mido.Message]]) -> tuple[list[mido.Message], 
     return [messages[i] for i in order.tolist()], ticks[order]
 
 
+def _too_long(tracks: list[mido.MidiTrack], tempo: TempoMap) -> str:
+    """Where a file runs past :data:`MAX_DURATION_S`: the first such event's track and tick."""
+    limit = f"more than {MAX_DURATION_S / 3600:g} h: a corrupt delta time?"
+    for i, track in enumerate(tracks, start=1):
+        ticks = np.cumsum(np.fromiter((m.time for m in track), np.int64, len(track)))
+        late = np.flatnonzero(tempo.seconds(ticks) > MAX_DURATION_S)
+        if late.size:
+            tick = int(ticks[late[0]])
+            hours = float(tempo.seconds(ticks[late[:1]])[0]) / 3600
+            return f"track {i}: tick {tick}: an event {hours:.1f} h into the file, {limit}"
+    return f"the file lasts {limit}"  # not reached: some track holds the last event
+
+
 def read_midi_file(path: Path | str, note_map: NoteMap, source: int = 0) -> Performance:
     """Read a Standard MIDI File into a :class:`Performance` (see the module docstring)."""
     path = Path(path)
@@ -157,10 +196,15 @@ def read_midi_file(path: Path | str, note_map: NoteMap, source: int = 0) -> Perf
 
 def read_midi_bytes(data: bytes, name: str, note_map: NoteMap, source: int = 0) -> Performance:
     """As :func:`read_midi_file`, from bytes already in memory."""
+    if len(data) > MAX_FILE_BYTES:
+        raise MidiFileError(
+            f"{name}: {len(data)} bytes, more than {MAX_FILE_BYTES} (4 MiB): not a performance"
+        )
     midi, layout = parse_smf(data, name)
+    count = sum(len(track) for track in midi.tracks)
+    if count > MAX_MESSAGES:
+        raise MidiFileError(f"{name}: {count} messages, more than {MAX_MESSAGES}")
     merged, ticks = merge_tracks(midi.tracks)
-    if len(merged) > MAX_MESSAGES:
-        raise MidiFileError(f"{name}: {len(merged)} messages, more than {MAX_MESSAGES}")
     smpte = layout.division & 0x8000
     tempos: list[tuple[int, int]] = []
     meters: list[tuple[int, int, int]] = []
@@ -179,6 +223,8 @@ def read_midi_bytes(data: bytes, name: str, note_map: NoteMap, source: int = 0) 
     else:
         tempo = TempoMap.build(layout.division, tempos)
     seconds = tempo.seconds(ticks)
+    if seconds.size and seconds[-1] > MAX_DURATION_S:
+        raise MidiFileError(f"{name}: {_too_long(midi.tracks, tempo)}")
     end_tick = int(ticks[-1]) if ticks.size else 0
     try:
         grid = Grid.build(tempo, meters, end_tick)

@@ -8,7 +8,9 @@ deliver in chunks, so messages in one chunk share an arrival time (at 31,250 bau
 note takes ~1 ms on the wire; that is the resolution a chunk can hide). Within a chunk they
 are spaced :data:`CHUNK_SPACING_S` (1 µs) apart, ending at the read time: a serial line
 cannot carry two messages at one instant, so two identical notes in one chunk are two hits,
-never the same-instant duplicates the shared decoder drops from files.
+never the same-instant duplicates the shared decoder drops from files. A chunk so big that
+this spacing would reach back past the previous read's time is spaced closer, so stamps
+always increase.
 
 A device that vanishes (cable pulled: pyserial raises, or reads EOF) becomes a
 :class:`MidiInputError`; the daemon reopens the path until it exists again. Garbage bytes
@@ -50,6 +52,7 @@ class SerialSource(MidiSource):
         self.parser = MidiStreamParser()
         self._port: Any = None
         self._garbage_seen = 0
+        self._last_read_s = float("-inf")
 
     def open(self) -> None:
         try:
@@ -58,6 +61,7 @@ class SerialSource(MidiSource):
             raise MidiInputError(f"{self.name}: cannot open: {exc}") from exc
         self.parser.reset()
         self._garbage_seen = 0
+        self._last_read_s = float("-inf")
         self.is_open = True
 
     def read(self, timeout_s: float) -> list[Event]:
@@ -75,8 +79,11 @@ class SerialSource(MidiSource):
         out: list[Event] = []
         messages = [m for m in self.parser.feed(data) if m.status < 0xF0]
         last = len(messages) - 1
+        # Closer spacing when a big chunk would reach back past the previous read's stamps.
+        step = min(CHUNK_SPACING_S, (t - self._last_read_s) / (last + 1)) if messages else 0.0
         for i, msg in enumerate(messages):
-            self.decode(t - (last - i) * CHUNK_SPACING_S, msg.status, msg.data, out)
+            self.decode(t - (last - i) * step, msg.status, msg.data, out)
+        self._last_read_s = t
         garbage = self.parser.stats.garbage_bytes
         if garbage > self._garbage_seen:
             new = garbage - self._garbage_seen
