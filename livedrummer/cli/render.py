@@ -5,7 +5,8 @@ FILE it renders the bundled demo groove with the Roland map. The drummer is the 
 (:mod:`livedrummer.body`) with the optimal limb assignment unless ``--sticking`` says otherwise;
 ``--sticking``, ``--strokes`` and ``--preset`` mean what they mean for ``livedrummer check``
 (the x264 speed preset is ``--x264-preset``). The progress bar goes to stderr and only when
-stderr is a terminal; the summary line goes to stdout.
+stderr is a terminal; the summary line goes to stdout. ``--overlay score,joints`` adds SMED's
+scrolling score and the joint-angle graph as strips at the bottom of the frame.
 """
 
 from __future__ import annotations
@@ -54,6 +55,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--aa", type=int, default=0, metavar="N", help="multisample N (slow on CPU)")
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
     p.add_argument("--x264-preset", default="veryfast", help="x264 speed (default veryfast)")
+    p.add_argument("--overlay", default="", metavar="LIST",
+                   help="bottom strips: score, joints or score,joints")  # fmt: skip
     add_motion_options(p)
 
 
@@ -126,10 +129,12 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.kitfile import load_kit
     from livedrummer.midifile import read_midi_file
     from livedrummer.notemap import load_note_map
+    from livedrummer.render.overlay import OVERLAYS, parse_overlays
     from services.display.export import export
     from services.display.video import VideoSettings
 
     size = parse_size(args.size)
+    overlays = parse_overlays(args.overlay)
     if not 1 <= args.fps <= 240:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
     source = Path(args.file) if args.file else demo_groove()
@@ -145,13 +150,14 @@ def run(args: argparse.Namespace) -> int:
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
         performance, body, out=out, frames_dir=args.frames, settings=settings,
-        camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar,
+        camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar, overlays=overlays,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames) if p is not None)
     print(
         f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s, "
         f"{size[0]}x{size[1]} @ {args.fps} fps, camera {args.camera}, kit {kit.name}, "
         f"sticking {args.sticking}"
+        f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"
         f"{', drum track 48 kHz stereo' if out is not None else ''}; "
         f"{report.realtime:.2f}x real time"
     )

@@ -11,6 +11,9 @@ as the render goes, so memory stays bounded however long the file.
 
 The frame count is ``ceil((performance.duration_s + tail_s) * fps)`` and the audio track is
 exactly that many frames long, so video and audio durations agree to the sample.
+
+Overlays (SMED's scrolling score, the joint-angle graph; :mod:`livedrummer.render.overlay`) are
+painted with numpy per frame and blended over the drawn frame before it is read back.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ from livedrummer.performance import Performance
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.overlay import OverlayModels
+from livedrummer.render.overlay_raster import overlay_image
 from services.display.context import DisplayError, headless_context
 from services.display.png import write_png
 from services.display.renderer import Renderer, i420_ok
@@ -64,8 +69,10 @@ def export(
     tail_s: float = 1.0,
     samples: int = 0,
     progress: Progress | None = None,
+    overlays: frozenset[str] = frozenset(),
 ) -> ExportReport:
-    """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``."""
+    """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
+    overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`)."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
     start = time.perf_counter()
@@ -90,8 +97,12 @@ def export(
         renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
                             samples=samples)  # fmt: skip
         gpu_yuv = i420_ok(settings.size)
+        strips = overlay_image(settings.size, overlays, OverlayModels(body, n / fps))
         for i, frame in enumerate(body.frames(times)):
             renderer.draw(frame, cam)
+            if not strips.empty:
+                r = strips.rect
+                renderer.draw_overlay(strips.paint(float(times[i])), (r.x, r.y, r.width, r.height))
             if writer is not None:
                 writer.write(renderer.read_i420() if gpu_yuv else renderer.read_rgba())
             if frames_dir is not None:

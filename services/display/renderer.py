@@ -15,6 +15,8 @@ the GPU first (full-screen passes, ``shaders/i420_*.frag``), so the encoder gets
 pixel, already top-down, and the CPU neither flips nor converts. A window passes its framebuffer to
 :meth:`Renderer.draw`. Limits: no shadows, no transparency; every surface is opaque and lit by
 the same rig; the window must set :attr:`Renderer.size` when its framebuffer is resized.
+:meth:`Renderer.draw_overlay` blends a 2D RGBA image (the score and joint-angle strips of
+:mod:`livedrummer.render.overlay_raster`) over the drawn frame (``shaders/overlay.frag``).
 """
 
 from __future__ import annotations
@@ -97,6 +99,7 @@ class Renderer:
                 self._resolve = self._fbo
         self.samples = samples
         self._i420: tuple[list[tuple[Any, Any]], Any] | None = None  # made on first use
+        self._overlay: tuple[Any, Any] | None = None  # (vao, texture), made on first use
 
     def _vao(self, program: str, mesh: Mesh, inst: Any, fmt: str, *names: str) -> Any:
         prog = self.programs[program]
@@ -207,6 +210,48 @@ class Renderer:
                 self._ball_vao.render(instances=self._ball_count)
         for vao, _buf, idx in self._kit_vaos:
             vao.render(instances=len(idx))
+
+    def draw_overlay(self, image: np.ndarray, rect: tuple[int, int, int, int],
+                     target: Any = None) -> None:  # fmt: skip
+        """Blend ``image`` ((h, w, 4) uint8, straight alpha, top row first) over the frame
+        drawn last, at ``rect`` = (x, y, w, h) in pixels from the frame's top-left corner.
+
+        Same target as :meth:`draw` (the off-screen frame by default), so the read-backs
+        include it. The texture is made once per image size and rewritten each call."""
+        import moderngl
+
+        h_img, w_img = image.shape[:2]
+        x, y, w, h = rect
+        if (w_img, h_img) != (w, h):
+            raise ValueError(f"overlay image is {w_img}x{h_img}, its rectangle {w}x{h}")
+        if w <= 0 or h <= 0:
+            return
+        if self._overlay is None:
+            prog = self.ctx.program(vertex_shader=shader_source("fullscreen.vert"),
+                                    fragment_shader=shader_source("overlay.frag"))  # fmt: skip
+            prog["u_image"].value = 0
+            self._overlay = (self.ctx.vertex_array(prog, []), None)
+        vao, tex = self._overlay
+        if tex is None or tex.size != (w, h):
+            if tex is not None:
+                tex.release()
+            tex = self.ctx.texture((w, h), 4)
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            tex.repeat_x = tex.repeat_y = False
+            self._overlay = (vao, tex)
+        tex.write(np.ascontiguousarray(image, np.uint8))
+        (target if target is not None else self._fbo).use()
+        bottom = self.size[1] - y - h  # GL rows count from the bottom
+        self.ctx.viewport = (x, bottom, w, h)
+        vao.program["u_rect"].value = (float(x), float(bottom), float(w), float(h))
+        self.ctx.disable(moderngl.DEPTH_TEST)
+        self.ctx.enable(moderngl.BLEND)
+        self.ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
+                               moderngl.ZERO, moderngl.ONE)  # fmt: skip
+        tex.use(location=0)
+        vao.render(moderngl.TRIANGLES, vertices=3)
+        self.ctx.disable(moderngl.BLEND)
+        self.ctx.viewport = (0, 0, *self.size)
 
     def _resolved(self) -> None:
         if self.samples > 0:

@@ -6,10 +6,11 @@ window's framebuffer. Each frame the loop asks its clock how much time passed, a
 :class:`~livedrummer.render.transport.Transport`, evaluates the scene at the transport's
 position (the body model, :class:`~livedrummer.render.body_scene.BodyScene`, sampled at that
 one time) and swaps; keys go through :data:`~livedrummer.render.transport.KEYS` (transport),
-1..8 (cameras, with a smooth move), F (full screen) and Q/Esc (quit). The clock is injected
+1..8 (cameras, with a smooth move), O and G (show or hide the score and the joint-angle
+overlays, :data:`OVERLAY_KEYS`), F (full screen) and Q/Esc (quit). The clock is injected
 (default ``time.monotonic``) as the style guide asks; with sound it would be the audio stream's.
 
-Limits: no sound in the window yet, no score or joint-angle overlays; resizing keeps the
+Limits: no sound in the window yet; resizing keeps the
 aspect ratio of the new size but not the pixel density of a HiDPI monitor.
 """
 
@@ -17,7 +18,8 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,6 +28,8 @@ from livedrummer.performance import Performance
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CAMERA_NAMES, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.overlay import OverlayModels
+from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.render.transport import KEYS, Transport
 from services.display.context import DisplayError
 from services.display.renderer import Renderer
@@ -42,9 +46,12 @@ class WindowOptions:
     samples: int = 4
     vsync: bool = True
     quit_after_s: float | None = None  # close by itself (demos, smoke tests)
+    overlays: frozenset[str] = frozenset()  # strips shown first: "score", "joints"
 
 
 DEFAULT_OPTIONS = WindowOptions()
+#: window key -> the overlay it shows or hides (keys the transport does not use)
+OVERLAY_KEYS: dict[str, str] = {"o": "score", "g": "joints"}
 
 
 def key_name(glfw: Any, key: int, mods: int) -> str:
@@ -82,6 +89,14 @@ def show(
         from livedrummer.notemap import load_note_map
 
         body = BodyScene.perform(performance, kit, load_note_map(performance.map_name))
+    with open_window(options) as (glfw, window, ctx):
+        _loop(glfw, window, ctx, performance, body, options, clock)
+
+
+@contextmanager
+def open_window(options: WindowOptions) -> Iterator[tuple[Any, Any, Any]]:
+    """A GLFW window with an OpenGL 3.3 core context made current, and its moderngl context:
+    yields ``(glfw, window, ctx)`` and terminates GLFW afterwards."""
     import glfw
     import moderngl
 
@@ -108,8 +123,7 @@ def show(
             raise DisplayError("could not open an OpenGL 3.3 window")
         glfw.make_context_current(window)
         glfw.swap_interval(1 if options.vsync else 0)
-        ctx = moderngl.create_context()
-        _loop(glfw, window, ctx, performance, body, options, clock)
+        yield glfw, window, moderngl.create_context()
     finally:
         glfw.terminate()
 
@@ -130,6 +144,9 @@ def _loop(
     mesh = build_kit_mesh(kit)
     size = glfw.get_framebuffer_size(window)
     renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False)
+    models = OverlayModels(body, transport.duration_s)
+    shown = frozenset(options.overlays)
+    strips = overlay_image(size, shown, models)
     pending: list[str] = []
 
     def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
@@ -150,6 +167,8 @@ def _loop(
                 glfw.set_window_should_close(window, True)
             elif name in KEYS:
                 transport.apply(KEYS[name])
+            elif name in OVERLAY_KEYS:
+                shown = shown ^ {OVERLAY_KEYS[name]}
             elif name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
                 current = move.at(now)
                 move = CameraMove(current, cameras[CAMERA_NAMES[int(name) - 1]], now)
@@ -160,6 +179,11 @@ def _loop(
         if fb != renderer.size and fb[0] > 0 and fb[1] > 0:
             renderer.size = fb
         renderer.draw(body.frame_at(t), move.at(now), target=ctx.screen)
+        if strips.names != shown or strips.frame_size != renderer.size:
+            strips = overlay_image(renderer.size, shown, models)
+        if not strips.empty:
+            r = strips.rect
+            renderer.draw_overlay(strips.paint(t), (r.x, r.y, r.width, r.height), ctx.screen)
         glfw.swap_buffers(window)
         frames += 1
     elapsed = clock() - started
