@@ -45,7 +45,10 @@ number of rows, 1 … :data:`MAX_ROWS`; every onset/control field in range (code
 vocabulary, MIDI values < 128, channels < 16, times finite); POSE rows match the announced
 dtype's hash and size; HELLO JSON <= 64 KiB with exactly the known keys. Any violation raises
 :class:`~livedrummer.errors.ProtocolError` naming the field and the value, and nothing else is
-ever raised on bad bytes (a hypothesis fuzz test holds us to it).
+ever raised on bad bytes (a hypothesis fuzz test holds us to it). Errors about the wire are
+:class:`WireError`, whose ``field`` attribute names that field for a program (``"version"``,
+``"payload_len"``, ``"row 3.note"``; ``"max_payload"`` for the size limit), so a receiver can
+count its drops by kind without parsing the message.
 
 The pose dtype belongs to the body engine and is opaque here: :class:`PoseFormat` turns any
 structured dtype (scalar or nested fields, subarrays, padding; no Python objects) into a
@@ -152,11 +155,19 @@ def topic(kind: Kind) -> bytes:
     return MAGIC + bytes((PROTOCOL_VERSION, int(kind)))
 
 
-def _fail(name: str, problem: str, value: object) -> ProtocolError:
+class WireError(ProtocolError):
+    """A :class:`ProtocolError` about bytes on the wire, with the field it names in ``field``."""
+
+    def __init__(self, message: str, field_name: str) -> None:
+        super().__init__(message)
+        self.field = field_name
+
+
+def _fail(name: str, problem: str, value: object, field_name: str | None = None) -> WireError:
     text = repr(value)
     if len(text) > 80:
         text = text[:77] + "..."
-    return ProtocolError(f"{name}: {problem} (got {text})")
+    return WireError(f"{name}: {problem} (got {text})", field_name or name)
 
 
 # --------------------------------------------------------------------------------------------
@@ -545,7 +556,7 @@ def decode(
 ) -> Message:
     """Validate and decode ``frames`` (as from ``recv_multipart``); see the module docstring."""
     if not frames:
-        raise ProtocolError("frames: no frames (got 0)")
+        raise _fail("frames", "no frames", 0)
     head = _view(frames[0], 0)
     if len(head) != HEADER.size:
         raise _fail("header", f"expected {HEADER.size} bytes", len(head))
@@ -559,7 +570,7 @@ def decode(
         raise _fail("kind", f"unknown (known {sorted(SPECS)})", kind)
     _check_header_values(flags, performer, stream, seq, t)
     if length > max_payload:
-        raise _fail("payload_len", f"larger than {max_payload}", length)
+        raise _fail("payload_len", f"larger than {max_payload}", length, "max_payload")
     if len(frames) != 1 + spec.frames:
         raise _fail("frames", f"{spec.kind.name} needs {1 + spec.frames} frames", len(frames))
     parts = [_view(f, i) for i, f in enumerate(frames[1:], start=1)]
@@ -593,7 +604,7 @@ def decode(
 
 def _decode_pose(parts: list[memoryview], fmt: PoseFormat | None) -> Pose:
     if fmt is None:
-        raise ProtocolError("pose: no pose format was announced to this receiver (got a POSE)")
+        raise WireError("pose: no pose format was announced to this receiver (got a POSE)", "pose")
     if len(parts[0]) != POSE_HEADER.size:
         raise _fail("pose header", f"expected {POSE_HEADER.size} bytes", len(parts[0]))
     digest, n, time_s = POSE_HEADER.unpack(parts[0])

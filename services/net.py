@@ -3,7 +3,11 @@
 Why here. Every service binds or connects a few sockets with the same habits: linger 0 (a
 stopping service never hangs on unsent messages), explicit high-water marks (a slow subscriber
 costs bounded memory; what ZeroMQ drops beyond the mark shows up as a sequence gap
-downstream), and endpoints checked before use so a typo is one line, not a ZMQError. The ready
+downstream), and endpoints checked before use so a typo is one line, not a ZMQError. Every
+socket also refuses inbound frames above :data:`MAX_FRAME` (twice the protocol's payload
+limit): ZeroMQ closes that connection rather than buffer a gigabyte from a broken peer, and
+anything smaller but still too large reaches :func:`~livedrummer.protocol.decode`, which
+refuses it by name (receivers count such drops with :mod:`services.badmsg`). The ready
 handshake replaces start-up sleeps: a client sends HELLO on the service's control socket and
 the service answers READY only once it is serving (see :mod:`livedrummer.protocol`).
 
@@ -24,17 +28,31 @@ from __future__ import annotations
 
 import logging
 import re
+import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import zmq
 from zmq.auth.thread import ThreadAuthenticator
 
 from livedrummer.errors import KeyFileError, ProtocolError
 from livedrummer.keys import KeyPair, read_key_file
-from livedrummer.protocol import Hello, Kind, Message, Stream, decode, encode
+from livedrummer.protocol import (
+    MAGIC,
+    MAX_PAYLOAD,
+    Hello,
+    Kind,
+    Message,
+    Stream,
+    decode,
+    encode,
+)
+from services.badmsg import BadMessages
 
 DEFAULT_HWM = 100_000
+MAX_FRAME = 2 * MAX_PAYLOAD
 _ENDPOINT = re.compile(r"^(tcp://[^\s:/]+:(\d+|\*)|ipc://\S+|inproc://\S+)$")
 
 
@@ -58,6 +76,7 @@ def socket(
     sock.setsockopt(zmq.LINGER, 0)
     sock.setsockopt(zmq.SNDHWM, hwm)
     sock.setsockopt(zmq.RCVHWM, hwm)
+    sock.setsockopt(zmq.MAXMSGSIZE, MAX_FRAME)
     return sock
 
 
@@ -215,5 +234,57 @@ def request_ready(
         if msg.kind is not Kind.READY or not isinstance(msg.body, Hello):
             raise ProtocolError(f"{endpoint}: answered {msg.kind.name}, expected READY")
         return msg.body
+    finally:
+        sock.close(0)
+
+
+def subscribe_protocol(sock: zmq.Socket[bytes]) -> None:
+    """Subscribe a SUB socket to every livedrummer message: any kind, any version.
+
+    Wider than one :func:`~livedrummer.protocol.topic` per kind on purpose: a message of
+    another protocol version (or a malformed one that starts with the magic) then reaches
+    :func:`~livedrummer.protocol.decode` and is counted and logged by the receiver, instead of
+    being filtered out unseen, which would look like silence. Counts as one subscription for
+    the input daemon's ``wait_subscribers``.
+    """
+    sock.setsockopt(zmq.SUBSCRIBE, MAGIC)
+
+
+def serve_control(
+    sock: Any,
+    stop: threading.Event,
+    ready: Callable[[], Message],
+    bad: BadMessages,
+    on_drop: Callable[[str], None] | None = None,
+) -> None:
+    """Answer HELLO with ``ready()`` on a ROUTER socket until ``stop``; then close the socket.
+
+    Anything else (undecodable frames, or a valid message other than HELLO) is dropped,
+    counted in ``bad`` (logged once per kind) and reported to ``on_drop`` with its kind; the
+    loop keeps serving. Replies keep the client's envelope (a DEALER's empty delimiter too).
+    """
+    try:
+        while not stop.is_set():
+            if not sock.poll(100):
+                continue
+            frames = sock.recv_multipart()
+            ident, rest = frames[0], frames[1:]
+            envelope = [ident]
+            if rest and rest[0] == b"":
+                envelope.append(b"")
+                rest = rest[1:]
+            try:
+                msg = decode(rest)
+            except ProtocolError as exc:
+                kind = bad.drop(exc)
+                if on_drop is not None:
+                    on_drop(kind)
+                continue
+            if msg.kind is not Kind.HELLO:
+                bad.unexpected(msg.kind.name)
+                if on_drop is not None:
+                    on_drop("unexpected")
+                continue
+            sock.send_multipart([*envelope, *encode(ready())])
     finally:
         sock.close(0)

@@ -7,7 +7,9 @@ process so each can crash, restart and move machine alone. The supervisor:
   (:mod:`services.notify`: one line on a pipe) before starting the next — no sleeps; a service
   that exits or stays silent past its ``ready_timeout_s`` fails the start-up with its name;
 * restarts a service that dies, with exponential back-off (reset after it has run for a while)
-  so a service that crashes at once does not spin; every restart is logged and counted;
+  so a service that crashes at once does not spin; every restart is logged and counted, and
+  when the new process reports ready the time since the old one died is logged and kept in
+  :attr:`Supervisor.recoveries` (the figure ``livedrummer bench recovery`` reports);
 * stops everything on :meth:`Supervisor.stop` (the CLI calls it on Ctrl-C / SIGTERM): SIGTERM
   in reverse start order, then SIGKILL for any process still alive after ``stop_timeout_s``.
 
@@ -56,6 +58,7 @@ class _Running:
     ready: bool = False
     detail: str = ""
     buffer: bytes = b""
+    died_at: float | None = None  # when the process this one replaces exited
 
 
 @dataclass
@@ -82,9 +85,12 @@ class Supervisor:
         self.specs = list(specs)
         self.stop_timeout_s = stop_timeout_s
         self.restarts: dict[str, int] = {s.name: 0 for s in specs}
+        #: Per service: seconds from a process's death to its replacement's ready line.
+        self.recoveries: dict[str, list[float]] = {s.name: [] for s in specs}
         self._running: dict[str, _Running] = {}
         self._backoff: dict[str, Backoff] = {s.name: Backoff() for s in specs}
         self._pending: dict[str, float] = {}  # name -> monotonic time to restart at
+        self._died_at: dict[str, float] = {}  # name -> when its last process exited
         self._selector = selectors.DefaultSelector()
         self._wake_r, self._wake_w = os.pipe()
         os.set_blocking(self._wake_w, False)
@@ -118,14 +124,20 @@ class Supervisor:
             log.info("%s ready %s", spec.name, self._running[spec.name].detail)
 
     def run_once(self, timeout_s: float = 0.5) -> None:
-        """Handle events for up to ``timeout_s``: ready lines, deaths, due restarts."""
+        """Handle events for up to ``timeout_s``: ready lines, deaths, due restarts.
+
+        Returns early for a due restart, so a back-off of 0.1 s is 0.1 s, not ``timeout_s``.
+        """
+        if self._pending:
+            due = min(self._pending.values()) - time.monotonic()
+            timeout_s = max(0.0, min(timeout_s, due))
         self._poll(timeout_s)
         self._reap()
         now = time.monotonic()
         for name, due in list(self._pending.items()):
             if now >= due and not self._stopping:
                 del self._pending[name]
-                self._spawn(self._spec(name))
+                self._spawn(self._spec(name), self._died_at.pop(name, None))
 
     def serve_forever(self) -> None:
         while not self._stopping:
@@ -176,14 +188,14 @@ class Supervisor:
     def _spec(self, name: str) -> ServiceSpec:
         return next(s for s in self.specs if s.name == name)
 
-    def _spawn(self, spec: ServiceSpec) -> None:
+    def _spawn(self, spec: ServiceSpec, died_at: float | None = None) -> None:
         read_fd, write_fd = os.pipe()
         env = {**os.environ, **spec.env, NOTIFY_FD_ENV: str(write_fd)}
         proc = subprocess.Popen(list(spec.argv), env=env, pass_fds=(write_fd,))
         os.close(write_fd)
         os.set_blocking(read_fd, False)
         self._selector.register(read_fd, selectors.EVENT_READ, spec.name)
-        self._running[spec.name] = _Running(spec, proc, read_fd, time.monotonic())
+        self._running[spec.name] = _Running(spec, proc, read_fd, time.monotonic(), died_at=died_at)
         log.info("started %s (pid %d)", spec.name, proc.pid)
 
     def _poll(self, timeout_s: float) -> None:
@@ -213,9 +225,14 @@ class Supervisor:
         while b"\n" in r.buffer:
             line, r.buffer = r.buffer.split(b"\n", 1)
             text = line.decode(errors="replace")
-            if text.startswith("READY"):
+            if text.startswith("READY") and not r.ready:
                 r.ready = True
                 r.detail = text[5:].strip()
+                if r.died_at is not None:
+                    took = time.monotonic() - r.died_at
+                    self.recoveries[r.spec.name].append(took)
+                    log.warning("%s ready again %.3f s after it died (pid %d)", r.spec.name,
+                                took, r.proc.pid)  # fmt: skip
 
     def _close_notify(self, r: _Running) -> None:
         if r.notify_fd is not None:
@@ -235,6 +252,7 @@ class Supervisor:
                 continue
             delay = self._backoff[name].next_delay(time.monotonic() - r.started_at)
             self.restarts[name] += 1
+            self._died_at[name] = time.monotonic()
             log.warning("%s exited with %s; restart #%d in %.1f s", name, code,
                         self.restarts[name], delay)  # fmt: skip
             self._pending[name] = time.monotonic() + delay

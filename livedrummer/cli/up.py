@@ -7,8 +7,17 @@ into the pipeline as if from a kit (looping). With no screen (neither ``DISPLAY`
 ``WAYLAND_DISPLAY``), or with ``--headless``, the display renders off screen into
 ``--out`` (default ``out/live``): numbered PNG frames plus ``frames.jsonl``.
 
+Security. ``--curve-secret RIG.key_secret`` makes every stream of the rig CURVE: the input
+daemon and the synth bind as CURVE servers with that key pair, and the synth and the display
+connect to them as clients with the same pair (the server key is read from the same file), so
+one key made with ``livedrummer keys new`` is all a rig needs. ``--allow DIR`` lets in only
+clients whose public key is in DIR, which must then hold the rig's own public key (checked at
+start, named in the error) or its own services would be refused. ``--bind ADDR`` serves on
+another address than 127.0.0.1 (a remote display); a non-loopback address needs
+``--curve-secret`` or ``--insecure``, as for each service.
+
 Limits: a live window is not implemented yet, so the display is always headless; endpoints are
-fixed local TCP ports from ``--port-base``.
+fixed TCP ports from ``--port-base``.
 """
 
 from __future__ import annotations
@@ -22,8 +31,9 @@ from pathlib import Path
 from types import FrameType
 
 from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, add_kit_option, demo_groove
+from livedrummer.cli.keys import add_curve_options
 
-SYNTH_TOPICS = 4  # the synth subscribes to ONSET, CONTROL, GAP and HEARTBEAT
+SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscribe_protocol)
 
 
 def register(sub: Subparsers) -> None:
@@ -42,16 +52,52 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--out", type=Path, default=Path("out/live"), help="headless frames folder")
     p.add_argument("--fps", type=float, default=30.0, help="display frames per second")
     p.add_argument("--port-base", type=int, default=5710,
-                   help="TCP ports PORT..PORT+11 on 127.0.0.1 (default 5710)")  # fmt: skip
+                   help="TCP ports PORT..PORT+11 on --bind (default 5710)")  # fmt: skip
+    p.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
+                   help="address the input and synth serve on (default 127.0.0.1)")  # fmt: skip
+    p.add_argument("--no-png", action="store_true", help="frames.jsonl only, no PNG frames")
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
+    add_curve_options(p, server=True, client=False)
+
+
+def curve_argv(args: argparse.Namespace) -> dict[str, list[str]]:
+    """The CURVE options of each service (see the module docstring), by service name.
+
+    Checks the key files here, so a bad one is one error before anything starts.
+    """
+    from livedrummer.errors import KeyFileError
+    from livedrummer.keys import PUBLIC_SUFFIX, read_key_file
+    from services.net import Security
+
+    Security.from_files(secret=args.curve_secret, allow=args.allow, insecure=args.insecure)
+    insecure = ["--insecure"] if args.insecure else []
+    if args.curve_secret is None:
+        return {"input": insecure, "synth": insecure, "display": []}
+    secret = str(args.curve_secret.resolve())
+    if args.allow is not None:
+        own = read_key_file(args.curve_secret, secret=True).public
+        keys = {read_key_file(k, secret=False).public for k in args.allow.glob(f"*{PUBLIC_SUFFIX}")}
+        if own not in keys:
+            raise KeyFileError(
+                f"{args.allow}: --allow folder lacks this rig's public key "
+                f"({args.curve_secret.name.removesuffix('_secret')}); its own services "
+                "could not connect"
+            )
+    allow = ["--allow", str(args.allow.resolve())] if args.allow is not None else []
+    serve = ["--curve-secret", secret, *allow, *insecure]
+    return {"input": serve, "synth": [*serve, "--server-key", secret],
+            "display": ["--curve-secret", secret, "--server-key", secret]}  # fmt: skip
 
 
 def specs(args: argparse.Namespace) -> list:  # type: ignore[type-arg]
     from services.supervisor import ServiceSpec
 
     base = args.port_base
-    ep = {name: f"tcp://127.0.0.1:{base + k}" for name, k in
+    ep = {name: f"tcp://{args.bind}:{base + k}" for name, k in
           (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))}  # fmt: skip
+    # Clients reach the servers through loopback unless they serve on one given address.
+    near = {name: e.replace("tcp://0.0.0.0:", "tcp://127.0.0.1:") for name, e in ep.items()}
+    curve = curve_argv(args)
     map_name = args.map or DEMO_MAP
     me = [sys.executable, "-m", "livedrummer"]
     source: list[str]
@@ -64,13 +110,14 @@ def specs(args: argparse.Namespace) -> list:  # type: ignore[type-arg]
     journal = ["--no-journal"] if args.no_journal or args.demo else []
     input_argv = [*me, "input", *source, "--map", map_name, "--pub", ep["in_pub"],
                   "--control", ep["in_ctl"], "--wait-subscribers", str(SYNTH_TOPICS),
-                  *journal]  # fmt: skip
-    synth_argv = [*me, "synth", "--sub", ep["in_pub"], "--pub", ep["syn_pub"],
+                  *journal, *curve["input"]]  # fmt: skip
+    synth_argv = [*me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
                   "--control", ep["syn_ctl"], "--kit", args.kit, "--map", map_name,
                   "--lookahead-ms", str(args.lookahead_ms),
-                  "--delay-ms", str(args.delay_ms)]  # fmt: skip
-    display_argv = [*me, "display", "--live", "--headless", "--sub", ep["syn_pub"],
-                    "--kit", args.kit, "--out", str(args.out), "--fps", str(args.fps)]  # fmt: skip
+                  "--delay-ms", str(args.delay_ms), *curve["synth"]]  # fmt: skip
+    display_argv = [*me, "display", "--live", "--headless", "--sub", near["syn_pub"],
+                    "--kit", args.kit, "--out", str(args.out), "--fps", str(args.fps),
+                    *(["--no-png"] if args.no_png else []), *curve["display"]]  # fmt: skip
     return [
         ServiceSpec("input", input_argv),
         ServiceSpec("synth", synth_argv),

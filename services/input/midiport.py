@@ -5,8 +5,13 @@ finds "TD-17:TD-17 MIDI 1 20:0"). rtmidi calls back on its own thread; the callb
 the shared clock first, then queues the bytes, so queueing delay never shifts a timestamp.
 rtmidi does not report a vanished device, so ``read`` polls the port list every
 :data:`PROBE_S` and raises :class:`MidiInputError` when the port is gone; the daemon reopens
-it when it comes back. The queue is bounded (:data:`MAX_QUEUE`): beyond it messages are shed
-and counted, and the daemon publishes a GAP.
+it when it comes back (it retries every ``reconnect_s``, 0.1 s by default). While the port is
+absent, ``open`` looks for it through one client kept for the whole outage, so a retry costs
+a port listing, not a new MIDI client (registering a JACK client each time would churn the
+server's graph ten times a second). A port that vanishes and comes back between two probes
+is not noticed (rtmidi gives no connection state), hence the short probe interval. The queue
+is bounded (:data:`MAX_QUEUE`): beyond it messages are shed and counted, and the daemon
+publishes a GAP.
 
 rtmidi is used directly rather than through mido's port wrapper to get the callback
 timestamp and the port list from one object without a second thread.
@@ -32,7 +37,7 @@ from livedrummer.errors import MidiInputError
 from livedrummer.protocol import Gap, GapReason
 from services.input.base import Event, MidiSource, Problems
 
-PROBE_S = 0.25
+PROBE_S = 0.1
 MAX_QUEUE = 200_000
 APIS = {
     "alsa": rtmidi.API_LINUX_ALSA,
@@ -89,22 +94,25 @@ class MidiPortSource(MidiSource):
         self.api = api
         self.port_name = ""
         self._in: Any = None
+        self._client: Any = None  # the rtmidi client, kept across retries while absent
         self._queue: queue.SimpleQueue[tuple[float, list[int]]] = queue.SimpleQueue()
         self._shed = 0
         self._shed_first = 0.0
         self._next_probe = 0.0
 
     def open(self) -> None:
-        m = midi_in(self.api)
+        if self._client is None:
+            self._client = midi_in(self.api)  # kept while the port is absent (docstring)
+        m = self._client
         try:
             ports = [str(p) for p in m.get_ports()]
             index = choose_port(self.spec, ports)
             m.ignore_types(sysex=True, timing=True, active_sense=True)
             m.set_callback(self._callback)
             m.open_port(index, "in")
-        except (MidiInputError, rtmidi.RtMidiError) as exc:
-            m.delete()
-            raise MidiInputError(str(exc)) from exc
+        except rtmidi.RtMidiError as exc:
+            self._drop_client()
+            raise MidiInputError(f"{self.name}: {exc}") from exc
         self._in = m
         self.port_name = ports[index]
         self._next_probe = self.clock.now() + PROBE_S
@@ -154,6 +162,11 @@ class MidiPortSource(MidiSource):
                 self._in.cancel_callback()
                 self._in.close_port()
             finally:
-                self._in.delete()
                 self._in = None
+        self._drop_client()
         self.is_open = False
+
+    def _drop_client(self) -> None:
+        if self._client is not None:
+            self._client.delete()
+            self._client = None

@@ -3,9 +3,14 @@
 Subscribes (SUB) to the remote daemon's event stream and turns its ONSET/CONTROL messages
 back into events, restamped with the local shared clock at arrival: the remote clock is
 another machine's, and the local pipeline must see the hit when it arrives here. Every
-message is validated by :func:`livedrummer.protocol.decode`; bad ones are dropped and counted
-(logged once per kind). A sequence gap on the remote stream, or a GAP the remote published,
-becomes a local GAP with reason UPSTREAM, so loss stays visible end to end.
+message is validated by :func:`livedrummer.protocol.decode`; bad ones are dropped, counted
+per kind in ``bad`` (a :class:`~services.badmsg.BadMessages`, logged once per kind) and in
+total in the problems report. The SUB socket takes every message that starts with the
+protocol magic (:func:`~services.net.subscribe_protocol`), so a remote site speaking another
+protocol version is counted as such rather than heard as silence; a valid message of a kind
+not carried on an events stream (HELLO, READY) is counted as "unexpected". A sequence gap
+on the remote stream, or a GAP the remote published, becomes a local GAP with reason
+UPSTREAM, so loss stays visible end to end.
 
 Security: with a :class:`~services.net.Security` holding our key pair and the remote
 daemon's public key, the SUB socket is a CURVE client (encrypted; refused by a daemon whose
@@ -17,6 +22,7 @@ Limits: no clock-offset estimation between sites. The remote daemon going away l
 
 from __future__ import annotations
 
+import logging
 from typing import Any
 
 import zmq
@@ -24,11 +30,15 @@ import zmq
 from livedrummer.clock import Clock
 from livedrummer.errors import KeyFileError, MidiInputError, ProtocolError
 from livedrummer.events import Control, ControlKind, Onset
-from livedrummer.protocol import Gap, GapReason, Kind, SeqStatus, SequenceTracker, decode, topic
+from livedrummer.protocol import Gap, GapReason, Kind, SeqStatus, SequenceTracker, decode
+from services.badmsg import BadMessages
 from services.input.base import Event, Problems, Source
-from services.net import Security, check_endpoint, connect, socket
+from services.net import Security, check_endpoint, connect, socket, subscribe_protocol
+
+log = logging.getLogger("livedrummer.input")
 
 MAX_BATCH = 1000
+EVENT_KINDS = (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT)
 
 
 class RemoteSource(Source):
@@ -47,13 +57,13 @@ class RemoteSource(Source):
         self.ctx = ctx
         self.security = security
         self.tracker = SequenceTracker()
+        self.bad = BadMessages(f"remote {endpoint}", log)
         self._sock: Any = None
 
     def open(self) -> None:
         sock = socket(self.ctx, zmq.SUB)
         try:
-            for kind in (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT):
-                sock.setsockopt(zmq.SUBSCRIBE, topic(kind))
+            subscribe_protocol(sock)
             connect(sock, self.endpoint, "remote endpoint", self.security)
         except (ProtocolError, KeyFileError) as exc:
             sock.close(0)
@@ -74,7 +84,12 @@ class RemoteSource(Source):
             try:
                 msg = decode(frames)
             except ProtocolError as exc:
-                self.problems.report("bad remote message", f"{self.name}: {exc}")
+                self.bad.drop(exc)
+                self.problems.counts["bad remote message"] += 1
+                continue
+            if msg.kind not in EVENT_KINDS:
+                self.bad.unexpected(msg.kind.name)
+                self.problems.counts["bad remote message"] += 1
                 continue
             seq = self.tracker.observe_message(msg)
             if seq.status is SeqStatus.DUPLICATE:
