@@ -11,7 +11,10 @@ sample. Measured per note, on the shared clock, from the moment the note-on is s
 * onset on the bus: a subscriber to the input daemon receives the ONSET;
 * pose available: a subscriber to the synth receives the POSE message holding the note's
   contact sample (show time = onset stamp + D);
-* frame rendered: the display has finished the first frame that drew that sample or a later one.
+* frame rendered: the display has finished the first frame that drew that sample or a later one;
+* pose - onset: pose available minus the onset's own stamp (the synth's share; with
+  provisional poses the first, possibly provisional, contact sample). ``late`` counts notes
+  whose contact sample arrived after onset + D, when it should already be on screen.
 
 Prints p50/p99 per stage and rate and the counts lost at each stage (sent vs on the bus, on
 the bus vs contact samples; a note the sticking leaves out, e.g. a third hand note of a
@@ -84,7 +87,7 @@ class Jack:
 
 
 def run_rate(jack: Jack, rate: float, count: int, delay_ms: float, lookahead_ms: float,
-             tmp: Path) -> dict[str, Any]:  # fmt: skip
+             tmp: Path, synth_args: list[str]) -> dict[str, Any]:  # fmt: skip
     clock = MonotonicClock()
     home = str(tmp / "home")
     fmt = p.PoseFormat.from_dtype(pose_dtype(len(load_kit("rock5").pieces)))
@@ -99,7 +102,7 @@ def run_rate(jack: Jack, rate: float, count: int, delay_ms: float, lookahead_ms:
         in_ep = _line(inp)["pub"]
         syn = _spawn(["synth", "--sub", in_ep, "--pub", "tcp://127.0.0.1:*", "--control",
                       "tcp://127.0.0.1:*", "--delay-ms", str(delay_ms), "--lookahead-ms",
-                      str(lookahead_ms)], home, tmp / "synth.err")  # fmt: skip
+                      str(lookahead_ms), *synth_args], home, tmp / "synth.err")  # fmt: skip
         procs.append(syn)
         syn_ep = _line(syn)["pub"]
         disp = _spawn(["display", "--live", "--headless", "--sub", syn_ep, "--size", "320x180",
@@ -189,6 +192,8 @@ def run_rate(jack: Jack, rate: float, count: int, delay_ms: float, lookahead_ms:
         if np.isnan(contact_at[i]):
             missing_pose += 1
     pose_lat = (contact_at - sent_a)[~np.isnan(contact_at)]
+    after_onset = (contact_at - stamps[:n])[~np.isnan(contact_at)]
+    late = int(np.sum(contact_at - stamps[:n] > d))
     frames = [json.loads(x) for x in (frames_dir / "frames.jsonl").read_text().splitlines()]
     drawn = [(f["pose_s"], f["done_s"]) for f in frames if f["pose_s"] is not None]
     frame_lat = []
@@ -200,6 +205,7 @@ def run_rate(jack: Jack, rate: float, count: int, delay_ms: float, lookahead_ms:
     return {
         "rate": rate, "sent": len(sent), "on_bus": int(got_t.size), "loopback": loop,
         "bus": bus, "pose": np.asarray(pose_lat), "frame": np.asarray(frame_lat),
+        "after_onset": after_onset, "late": late,
         "no_contact": missing_pose, "synth": (tmp / "synth.err").read_text().strip()[-200:],
     }  # fmt: skip
 
@@ -216,20 +222,25 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--seconds", type=float, default=2.0, help="per rate (min 5 notes)")
     parser.add_argument("--delay-ms", type=float, default=30.0)
     parser.add_argument("--lookahead-ms", type=float, default=30.0)
+    parser.add_argument("--no-provisional", action="store_true",
+                        help="the synth publishes a hit only once its hand is decided")  # fmt: skip
     args = parser.parse_args(argv)
+    synth_args = ["--no-provisional"] if args.no_provisional else []
     jack = Jack()
     print(f"D = {args.delay_ms:g} ms, L = {args.lookahead_ms:g} ms; ms from note-on sent, p50 p99")
-    print(f"{'notes/s':>8} {'sent':>5} {'bus':>5} {'no-pose':>7} | {'JACK loop':>15} | "
-          f"{'onset on bus':>15} | {'pose at display':>15} | {'frame rendered':>15}")  # fmt: skip
+    print(f"{'notes/s':>8} {'sent':>5} {'bus':>5} {'no-pose':>7} {'late':>5} | "
+          f"{'JACK loop':>15} | {'onset on bus':>15} | {'pose at display':>15} | "
+          f"{'frame rendered':>15} | {'pose - onset':>15}")  # fmt: skip
     try:
         with tempfile.TemporaryDirectory() as tmp:
             for rate in args.rates:
                 count = max(5, int(rate * args.seconds))
                 r = run_rate(jack, rate, count, args.delay_ms, args.lookahead_ms,
-                             Path(tmp))  # fmt: skip
-                print(f"{rate:8g} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} | "
-                      f"{_pct(r['loopback'])} | {_pct(r['bus'])} | {_pct(r['pose'])} | "
-                      f"{_pct(r['frame'])}", flush=True)  # fmt: skip
+                             Path(tmp), synth_args)  # fmt: skip
+                print(f"{rate:8g} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
+                      f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
+                      f"{_pct(r['pose'])} | {_pct(r['frame'])} | "
+                      f"{_pct(r['after_onset'])}", flush=True)  # fmt: skip
                 print(f"         {r['synth']}", flush=True)
     finally:
         jack.close()

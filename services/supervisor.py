@@ -47,6 +47,7 @@ class ServiceSpec:
     env: dict[str, str] = field(default_factory=dict)
     ready_timeout_s: float = 30.0
     restart: bool = True
+    ends_rig: bool = False  # exit status 0 means the user is done (a window closed): no restart
 
 
 @dataclass
@@ -91,6 +92,7 @@ class Supervisor:
         self._backoff: dict[str, Backoff] = {s.name: Backoff() for s in specs}
         self._pending: dict[str, float] = {}  # name -> monotonic time to restart at
         self._died_at: dict[str, float] = {}  # name -> when its last process exited
+        self.finished: set[str] = set()  # ``ends_rig`` services that exited with status 0
         self._selector = selectors.DefaultSelector()
         self._wake_r, self._wake_w = os.pipe()
         os.set_blocking(self._wake_w, False)
@@ -122,6 +124,10 @@ class Supervisor:
                     )
                 self._poll(min(left, 0.5))
             log.info("%s ready %s", spec.name, self._running[spec.name].detail)
+
+    def quit_by_user(self, name: str) -> bool:
+        """True once ``name`` (an ``ends_rig`` service) exited with status 0."""
+        return name in self.finished
 
     def run_once(self, timeout_s: float = 0.5) -> None:
         """Handle events for up to ``timeout_s``: ready lines, deaths, due restarts.
@@ -247,6 +253,10 @@ class Supervisor:
                 continue
             self._close_notify(r)
             del self._running[name]
+            if code == 0 and r.spec.ends_rig:
+                log.info("%s finished", name)
+                self.finished.add(name)
+                continue
             if not r.spec.restart:
                 log.warning("%s exited with %s; not restarting", name, code)
                 continue

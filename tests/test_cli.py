@@ -77,9 +77,21 @@ def test_kits_lists_kits_and_maps() -> None:
         assert f"  {name} " in proc.stdout
 
 
-def test_demo_renders_the_bundled_groove_without_a_screen(tmp_path: Path) -> None:
+def test_demo_plays_the_groove_live_and_records_it_without_a_screen(tmp_path: Path) -> None:
     out = tmp_path / "demo.mp4"
-    proc = run("demo", "--seconds", "3", "-o", str(out), DISPLAY="", WAYLAND_DISPLAY="")
+    proc = run("demo", "--seconds", "4", "-o", str(out), DISPLAY="", WAYLAND_DISPLAY="",
+               LIVEDRUMMER_HOME=str(tmp_path / "home"))  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "gmd-drummer1-funk-80.mid" in proc.stdout and "played live" in proc.stdout
+    assert f"up: wrote {out.resolve()}" in proc.stdout
+    assert "up: stopped (0 restarts)" in proc.stderr
+    assert out.stat().st_size > 10_000
+
+
+def test_demo_file_renders_the_bundled_groove_offline(tmp_path: Path) -> None:
+    out = tmp_path / "demo.mp4"
+    proc = run("demo", "--file", "--seconds", "3", "-o", str(out), DISPLAY="",
+               WAYLAND_DISPLAY="")  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     assert "gmd-drummer1-funk-80.mid" in proc.stdout
     assert "sticking  optimal:" in proc.stdout

@@ -105,3 +105,66 @@ def test_a_killed_synth_is_restarted_while_input_keeps_running(gl_ok: None, tmp_
             proc.wait()
     assert proc.returncode == 0, out[-2000:]
     assert "up: stopped (1 restarts)" in out
+
+
+def test_up_records_the_show_with_its_drum_track_on_show_time(gl_ok: None, tmp_path: Path) -> None:
+    import av
+    import numpy as np
+    import zmq
+
+    from livedrummer import protocol as p
+    from services.display.record import Timing
+
+    video = tmp_path / "show.mp4"
+    env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
+    env.pop("DISPLAY", None)
+    env.pop("WAYLAND_DISPLAY", None)
+    base = random.Random().randrange(20_000, 40_000, 20)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "livedrummer", "up", "--demo", "--port-base", str(base),
+         "--out", str(tmp_path / "frames"), "--seconds", "6", "--video", str(video),
+         "--size", "320x180", "--fps", "25"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
+    )  # fmt: skip
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    sub = ctx.socket(zmq.SUB)
+    sub.setsockopt(zmq.SUBSCRIBE, b"")
+    sub.connect(f"tcp://127.0.0.1:{base}")  # the input daemon's events
+    stamps: list[float] = []
+    try:
+        while proc.poll() is None:
+            if sub.poll(100):
+                msg = p.decode(sub.recv_multipart())
+                if msg.kind is p.Kind.ONSET and isinstance(msg.body, np.ndarray):
+                    stamps.extend(msg.body["time_s"].astype(float).tolist())
+        out = proc.stdout.read() if proc.stdout else ""
+    finally:
+        sub.close(0)
+        ctx.term()
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, out[-2000:]
+    assert "wrote" in out and "hits in its drum track" in out, out[-2000:]
+    timing = Timing.load(video)
+    with av.open(str(video)) as c:
+        frames = len(list(c.decode(c.streams.video[0])))
+    with av.open(str(video)) as c:
+        a = c.streams.audio[0]
+        audio = np.concatenate([f.to_ndarray() for f in c.decode(a)], axis=1).T
+        rate = a.rate
+    assert frames == timing.frames and 0.7 * 6 * 25 < frames <= 6 * 25 + 2
+    assert abs(len(audio) / rate - frames / 25) < 0.05
+    # the hits heard by this test's own subscriber sound at onset + D on the video's time:
+    # the track's onset strength (rise of the log envelope, 1 ms bins) correlates best with
+    # those hits at a lag within one frame
+    ms = rate // 1000
+    env_a = np.abs(audio[: len(audio) // ms * ms]).max(axis=1).reshape(-1, ms).max(axis=1)
+    rise = np.maximum(np.diff(np.log(env_a + 1e-4)), 0.0)
+    heard = np.array([t + 0.030 - timing.show0_s for t in stamps])
+    heard = heard[(heard > 0.25) & (heard < frames / 25 - 0.25)]
+    assert heard.size >= 10
+    lags = np.arange(-200, 201)
+    score = [rise[np.round(heard * 1000).astype(int) + lag - 1].sum() for lag in lags]
+    best = int(lags[int(np.argmax(score))])
+    assert abs(best) < 1000 / 25, f"drum track {best} ms off the show"
+    assert max(score) > 3 * float(np.median(score)), "the hits are not where the track rises"

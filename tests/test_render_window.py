@@ -42,3 +42,41 @@ def test_window_plays_under_xvfb() -> None:
     assert run.returncode == 0, run.stderr
     line = next(ln for ln in run.stderr.splitlines() if "window:" in ln)
     assert int(line.split("window:")[1].split()[0]) > 3  # frames drawn
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
+def test_live_display_draws_in_a_window_under_xvfb() -> None:
+    # no synth is running: the live window still draws the kit, frame after frame
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", *LIVEDRUMMER, "display", "--live",
+         "--sub", "tcp://127.0.0.1:1", "--size", "320x180", "--aa", "0", "--frames", "12",
+         "--fps", "30"],
+        cwd=REPO, capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "display: 12 frames" in run.stderr
+
+
+def test_live_window_refuses_recording_options(tmp_path: Path) -> None:
+    run = subprocess.run([*LIVEDRUMMER, "display", "--live", "--video", str(tmp_path / "a.mp4")],
+                         cwd=REPO, capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert run.returncode == 2
+    assert "--headless" in run.stderr and "Traceback" not in run.stderr
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
+def test_up_opens_the_live_window_where_there_is_a_screen(tmp_path: Path) -> None:
+    import random
+
+    base = random.Random().randrange(20_000, 40_000, 20)
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", *LIVEDRUMMER, "up", "--demo",
+         "--seconds", "4", "--port-base", str(base), "--size", "320x180"],
+        cwd=REPO, capture_output=True, text=True, timeout=120,
+        env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")},
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "running; in a window" in run.stdout
+    line = next(ln for ln in run.stderr.splitlines() if ln.startswith("display: "))
+    assert int(line.split()[1]) > 30, line  # frames drawn in the window
+    assert "(0 lost upstream)" in run.stderr

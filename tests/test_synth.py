@@ -39,30 +39,35 @@ def groove() -> Performance:
 
 
 def play(synth: LiveSynth, onsets: np.ndarray, tick_s: float, tail_s: float = 0.3) -> PoseBatch:
-    """Feed onsets at their times and poll like the service does; all published samples."""
+    """Feed onsets at their times and poll like the service does; the samples as a display
+    keeps them (a batch replaces what it covers: provisional samples are re-sent)."""
     now = float(onsets["time_s"][0]) - 0.2
     end = float(onsets["time_s"][-1]) + tail_s
-    i, shows, rows = 0, [], []
+    i, track = 0, PoseTrack(keep_s=end - now + 1.0)
     while now < end:
         while i < onsets.size and onsets["time_s"][i] <= now:
             synth.process(onsets[i])
             i += 1
         batch = synth.poses_until(now)
-        shows.append(batch.show_s)
-        rows.append(batch.rows)
+        if batch.show_s.size and not synth.params.provisional:
+            assert track.newest_s is None or batch.show_s[0] > track.newest_s, "no sample twice"
+        track.add(batch.show_s, batch.rows)
         now += tick_s
-    return PoseBatch(np.concatenate(shows), np.concatenate(rows))
+    return PoseBatch(track.show_s.copy(), track.rows.copy())
 
 
-@pytest.mark.parametrize(("lookahead_s", "delay_s"), [(0.03, 0.03), (0.02, 0.05)])
+@pytest.mark.parametrize(
+    ("lookahead_s", "delay_s", "provisional"),
+    [(0.03, 0.03, True), (0.02, 0.05, True), (0.03, 0.03, False), (0.02, 0.05, False)],
+)
 def test_contacts_land_on_the_offline_contact_at_onset_plus_delay(
-    rig: Rig, groove: Performance, lookahead_s: float, delay_s: float
+    rig: Rig, groove: Performance, lookahead_s: float, delay_s: float, provisional: bool
 ) -> None:
     onsets = groove.onsets[groove.onsets["time_s"] < 5.0].copy()
     onsets["time_s"] += START
-    synth = LiveSynth(rig, SynthParams(lookahead_s, delay_s, predict=False))
-    out = play(synth, onsets, 1 / 120)
-    assert np.all(np.diff(out.show_s) > 0), "show times must increase, no sample twice"
+    params = SynthParams(lookahead_s, delay_s, predict=False, provisional=provisional)
+    out = play(LiveSynth(rig, params), onsets, 1 / 120)
+    assert np.all(np.diff(out.show_s) > 0), "show times must increase"
     assert np.diff(out.show_s).max() <= 1 / 240 + 1e-9, "no hole in the pose stream"
     sticking = stick_online(onsets, rig.kit, lookahead_s)
     beats = groove.grid.beat_s + START
@@ -191,3 +196,78 @@ def test_next_due_is_when_a_hand_note_gets_committed(rig: Rig, groove: Performan
     assert synth.next_due_s(t - 0.1) == pytest.approx(t + params.lookahead_s)
     synth.poses_until(t + params.lookahead_s)
     assert synth.next_due_s(t) is None
+
+
+@pytest.mark.parametrize("provisional", [True, False])
+def test_a_hit_s_contact_goes_out_on_arrival_only_when_provisional(
+    rig: Rig, groove: Performance, provisional: bool
+) -> None:
+    params = SynthParams(provisional=provisional)
+    synth = LiveSynth(rig, params)
+    onsets = groove.onsets[groove.onsets["time_s"] < 4.0].copy()
+    onsets["time_s"] += START
+    now = float(onsets["time_s"][0]) - 0.2
+    synth.poses_until(now)
+    sticking = stick_online(onsets, rig.kit, params.lookahead_s)
+    is_hand = (sticking.limb >= 0) & (sticking.limb <= 1) & (sticking.piece >= 0)
+    on_arrival, hands = 0, 0
+    for k, row in enumerate(sticking.onsets):
+        t = float(row["time_s"])
+        while now + 1 / 120 < t:  # the service's ticks between notes
+            now += 1 / 120
+            synth.poses_until(now)
+        now = t + 0.0005  # the note arrives, the service publishes at once
+        synth.process(row)
+        batch = synth.poses_until(now)
+        if not is_hand[k]:
+            continue
+        hands += 1
+        on_arrival += bool(np.any(np.abs(batch.show_s - (t + params.delay_s)) < 1e-9))
+    assert hands > 10
+    if provisional:
+        assert on_arrival == hands, "every hand hit's contact is published when it arrives"
+    else:
+        assert on_arrival == 0, "without provisional poses a contact waits for its decision"
+
+
+def test_predicted_hits_get_their_contact_on_arrival(rig: Rig, groove: Performance) -> None:
+    params = SynthParams()
+    synth = LiveSynth(rig, params)
+    onsets = groove.onsets[groove.onsets["time_s"] < 8.0].copy()
+    onsets["time_s"] += START
+    sticking = stick_online(onsets, rig.kit, params.lookahead_s)
+    now = float(onsets["time_s"][0]) - 0.2
+    track = PoseTrack(keep_s=20.0)
+    quick: dict[float, np.ndarray] = {}
+    for row in sticking.onsets:
+        t = float(row["time_s"])
+        while now + 1 / 120 < t:
+            now += 1 / 120
+            b = synth.poses_until(now)
+            track.add(b.show_s, b.rows)
+        now = t + 0.0005
+        synth.process(row)
+        q = synth.take_quick()  # what the service sends before re-animating
+        track.add(q.show_s, q.rows)
+        for show, rec in zip(q.show_s, q.rows, strict=True):
+            assert show == pytest.approx(t + params.delay_s, abs=1e-9)
+            quick[float(show)] = rec
+        b = synth.poses_until(now)
+        track.add(b.show_s, b.rows)
+    for _ in range(60):
+        now += 1 / 120
+        b = synth.poses_until(now)
+        track.add(b.show_s, b.rows)
+    hands = np.flatnonzero((sticking.limb >= 0) & (sticking.limb <= 1) & (sticking.piece >= 0))
+    assert synth.quick_contacts == len(quick) > hands.size // 2, "most groove hits are predicted"
+    close = 0
+    for i in hands:
+        show = float(sticking.onsets["time_s"][i]) + params.delay_s
+        if show not in quick:
+            continue
+        j = int(np.argmin(np.abs(track.show_s - show)))
+        assert abs(track.show_s[j] - show) < 1e-9
+        tip = TIPS[int(sticking.limb[i])]
+        final = track.rows["position"][j, tip]
+        close += bool(np.linalg.norm(quick[show]["position"][tip] - final) < 0.01)
+    assert close >= 0.9 * len(quick), f"{close} of {len(quick)} quick contacts on the final one"

@@ -1,11 +1,16 @@
 """``livedrummer demo``: the whole pipeline on the bundled groove, ending in something to watch.
 
-It prints what the groove holds (as ``inspect`` does) and how the limbs were assigned, then
-shows the drummer: in a window where there is a screen (``DISPLAY`` or ``WAYLAND_DISPLAY``
-set), otherwise as a video, ``out/demo.mp4`` at 1280x720 with its drum track, reporting where
-it is and how long it took. ``--seconds S`` keeps only the first S seconds (the whole groove,
-about 88 s, takes a couple of minutes on a CPU); ``--render`` makes the video even with a
-screen.
+By default this is the live product: it prints what the groove holds (as ``inspect`` does),
+then runs ``livedrummer up --demo``: the input daemon plays the groove into the pipeline as
+if from a kit, the synthesizer assigns hands and strokes online and the display draws the
+drummer on its clock. Where there is a screen (``DISPLAY`` or ``WAYLAND_DISPLAY`` set) that is
+a window (Q quits); otherwise the headless display records the show, and its drum track, to
+``out/demo.mp4`` (1280x720, 30 fps) and the demo says where it is. ``--seconds S`` sets how
+long it plays (default 30; it runs in real time); ``--render`` records even with a screen.
+
+``--file`` is the offline twin: the same groove read as a file with full lookahead (optimal
+sticking over the whole piece), rendered to the same video as fast as the machine allows, or
+played in the file window with transport keys.
 """
 
 from __future__ import annotations
@@ -27,11 +32,14 @@ from livedrummer.sticking.result import Sticking
 DEMO_VIDEO = Path("out/demo.mp4")
 DEMO_SIZE = (1280, 720)
 DEMO_FPS = 30
+LIVE_SECONDS = 30.0
 
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "demo", run, "run the pipeline on the bundled demo groove and show it")
-    p.add_argument("--seconds", type=float, metavar="S", help="only the first S seconds")
+    p.add_argument("--seconds", type=float, metavar="S",
+                   help=f"play S s (default {LIVE_SECONDS:g}; --file: the first S)")  # fmt: skip
+    p.add_argument("--file", action="store_true", help="offline: the groove as a file")
     p.add_argument("--render", action="store_true", help="make the video even with a screen")
     p.add_argument("-o", "--output", type=Path, default=DEMO_VIDEO,
                    help=f"video file (default {DEMO_VIDEO})")  # fmt: skip
@@ -52,6 +60,31 @@ def has_screen() -> bool:
 
 
 def run(args: argparse.Namespace) -> int:
+    return run_file(args) if args.file else run_live(args)
+
+
+def run_live(args: argparse.Namespace) -> int:
+    from livedrummer.cli import build_parser
+    from livedrummer.cli.up import run as up
+
+    groove = demo_groove()
+    print(f"demo: {groove.name} (Groove MIDI Dataset, CC BY 4.0), played live into the pipeline")
+    print_summary(read_midi_file(groove, load_note_map(DEMO_MAP)).summary())
+    seconds = LIVE_SECONDS if args.seconds is None else args.seconds
+    argv = ["up", "--demo", "--seconds", f"{seconds:g}"]
+    if has_screen() and not args.render:
+        print("demo: in a window (Q quits)", flush=True)
+    else:
+        out: Path = args.output
+        size = f"{DEMO_SIZE[0]}x{DEMO_SIZE[1]}"
+        print(f"demo: no screen: recording {seconds:g} s of the live show to {out} "
+              f"({size} @ {DEMO_FPS} fps)", flush=True)  # fmt: skip
+        argv += ["--video", str(out), "--size", size, "--fps", str(DEMO_FPS),
+                 "--out", str(out.parent / "live")]  # fmt: skip
+    return up(build_parser().parse_args(argv))
+
+
+def run_file(args: argparse.Namespace) -> int:
     from livedrummer.kitfile import load_kit
     from livedrummer.render.body_scene import BodyScene
     from livedrummer.render.camera import CAMERA_NAMES

@@ -2,8 +2,9 @@
 
 Keys: space play/pause, left/right step a frame, shift+left/right seek 5 s, home/end, r
 reverse, +/- speed, 0 normal speed, m set a marker, [ ] previous/next marker, 1..8 cameras
-(stage, front, drummer, overhead, left, right, back, kick), q or Esc quit. On a machine with
-no screen use ``livedrummer render``.
+(stage, front, drummer, overhead, left, right, back, kick), o the scrolling score and g the
+joint-angle graph (``--overlay score,joints`` shows them from the start), q or Esc quit. On a
+machine with no screen use ``livedrummer render``.
 """
 
 from __future__ import annotations
@@ -35,6 +36,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
     p.add_argument("--aa", type=int, default=4, metavar="N", help="multisample N (default 4)")
     p.add_argument("--quit-after", type=float, metavar="S", help="close after S seconds")
+    p.add_argument("--overlay", default="", metavar="LIST",
+                   help="strips shown first: score, joints or both (keys o, g)")  # fmt: skip
     add_motion_options(p)
     live = p.add_argument_group("live (poses from a running synth)")
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
@@ -48,6 +51,8 @@ def register(sub: Subparsers) -> None:
     live.add_argument("--clock", choices=("auto", "audio", "monotonic"), default="auto",
                       help="frame clock: the audio output's (auto: when not headless)")  # fmt: skip
     live.add_argument("--no-png", action="store_true", help="--out: frames.jsonl only, no PNGs")
+    live.add_argument("--video", type=Path, metavar="FILE",
+                      help="with --headless: record the frames on show time (MP4)")  # fmt: skip
     live.add_argument("--no-render", action="store_true",
                       help="only log frames (benchmarks without a GPU context)")  # fmt: skip
     add_curve_options(p, server=False, client=True)
@@ -59,6 +64,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.kitfile import load_kit
     from livedrummer.midifile import read_midi_file
     from livedrummer.notemap import load_note_map
+    from livedrummer.render.overlay import parse_overlays
     from services.display.window import WindowOptions, show
 
     source = Path(args.file) if args.file else demo_groove()
@@ -68,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
     options = WindowOptions(
         size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
         camera=args.camera, samples=args.aa, quit_after_s=args.quit_after,
+        overlays=parse_overlays(args.overlay),
     )  # fmt: skip
     kit = load_kit(args.kit)
     show(performance, kit, options, body=body_scene(args, performance, kit, note_map))
@@ -77,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
 def run_live(args: argparse.Namespace) -> int:
     """``--live``: subscribe to poses and render them on the frame clock until stopped."""
     import json
+    import logging
     import signal
     import sys
     import threading
@@ -96,8 +104,15 @@ def run_live(args: argparse.Namespace) -> int:
     )
     from services.notify import ready
 
+    window = None
     if not args.headless:
-        raise ConfigError("display --live: only --headless is implemented yet (no live window)")
+        from services.display.window import WindowOptions
+
+        if args.video is not None or args.out is not None:
+            raise ConfigError("display --live: --video and --out record off screen: add --headless")
+        window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
+                               monitor=args.monitor, camera=args.camera, samples=args.aa,
+                               vsync=False)  # fmt: skip
     if args.frames is not None and args.frames < 1:
         raise ConfigError(f"--frames: expected >= 1 (got {args.frames})")
     if not 0 < args.fps <= 1000:
@@ -106,13 +121,23 @@ def run_live(args: argparse.Namespace) -> int:
     clock: FrameClock
     if args.clock == "audio":
         clock = AudioFrameClock(calibration.audio_ms / 1000.0)
+    elif args.clock == "auto" and window is not None:
+        from services.display.context import DisplayError
+
+        try:  # a stage window follows the sound the audience hears, where there is an output
+            clock = AudioFrameClock(calibration.audio_ms / 1000.0)
+        except DisplayError as exc:
+            logging.getLogger("livedrummer.display").warning("%s: frames on the monotonic clock",
+                                                             exc)  # fmt: skip
+            clock = MonotonicFrameClock(calibration.audio_ms / 1000.0)
     else:
         clock = MonotonicFrameClock(calibration.audio_ms / 1000.0)
     config = LiveConfig(
         sub=args.sub, fps=args.fps, frames=args.frames, out=args.out,
         size=parse_size(args.size), camera=args.camera,
         display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
-        png=not args.no_png, security=security_from_args(args),
+        png=not args.no_png, security=security_from_args(args), window=window,
+        video=args.video,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     display = LiveDisplay(load_kit(args.kit), config, clock, ctx)

@@ -36,6 +36,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--rate", type=float, default=240.0, help="pose samples per second")
     p.add_argument("--tick-hz", type=float, default=120.0, help="pose messages per second")
     p.add_argument("--no-predict", action="store_true", help="no upswing before expected hits")
+    p.add_argument("--no-provisional", action="store_true",
+                   help="publish a hit only once its hand is decided, L after it")  # fmt: skip
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
     add_curve_options(p, server=True, client=True)
 
@@ -60,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
             delay_s=args.delay_ms / 1000.0,
             rate_hz=args.rate,
             predict=not args.no_predict,
+            provisional=not args.no_provisional,
         )
     except ValueError as exc:
         raise ConfigError(f"--lookahead-ms/--delay-ms/--rate: {exc}") from None

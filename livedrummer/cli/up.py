@@ -3,9 +3,14 @@
 Each stage is its own process (:mod:`services.supervisor`): started in order, each only after
 the previous one said it is ready (no sleeps), restarted with back-off when it dies, all
 stopped on Ctrl-C / SIGTERM or after ``--seconds``. ``--demo`` plays the bundled groove
-into the pipeline as if from a kit (looping). With no screen (neither ``DISPLAY`` nor
-``WAYLAND_DISPLAY``), or with ``--headless``, the display renders off screen into
-``--out`` (default ``out/live``): numbered PNG frames plus ``frames.jsonl``.
+into the pipeline as if from a kit (looping). With a screen (``DISPLAY`` or
+``WAYLAND_DISPLAY``) the display opens a window (``--fullscreen --monitor N`` for a
+projector; camera keys 1..8, Q quits the window and the rig). With no screen, or with
+``--headless``, it renders off screen into ``--out`` (default ``out/live``): numbered PNG
+frames plus ``frames.jsonl``; ``--video FILE`` records those frames on show time into an MP4
+and, when the rig stops, adds the drum track: the journaled onsets (the session's journal, a
+temporary one for ``--demo``) mixed with the built-in kit at onset + D
+(:mod:`services.display.record`), so picture and sound line up as the audience would see them.
 
 Security. ``--curve-secret RIG.key_secret`` makes every stream of the rig CURVE: the input
 daemon and the synth bind as CURVE servers with that key pair, and the synth and the display
@@ -16,8 +21,8 @@ start, named in the error) or its own services would be refused. ``--bind ADDR``
 another address than 127.0.0.1 (a remote display); a non-loopback address needs
 ``--curve-secret`` or ``--insecure``, as for each service.
 
-Limits: a live window is not implemented yet, so the display is always headless; endpoints are
-fixed TCP ports from ``--port-base``.
+Limits: endpoints are fixed TCP ports from ``--port-base``; a recording's drum track ignores
+the input calibration offset.
 """
 
 from __future__ import annotations
@@ -26,12 +31,17 @@ import argparse
 import os
 import signal
 import sys
+import tempfile
 import time
 from pathlib import Path
 from types import FrameType
+from typing import TYPE_CHECKING
 
 from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, add_kit_option, demo_groove
 from livedrummer.cli.keys import add_curve_options
+
+if TYPE_CHECKING:
+    from services.supervisor import Supervisor
 
 SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscribe_protocol)
 
@@ -57,6 +67,11 @@ def register(sub: Subparsers) -> None:
                    help="address the input and synth serve on (default 127.0.0.1)")  # fmt: skip
     p.add_argument("--no-png", action="store_true", help="frames.jsonl only, no PNG frames")
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
+    p.add_argument("--video", type=Path, metavar="FILE",
+                   help="headless: record the show and its drum track (MP4)")  # fmt: skip
+    p.add_argument("--size", default="640x360", help="headless frame size (default 640x360)")
+    p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
+    p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
     add_curve_options(p, server=True, client=False)
 
 
@@ -89,7 +104,15 @@ def curve_argv(args: argparse.Namespace) -> dict[str, list[str]]:
             "display": ["--curve-secret", secret, "--server-key", secret]}  # fmt: skip
 
 
-def specs(args: argparse.Namespace) -> list:  # type: ignore[type-arg]
+def has_screen() -> bool:
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def windowed(args: argparse.Namespace) -> bool:
+    return has_screen() and not args.headless and args.video is None
+
+
+def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # type: ignore[type-arg]
     from services.supervisor import ServiceSpec
 
     base = args.port_base
@@ -107,7 +130,10 @@ def specs(args: argparse.Namespace) -> list:  # type: ignore[type-arg]
         source = ["--serial", args.serial, "--baud", str(args.baud)]
     else:
         source = ["--midi", args.midi]
-    journal = ["--no-journal"] if args.no_journal or args.demo else []
+    if sessions is not None:
+        journal = ["--sessions-dir", str(sessions)]
+    else:
+        journal = ["--no-journal"] if args.no_journal or args.demo else []
     input_argv = [*me, "input", *source, "--map", map_name, "--pub", ep["in_pub"],
                   "--control", ep["in_ctl"], "--wait-subscribers", str(SYNTH_TOPICS),
                   *journal, *curve["input"]]  # fmt: skip
@@ -115,13 +141,19 @@ def specs(args: argparse.Namespace) -> list:  # type: ignore[type-arg]
                   "--control", ep["syn_ctl"], "--kit", args.kit, "--map", map_name,
                   "--lookahead-ms", str(args.lookahead_ms),
                   "--delay-ms", str(args.delay_ms), *curve["synth"]]  # fmt: skip
-    display_argv = [*me, "display", "--live", "--headless", "--sub", near["syn_pub"],
-                    "--kit", args.kit, "--out", str(args.out), "--fps", str(args.fps),
-                    *(["--no-png"] if args.no_png else []), *curve["display"]]  # fmt: skip
+    display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], "--kit", args.kit,
+                    "--fps", str(args.fps), "--size", args.size, *curve["display"]]  # fmt: skip
+    if windowed(args):
+        display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
+        display_argv += ["--fullscreen"] if args.fullscreen else []
+    else:
+        display_argv += ["--headless", "--out", str(args.out)]
+        display_argv += ["--no-png"] if args.no_png or args.video is not None else []
+        display_argv += ["--video", str(args.video)] if args.video is not None else []
     return [
         ServiceSpec("input", input_argv),
         ServiceSpec("synth", synth_argv),
-        ServiceSpec("display", display_argv),
+        ServiceSpec("display", display_argv, ends_rig=windowed(args)),
     ]
 
 
@@ -131,10 +163,23 @@ def run(args: argparse.Namespace) -> int:
 
     if args.seconds is not None and not args.seconds > 0:
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
-    screen = bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-    if screen and not args.headless:
-        print("up: a live window is not implemented yet; rendering headless", file=sys.stderr)
-    sup = Supervisor(specs(args))
+    if args.video is not None and args.no_journal:
+        raise ConfigError("--video: the drum track comes from the journal; drop --no-journal")
+    with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
+        sessions = None
+        if args.video is not None:
+            from services.journal import sessions_dir
+
+            sessions = Path(tmp) if args.demo else sessions_dir()
+            args.video.parent.mkdir(parents=True, exist_ok=True)
+        started = time.time()
+        code = _supervise(args, Supervisor(specs(args, sessions)))
+        if code == 0 and args.video is not None and sessions is not None:
+            add_drum_track(args, sessions, started)
+    return code
+
+
+def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
     stopping: list[int] = []
 
     def on_signal(signum: int, _frame: FrameType | None) -> None:
@@ -144,17 +189,43 @@ def run(args: argparse.Namespace) -> int:
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
     try:
         sup.start()
-        print(f"up: input, synth and display running; frames in {args.out}/", flush=True)
+        where = "in a window" if windowed(args) else f"frames in {args.out}/"
+        print(f"up: input, synth and display running; {where}", flush=True)
         deadline = None if args.seconds is None else time.monotonic() + args.seconds
         while not stopping:
             left = 0.5 if deadline is None else min(0.5, deadline - time.monotonic())
             if left <= 0:
                 break
             sup.run_once(left)
+            if windowed(args) and sup.quit_by_user("display"):
+                break  # the window was closed: the show is over
     finally:
         sup.stop()
         for s, handler in old.items():
             signal.signal(s, handler)
     restarts = sum(sup.restarts.values())
-    print(f"up: stopped ({restarts} restarts); frames in {args.out}/", file=sys.stderr)
+    where = "" if windowed(args) else f"; frames in {args.out}/"
+    print(f"up: stopped ({restarts} restarts){where}", file=sys.stderr)
     return 0
+
+
+def add_drum_track(args: argparse.Namespace, sessions: Path, started: float) -> None:
+    """Mix the journaled onsets at onset + D into the recording (see the module docstring)."""
+    import numpy as np
+
+    from livedrummer.audio.mix import mix_onsets
+    from livedrummer.events import ONSET_DTYPE
+    from livedrummer.journal import SUFFIX
+    from livedrummer.kitfile import load_kit
+    from services.display.record import Timing, mux_audio
+    from services.journal import load_journal
+
+    timing = Timing.load(args.video)
+    parts = [load_journal(path).onsets for path in sorted(sessions.glob(f"*{SUFFIX}"))
+             if path.stat().st_mtime >= started - 1.0]  # fmt: skip
+    onsets = np.concatenate(parts) if parts else np.zeros(0, ONSET_DTYPE)
+    onsets["time_s"] += args.delay_ms / 1000.0 - timing.show0_s
+    duration = timing.frames / timing.fps
+    mux_audio(args.video, mix_onsets(onsets, duration, load_kit(args.kit)))
+    print(f"up: wrote {args.video.resolve()} ({duration:.1f} s, {timing.frames} frames, "
+          f"{onsets.size} hits in its drum track)", flush=True)  # fmt: skip

@@ -11,18 +11,36 @@ only for the times it has not published yet. Three timelines meet here:
   note ``L`` (lookahead) after its onset, so at clock time ``now`` every note up to
   ``now - L`` is decided: that is how far the synth samples (its *horizon*);
 * *show time* is performance time + ``D``: the display shows the pose sampled at ``t`` when
-  the shared clock reads ``t + D``. Poses are therefore published ``D - L`` ahead of being
-  seen, and a contact sample is always included at exactly each committed onset + D.
+  the shared clock reads ``t + D``, and a contact sample is always included at exactly each
+  onset + D.
+
+Provisional poses (the default; ``SynthParams.provisional``). Waiting for the sticking's
+decision would publish a hit's contact only ``L`` after the hit (``D - L`` before it is seen:
+no slack at all with the default ``D = L``). Instead the synth samples up to ``now``: an
+arrived, undecided note joins the window with its guessed hand (the predictor's guess near
+it, else the hand that last played its piece), so its contact goes out as soon as the note
+arrives. Everything published past the committed horizon ``now - L`` is provisional: when a
+decision, an arrival or a dropped guess changes the window, the synth re-sends from the
+previous committed horizon (the display's :class:`~livedrummer.live.track.PoseTrack` lets a
+batch replace the samples it covers), cross-fading into the new curves before the next
+contact. With ``provisional=False`` samples go out only up to ``now + D - L``, never twice.
+
+Quick contacts. Re-animating the window takes about 10-20 ms, yet most hits of a groove were
+predicted: the current curves already strike the guessed piece, with the guessed hand, at the
+guess's time. So when a hit arrives near a guess for its piece and zone, the pose sampled at
+the guess's contact goes out at once as the sample for onset + D
+(:meth:`LiveSynth.take_quick`, published by the service before the re-animation), and the
+re-animated curves replace it a moment later. An unpredicted hit waits for the re-animation.
 
 Prediction. A :class:`~livedrummer.live.predict.HandPredictor` places at most one *guess*
 note per hand at its expected next onset; the guess takes part in the animation (so the
-upswing starts on time) but its contact is never published: when the horizon gets within
+upswing starts on time) but its contact is never shown: when the horizon gets within
 ``guard_s`` of it and no onset has arrived near it, it is dropped and the body settles back;
 when an onset has arrived (its limb still pending), the guess moves to that exact time and is
-replaced by the committed note when the horizon reaches it. With ``D > L`` arrived, pending
-notes also join the window with a guessed hand. Whenever the window's notes change, the new
-curves are cross-faded from the old ones, and the fade always ends at the next contact, so a
-surprise hit strikes fast and every contact lands exactly.
+replaced by the committed note when the horizon reaches it. With ``D > L`` (or provisional
+poses) arrived, pending notes also join the window with a guessed hand. Whenever the window's
+notes change, the new curves are cross-faded from the old ones, and the fade always ends at
+the next contact, so a surprise hit strikes fast and every contact lands exactly.
 
 Idle. With no notes the torso still sways on a slow "breathing" beat (the body's sway keyed on
 ``idle_period_s``), so the drummer never freezes.
@@ -65,6 +83,7 @@ class SynthParams:
     idle_period_s: float = 4.0  # "breathing" sway period when nothing is played
     chunk_s: float = 0.05  # sample this far ahead of the horizon at once (dropped on change)
     epoch_s: float = 4.0  # the torso's beat keys are rebuilt at least this often
+    provisional: bool = True  # publish up to now with pending notes' guessed hands; resend
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.lookahead_s <= self.delay_s:
@@ -132,10 +151,13 @@ class LiveSynth:
         self._controls: list[np.ndarray] = []
         self._guesses: dict[int, Guess] = {}
         self._horizon: float | None = None  # last sampled performance time
+        self._final = -math.inf  # the committed horizon (now - L) at the last call
         self._curves: _Curves | None = None
         self._old: _Curves | None = None
         self._fade = (0.0, 0.0)  # start, length (performance time)
         self.animations = 0  # how many times the body was re-run (for benchmarks)
+        self.quick_contacts = 0  # predicted hits whose contact went out before re-animating
+        self._quick: list[tuple[float, np.ndarray]] = []
         self._cache_t = np.zeros(0)  # samples of the current curves ahead of the horizon
         self._cache_rows = np.zeros(0, self.dtype)
 
@@ -144,8 +166,42 @@ class LiveSynth:
     def process(self, row: np.ndarray | np.void) -> None:
         """One onset (ONSET_DTYPE record; its time is the arrival on the shared clock)."""
         rec = np.array(row, dtype=ONSET_DTYPE)
-        self._notes.append(_Note(rec))
+        note = _Note(rec)
+        self._notes.append(note)
         self._apply(self.sticker.process(cast(np.void, rec[()])))
+        if self.params.provisional and not note.decided:
+            self._quick_contact(note)
+
+    def _quick_contact(self, note: _Note) -> None:
+        """A predicted hit's contact at once: the current curves already strike the guessed
+        piece at the guess's time, so that pose, shown at this onset + D, is the contact (see
+        the module docstring); the re-animation that follows replaces it."""
+        t = float(note.row["time_s"])
+        piece = _piece_of(self.rig, int(note.row["instrument"]))
+        drawn = cast(tuple[object, ...], self._curves.key[1] if self._curves else ())
+        for g in self._guesses.values():
+            if (
+                (g.time_s, g.limb, g.piece) in drawn
+                and g.piece == piece
+                and g.zone == int(note.row["zone"])
+                and abs(g.time_s - t) <= g.period_s / 3
+            ):
+                rows = self._sample(np.array([g.time_s]))
+                self._quick.append((t + self.params.delay_s, rows))
+                self.quick_contacts += 1
+                return
+
+    def take_quick(self) -> PoseBatch:
+        """Contacts of predicted hits that arrived since the last call, to publish at once,
+        ahead of :meth:`poses_until` (one sample per show time, ascending)."""
+        by_show = dict(sorted(self._quick, key=lambda q: q[0]))  # a chord: the last one
+        self._quick.clear()
+        if not by_show:
+            return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
+        show = np.array(list(by_show))
+        rows = np.concatenate(list(by_show.values()))
+        rows["time_s"] = (show - show[0]).astype(np.float32)
+        return PoseBatch(show, rows)
 
     def control(self, row: np.ndarray | np.void) -> None:
         """One controller event (CONTROL_DTYPE record): the hi-hat pedal and chokes."""
@@ -176,27 +232,35 @@ class LiveSynth:
     # -- output --------------------------------------------------------------------------------
 
     def poses_until(self, now_s: float) -> PoseBatch:
-        """Commit what ``now_s`` allows and return the samples not yet published, for show
-        times up to ``now_s + D - L``."""
+        """Commit what ``now_s`` allows and return the samples to publish: show times up to
+        ``now_s + D`` (provisional) or ``now_s + D - L``. A provisional batch may start before
+        the end of the previous one: it replaces the samples it covers (see the module
+        docstring)."""
         p = self.params
         self._apply(self.sticker.advance(now_s))
-        horizon = now_s - p.lookahead_s
+        final = now_s - p.lookahead_s  # every note up to here is decided
+        top = now_s if p.provisional else final
         if self._horizon is None:
-            self._horizon = horizon - 1.0 / p.rate_hz
+            self._horizon = top - 1.0 / p.rate_hz
         start = self._horizon
-        if horizon <= start:
-            return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
         if p.predict:
-            self._update_guesses(horizon, now_s)
-        if self._refresh(start, horizon):
+            self._update_guesses(final, now_s)
+        # what was published past the last committed horizon is provisional: a change of the
+        # notes re-sends it from there (with D = L its first tick may already be on screen)
+        rewind = min(start, max(self._final, final - p.delay_s)) if p.provisional else start
+        if (top > start or p.provisional) and self._refresh(rewind, final):
             self._cache_t, self._cache_rows = np.zeros(0), np.zeros(0, self.dtype)
-        if self._cache_t.size == 0 or self._cache_t[-1] < horizon:
-            self._extend_cache(max(start, self._cache_end(start)), horizon + p.chunk_s)
-        take = (self._cache_t > start) & (self._cache_t <= horizon)
+            start = rewind
+        self._final = max(self._final, final)
+        if top <= start:
+            return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
+        if self._cache_t.size == 0 or self._cache_t[-1] < top:
+            self._extend_cache(max(start, self._cache_end(start)), top + p.chunk_s)
+        take = (self._cache_t > start) & (self._cache_t <= top)
         times, rows = self._cache_t[take], self._cache_rows[take]
-        later = self._cache_t > horizon
+        later = self._cache_t > top
         self._cache_t, self._cache_rows = self._cache_t[later], self._cache_rows[later]
-        self._horizon = horizon
+        self._horizon = max(top, start)
         if times.size == 0:
             return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
         rows = rows.copy()
@@ -288,7 +352,8 @@ class LiveSynth:
             self._first += 1
         self._controls = [c for c in self._controls if float(c["time_s"]) >= horizon - p.window_s]
         keep: list[tuple[np.ndarray, int, int]] = []
-        ahead = p.delay_s > p.lookahead_s  # arrived notes can be shown before their decision
+        # arrived notes can be shown before their decision
+        ahead = p.provisional or p.delay_s > p.lookahead_s
         for n in self._notes:
             if n.decided:
                 # feet are decided on arrival; with D = L they join with their hands' chord,

@@ -45,6 +45,18 @@ class PoseTrack:
             self._show, self._rows = self._show[cut:], self._rows[cut:]
 
     @property
+    def show_s(self) -> np.ndarray:
+        """The kept samples' show times (ascending, read-only view)."""
+        out = self._show.view()
+        out.flags.writeable = False
+        return out
+
+    @property
+    def rows(self) -> np.ndarray:
+        """The kept pose records, matching :attr:`show_s`."""
+        return self._rows if self._rows is not None else np.zeros(0)
+
+    @property
     def newest_s(self) -> float | None:
         return float(self._show[-1]) if self._show.size else None
 

@@ -15,9 +15,17 @@ back), hand the image to a sink (PNG files, a window). ``frames.jsonl`` records,
 its render time, its show time, the show time of the pose drawn and of the newest pose
 received by then, so a test or a bench can check contacts and latency without pixels.
 
+Bad input. The SUB socket takes every message that starts with the protocol magic (so a
+synth of another protocol version is seen and counted, not filtered into silence); a message
+that fails to decode, or a valid one that is not a POSE, is dropped and counted per kind in
+``bad`` (:class:`~services.badmsg.BadMessages`, logged once per kind, totals logged when the
+loop ends and in ``summary()``), and the next one is read.
+
 Limits: the pose format is taken from the kit given to the display (the synth's READY also
-carries it; a mismatch is refused by hash, frame by frame); one performer; no window mode yet
-in live (headless PNGs, or ``--out`` omitted to only log frames). A remote display sets
+carries it; a mismatch is refused by hash, frame by frame); one performer. Frames go to a
+:mod:`~services.display.surface`: a window (``config.window``; the stage) or off screen, where
+they can also be written as PNGs (``--out``) and recorded into a video on show time
+(``config.video``, :mod:`~services.display.record`). A remote display sets
 ``config.security`` (our key pair and the synth's public key) to subscribe over CURVE.
 """
 
@@ -39,9 +47,14 @@ from livedrummer.body.skeleton import J
 from livedrummer.errors import KeyFileError, ProtocolError
 from livedrummer.kit import Kit
 from livedrummer.live.track import PoseTrack
-from livedrummer.protocol import Kind, Pose, PoseFormat, SeqStatus, SequenceTracker, decode, topic
-from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
-from services.net import Security, connect, socket
+from livedrummer.protocol import Pose, PoseFormat, SeqStatus, SequenceTracker, decode
+from livedrummer.render.body_scene import frame_from_pose
+from services.badmsg import BadMessages
+from services.display.record import LiveRecorder
+from services.display.surface import HeadlessSurface, WindowSurface
+from services.display.video import VideoSettings
+from services.display.window import WindowOptions
+from services.net import Security, connect, socket, subscribe_protocol
 
 log = logging.getLogger("livedrummer.display")
 
@@ -112,6 +125,8 @@ class LiveConfig:
     camera: str = "stage"
     display_offset_s: float = 0.0
     render: bool = True
+    window: WindowOptions | None = None  # a window instead of off-screen rendering
+    video: Path | None = None  # record the frames (headless) into this video file
     png: bool = True  # with ``out``: write each frame as a PNG (frames.jsonl is always written)
     security: Security = field(default_factory=Security)
 
@@ -144,11 +159,12 @@ class LiveDisplay:
         self.track = PoseTrack()
         self.tracker = SequenceTracker()
         self.stats = LiveStats()
+        self.bad = BadMessages("display pose stream", log)
         self._sub: Any = None
 
     def start(self) -> None:
         sub = socket(self.ctx, zmq.SUB)
-        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.POSE))
+        subscribe_protocol(sub)
         try:
             connect(sub, self.config.sub, "sub endpoint", self.config.security)
         except (ProtocolError, KeyFileError):
@@ -158,22 +174,21 @@ class LiveDisplay:
 
     def run(self, stop: threading.Event) -> int:
         cfg = self.config
-        renderer = ctx_gl = None
+        surface: HeadlessSurface | WindowSurface | None = None
+        recorder: LiveRecorder | None = None
         log_file: IO[str] | None = None
         try:
-            if cfg.render:
-                from livedrummer.render.camera import pick_camera
-                from livedrummer.render.kitmesh import build_kit_mesh
-                from services.display.context import headless_context
-                from services.display.renderer import Renderer
-
-                ctx_gl = headless_context()
-                renderer = Renderer(ctx_gl, build_kit_mesh(self.kit), BODY_SKELETON, cfg.size,
-                                    samples=0)  # fmt: skip
-                camera = pick_camera(self.kit, cfg.camera)
+            if cfg.window is not None:
+                surface = WindowSurface(self.kit, cfg.window)
+            elif cfg.render:
+                surface = HeadlessSurface(self.kit, cfg.size, cfg.camera)
+            if cfg.video is not None and isinstance(surface, HeadlessSurface):
+                settings = VideoSettings(size=cfg.size, fps=round(cfg.fps))
+                recorder = LiveRecorder(cfg.video, settings)
             if cfg.out is not None:
                 cfg.out.mkdir(parents=True, exist_ok=True)
-                log_file = (cfg.out / "frames.jsonl").open("w")
+                # Line-buffered: a watcher (tests, bench/recovery.py) sees each frame as drawn.
+                log_file = (cfg.out / "frames.jsonl").open("w", buffering=1)
             period = 1.0 / cfg.fps
             next_frame = self.clock.now()
             while not stop.is_set() and (cfg.frames is None or self.stats.frames < cfg.frames):
@@ -197,14 +212,19 @@ class LiveDisplay:
                     )
                     if show - pose_s > period:
                         self.stats.held += 1
-                    if renderer is not None:
-                        renderer.draw(frame_from_pose(row, show, self.kit), camera)
-                elif renderer is not None:
-                    renderer.draw(None, camera)
-                if renderer is not None and cfg.out is not None and cfg.png:
+                    if surface is not None:
+                        surface.draw(frame_from_pose(row, show, self.kit), now)
+                elif surface is not None:
+                    surface.draw(None, now)
+                if recorder is not None and surface is not None:
+                    recorder.add(surface.renderer, show)
+                if isinstance(surface, HeadlessSurface) and cfg.out is not None and cfg.png:
                     from services.display.png import write_png
 
-                    write_png(cfg.out / f"frame_{self.stats.frames:06d}.png", renderer.read_rgb())
+                    write_png(cfg.out / f"frame_{self.stats.frames:06d}.png",
+                              surface.renderer.read_rgb())  # fmt: skip
+                if surface is not None and not surface.present():
+                    stop.set()  # the window was closed
                 record["done_s"] = self.clock.now()
                 if log_file is not None:
                     log_file.write(json.dumps(record) + "\n")
@@ -213,11 +233,14 @@ class LiveDisplay:
         finally:
             if log_file is not None:
                 log_file.close()
-            if ctx_gl is not None:
-                ctx_gl.release()
+            if recorder is not None:
+                recorder.close()
+            if surface is not None:
+                surface.close()
             if self._sub is not None:
                 self._sub.close(0)
                 self._sub = None
+            self.bad.log_summary()
         return 0
 
     def _drain(self) -> None:
@@ -230,21 +253,23 @@ class LiveDisplay:
                 msg = decode(frames, self.format)
             except ProtocolError as exc:
                 self.stats.bad += 1
-                log.warning("bad pose message: %s", exc)
+                self.bad.drop(exc)
+                continue
+            if not isinstance(msg.body, Pose):
+                self.stats.bad += 1
+                self.bad.unexpected(msg.kind.name)
                 continue
             report = self.tracker.observe_message(msg)
             if report.status is SeqStatus.GAP:
                 self.stats.missing += report.missing
-            if not isinstance(msg.body, Pose):
-                continue
             rows = msg.body.rows
             show = msg.body.time_s + rows["time_s"].astype(np.float64)
             self.track.add(show, rows)
             self.stats.pose_messages += 1
             self.stats.pose_samples += rows.size
 
-    def summary(self) -> dict[str, int]:
+    def summary(self) -> dict[str, Any]:
         s = self.stats
         return {"frames": s.frames, "pose_messages": s.pose_messages,
                 "pose_samples": s.pose_samples, "missing": s.missing, "bad": s.bad,
-                "held": s.held}  # fmt: skip
+                "held": s.held, "bad_messages": self.bad.summary()}  # fmt: skip

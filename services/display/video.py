@@ -42,6 +42,23 @@ class VideoSettings:
     sample_rate: int = 48_000
 
 
+def encode_audio(container: Any, stream: Any, stereo: np.ndarray, sample_rate: int) -> None:
+    """Encode a whole (N, 2) float track into ``stream`` of ``container`` and mux it."""
+    import av
+
+    planar = np.ascontiguousarray(np.asarray(stereo, np.float32).T)
+    for start in range(0, planar.shape[1], AUDIO_FRAME):
+        chunk = np.ascontiguousarray(planar[:, start : start + AUDIO_FRAME])
+        frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout="stereo")
+        frame.sample_rate = sample_rate
+        frame.pts = start
+        frame.time_base = Fraction(1, sample_rate)
+        for packet in stream.encode(frame):
+            container.mux(packet)
+    for packet in stream.encode(None):
+        container.mux(packet)
+
+
 class _Encoder:
     """The PyAV side: an open MP4 with one H.264 and one AAC stream (runs in the child)."""
 
@@ -63,20 +80,7 @@ class _Encoder:
         self.audio.layout = "stereo"
 
     def write_audio(self, stereo: np.ndarray) -> None:
-        import av
-
-        planar = np.ascontiguousarray(stereo.T, dtype=np.float32)
-        sr = self.settings.sample_rate
-        for start in range(0, planar.shape[1], AUDIO_FRAME):
-            chunk = np.ascontiguousarray(planar[:, start : start + AUDIO_FRAME])
-            frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout="stereo")
-            frame.sample_rate = sr
-            frame.pts = start
-            frame.time_base = Fraction(1, sr)
-            for packet in self.audio.encode(frame):
-                self.container.mux(packet)
-        for packet in self.audio.encode(None):
-            self.container.mux(packet)
+        encode_audio(self.container, self.audio, stereo, self.settings.sample_rate)
 
     def write(self, image: np.ndarray) -> None:
         import av

@@ -2,14 +2,21 @@
 
 One thread owns the SUB (events in) and PUB (poses out) sockets: it waits on the SUB socket
 until the next tick, feeds every ONSET and CONTROL row to the
-:class:`~livedrummer.live.synth.LiveSynth` as it arrives, and at each tick (``tick_hz``,
-default 120, and as soon as a note's limb is due to be committed) publishes whatever samples
-the synth has for show times up to ``now + D - L``,
-as one POSE message (header time = the first sample's show time; each record's ``time_s`` is
-its offset from it). Sequence numbers of the input stream are tracked, so a gap upstream is
-counted and logged. A second thread answers HELLO with READY on a ROUTER control socket; the
-READY carries the pose format, which a display checks against its own. ``ready()`` tells a
-launcher or systemd the service is serving once both sockets are bound.
+:class:`~livedrummer.live.synth.LiveSynth` as it arrives, and at each tick (``tick_hz``, default
+120, as soon as a note's limb is due to be committed, and at once when an onset arrives)
+publishes whatever samples the synth has for show times up to ``now + D`` (with provisional
+poses, the default; ``now + D - L`` without), as one POSE message (header time = the first
+sample's show time; each record's ``time_s`` is its offset from it). Sequence numbers of the
+input stream are tracked, so a gap upstream is counted and logged. A second thread answers HELLO
+with READY on a ROUTER control socket; the READY carries the pose format, which a display checks
+against its own. ``ready()`` tells a launcher or systemd the service is serving once both
+sockets are bound.
+
+Bad input. Every message on the SUB socket (subscribed to the protocol magic, so another
+protocol version is seen, not filtered away) and on the control socket is decoded and
+checked; a bad one is dropped, counted per kind (``bad_events``, ``bad_control``:
+:class:`~services.badmsg.BadMessages`, logged once per kind, totals logged at exit and in
+``summary()["bad_messages"]``) and the loop carries on with the next message.
 
 Limits: the pose socket is a plain PUB (a slow display loses samples past the high-water
 mark; it sees the gap in the sequence numbers); one performer per synth.
@@ -32,7 +39,7 @@ import zmq
 
 from livedrummer.clock import Clock
 from livedrummer.errors import KeyFileError, ProtocolError
-from livedrummer.live.synth import LiveSynth
+from livedrummer.live.synth import LiveSynth, PoseBatch
 from livedrummer.protocol import (
     Hello,
     Kind,
@@ -44,13 +51,22 @@ from livedrummer.protocol import (
     Stream,
     decode,
     encode,
-    topic,
 )
-from services.net import Security, bind, connect, socket, start_authenticator
+from services.badmsg import BadMessages
+from services.net import (
+    Security,
+    bind,
+    connect,
+    serve_control,
+    socket,
+    start_authenticator,
+    subscribe_protocol,
+)
 
 log = logging.getLogger("livedrummer.synth")
 
 DEFAULT_SUB = "tcp://127.0.0.1:5710"
+_EVENT_KINDS = (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT)
 DEFAULT_PUB = "tcp://127.0.0.1:5720"
 DEFAULT_CONTROL = "tcp://127.0.0.1:5721"
 
@@ -96,6 +112,8 @@ class SynthService:
         self.format = PoseFormat.from_dtype(synth.dtype)
         self.stats = SynthStats()
         self.tracker = SequenceTracker()
+        self.bad_events = BadMessages("synth input stream", log)
+        self.bad_control = BadMessages("synth control socket", log)
         self.endpoints: dict[str, str] = {}
         self._sub: Any = None
         self._pub: Any = None
@@ -114,8 +132,7 @@ class SynthService:
         try:
             self.endpoints["pub"] = bind(pub, cfg.pub, "pub endpoint", cfg.security)
             self.endpoints["control"] = bind(control, cfg.control, "control endpoint", cfg.security)
-            for kind in (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT):
-                sub.setsockopt(zmq.SUBSCRIBE, topic(kind))
+            subscribe_protocol(sub)
             connect(sub, cfg.sub, "sub endpoint", cfg.security)
         except (ProtocolError, KeyFileError):
             for s in (pub, control, sub):
@@ -142,10 +159,14 @@ class SynthService:
                 due = self.synth.next_due_s(last)
                 wake = next_tick if due is None else min(next_tick, due)
                 wait_ms = max(0, math.ceil((wake - self.clock.now()) * 1000))
+                heard = self.stats.onsets
                 if self._sub.poll(wait_ms):
                     self._drain()
+                    self._publish(self.synth.take_quick())  # predicted hits: at once
                 now = self.clock.now()
-                if now >= next_tick or (due is not None and now >= due):
+                # a hit goes out at once with its provisional hand (SynthParams.provisional)
+                fresh = self.synth.params.provisional and self.stats.onsets != heard
+                if fresh or now >= next_tick or (due is not None and now >= due):
                     self.tick(now)
                     last = now
                     if now >= next_tick:
@@ -155,7 +176,9 @@ class SynthService:
         return 0
 
     def tick(self, now: float) -> None:
-        batch = self.synth.poses_until(now)
+        self._publish(self.synth.poses_until(now))
+
+    def _publish(self, batch: PoseBatch) -> None:
         if batch.show_s.size == 0:
             return
         body = Pose(float(batch.show_s[0]), batch.rows)
@@ -176,14 +199,22 @@ class SynthService:
                 msg = decode(frames)
             except ProtocolError as exc:
                 self.stats.bad += 1
-                log.warning("bad message from input: %s", exc)
+                self.bad_events.drop(exc)
+                continue
+            if msg.kind not in _EVENT_KINDS:
+                self.stats.bad += 1
+                self.bad_events.unexpected(msg.kind.name)
                 continue
             report = self.tracker.observe_message(msg)
             if report.status is SeqStatus.GAP:
                 self.stats.missing += report.missing
                 log.warning("input stream: %d messages lost before #%d", report.missing, msg.seq)
             elif report.status is SeqStatus.DUPLICATE:
-                continue
+                # One publisher on one connection never repeats a number: an older one means
+                # the input daemon restarted and we reconnected after its first messages.
+                log.warning("input stream restarted at #%d (its first messages missed)", msg.seq)
+                self.tracker.reset()
+                self.tracker.observe_message(msg)
             if self.stats.first_seq is None:
                 self.stats.first_seq = msg.seq
             self.stats.last_seq = msg.seq
@@ -210,6 +241,8 @@ class SynthService:
                 s.close(0)
         self._sub = self._pub = None
         self._stop_auth()
+        self.bad_events.log_summary()
+        self.bad_control.log_summary()
 
     def _stop_auth(self) -> None:
         if self._auth is not None:
@@ -226,28 +259,17 @@ class SynthService:
             "pose_messages": s.pose_messages,
             "pose_samples": s.pose_samples,
             "animations": self.synth.animations,
+            "bad_messages": self.bad_messages(),
         }
 
+    def bad_messages(self) -> dict[str, dict[str, int]]:
+        """Dropped messages by socket ("events", "control") and kind; sockets with none left out."""
+        out = {"events": self.bad_events.summary(), "control": self.bad_control.summary()}
+        return {k: v for k, v in out.items() if v}
+
+    def _ready(self) -> Message:
+        return Message(Kind.READY, self.hello(), self.config.performer, 0, self.clock.now(),
+                       Stream.CONTROL)  # fmt: skip
+
     def _serve_control(self, sock: Any) -> None:
-        try:
-            while not self._control_stop.is_set():
-                if not sock.poll(100):
-                    continue
-                frames = sock.recv_multipart()
-                ident, rest = frames[0], frames[1:]
-                envelope = [ident]
-                if rest and rest[0] == b"":
-                    envelope.append(b"")
-                    rest = rest[1:]
-                try:
-                    msg = decode(rest)
-                except ProtocolError as exc:
-                    log.warning("bad control message: %s", exc)
-                    continue
-                if msg.kind is not Kind.HELLO:
-                    continue
-                reply = Message(Kind.READY, self.hello(), self.config.performer, 0,
-                                self.clock.now(), Stream.CONTROL)  # fmt: skip
-                sock.send_multipart([*envelope, *encode(reply)])
-        finally:
-            sock.close(0)
+        serve_control(sock, self._control_stop, self._ready, self.bad_control)

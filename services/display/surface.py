@@ -1,0 +1,94 @@
+"""Where a live display draws: off screen (headless, recording, CI) or in a window (the stage).
+
+Both hold a :class:`~services.display.renderer.Renderer` and the current camera, and give the
+live loop the same three calls: :meth:`draw` a scene frame (or the empty kit), :meth:`present`
+it (a window swaps and handles its keys; headless does nothing) and :meth:`close`. The window
+is the file window's (:func:`~services.display.window.open_window`: windowed or full screen on
+a chosen monitor, for projectors) with the camera keys 1..8 (a smooth move between stored
+viewpoints) and Q/Esc to quit; a live show has no transport, since the drummer sets the time.
+
+Limits: a window draws to its own framebuffer, so recording and PNG frames are headless only.
+"""
+
+from __future__ import annotations
+
+from contextlib import ExitStack
+from typing import Any
+
+from livedrummer.kit import Kit
+from livedrummer.render.body_scene import BODY_SKELETON
+from livedrummer.render.camera import CAMERA_NAMES, CameraMove, kit_cameras
+from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.scene import SceneFrame
+from services.display.renderer import Renderer
+from services.display.window import WindowOptions, key_name, open_window
+
+
+class HeadlessSurface:
+    """An off-screen renderer on an EGL context; read frames back from :attr:`renderer`."""
+
+    def __init__(self, kit: Kit, size: tuple[int, int], camera: str) -> None:
+        from livedrummer.render.camera import pick_camera
+        from services.display.context import headless_context
+
+        self._ctx = headless_context()
+        self.renderer = Renderer(self._ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0)
+        self._camera = pick_camera(kit, camera)
+
+    def draw(self, frame: SceneFrame | None, now_s: float) -> None:
+        self.renderer.draw(frame, self._camera)
+
+    def present(self) -> bool:
+        return True
+
+    def close(self) -> None:
+        self._ctx.release()
+
+
+class WindowSurface:
+    """A GLFW window (see the module docstring); :meth:`present` is False once the user quits."""
+
+    def __init__(self, kit: Kit, options: WindowOptions) -> None:
+        self._stack = ExitStack()
+        try:
+            glfw, window, ctx = self._stack.enter_context(open_window(options))
+        except BaseException:
+            self._stack.close()
+            raise
+        self._glfw, self._window, self._ctx = glfw, window, ctx
+        size = glfw.get_framebuffer_size(window)
+        self.renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False)
+        self._cameras = kit_cameras(kit)
+        start = self._cameras[options.camera]
+        self._move = CameraMove(start, start, 0.0, 0.0)
+        self._keys: list[str] = []
+        self._now = 0.0
+
+        def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
+            if action in (glfw.PRESS, glfw.REPEAT):
+                self._keys.append(key_name(glfw, key, mods))
+
+        glfw.set_key_callback(window, on_key)
+
+    def draw(self, frame: SceneFrame | None, now_s: float) -> None:
+        self._now = now_s
+        fb = self._glfw.get_framebuffer_size(self._window)
+        if fb != self.renderer.size and fb[0] > 0 and fb[1] > 0:
+            self.renderer.size = fb
+        self.renderer.draw(frame, self._move.at(now_s), target=self._ctx.screen)
+
+    def present(self) -> bool:
+        glfw = self._glfw
+        glfw.swap_buffers(self._window)
+        glfw.poll_events()
+        for name in self._keys:
+            if name in ("q", "escape"):
+                glfw.set_window_should_close(self._window, True)
+            elif name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
+                target = self._cameras[CAMERA_NAMES[int(name) - 1]]
+                self._move = CameraMove(self._move.at(self._now), target, self._now)
+        self._keys.clear()
+        return not glfw.window_should_close(self._window)
+
+    def close(self) -> None:
+        self._stack.close()
