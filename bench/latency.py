@@ -86,14 +86,15 @@ class Jack:
         self.jackd.wait(10)
 
 
-def run_rate(jack: Jack, rate: float, count: int, delay_ms: float, lookahead_ms: float,
-             tmp: Path, synth_args: list[str]) -> dict[str, Any]:  # fmt: skip
+def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], delay_ms: float,
+             lookahead_ms: float, tmp: Path, synth_args: list[str]) -> dict[str, Any]:  # fmt: skip
+    """One pipeline fed ``schedule``: (seconds from the start, note, velocity) per note-on."""
     clock = MonotonicClock()
     home = str(tmp / "home")
     fmt = p.PoseFormat.from_dtype(pose_dtype(len(load_kit("rock5").pieces)))
     procs = []
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    frames_dir = tmp / f"frames-{rate:g}"
+    frames_dir = tmp / f"frames-{label}"
     try:
         inp = _spawn(["input", "--midi", "kit:pads", "--api", "jack", "--map", "roland-td",
                       "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
@@ -146,14 +147,14 @@ def run_rate(jack: Jack, rate: float, count: int, delay_ms: float, lookahead_ms:
 
         def play() -> None:
             start = clock.now() + 0.05
-            for i in range(count):
-                clock.wait_until(start + i / rate, stop)
+            for at, note, velocity in schedule:
+                clock.wait_until(start + at, stop)
                 sent.append(clock.now())
-                jack.out.send_message([0x99, NOTES[i % 2], 64 + i % 60])
+                jack.out.send_message([0x99, note, velocity])
 
         player = threading.Thread(target=play)
         player.start()
-        pump(count / rate + 0.1)
+        pump(schedule[-1][0] + 0.15)
         player.join()
         pump(2.0)
     finally:
@@ -203,11 +204,23 @@ def run_rate(jack: Jack, rate: float, count: int, delay_ms: float, lookahead_ms:
         if done is not None:
             frame_lat.append(done - sent_a[i])
     return {
-        "rate": rate, "sent": len(sent), "on_bus": int(got_t.size), "loopback": loop,
+        "rate": label, "sent": len(sent), "on_bus": int(got_t.size), "loopback": loop,
         "bus": bus, "pose": np.asarray(pose_lat), "frame": np.asarray(frame_lat),
         "after_onset": after_onset, "late": late,
         "no_contact": missing_pose, "synth": (tmp / "synth.err").read_text().strip()[-200:],
     }  # fmt: skip
+
+
+def groove_schedule(seconds: float) -> list[tuple[float, int, int]]:
+    """The demo groove's note-ons (GMD, Roland TD notes) in its first ``seconds``."""
+    from livedrummer.cli.common import demo_groove
+    from livedrummer.midifile import read_midi_file
+    from livedrummer.notemap import load_note_map
+
+    on = read_midi_file(demo_groove(), load_note_map("roland-td")).onsets
+    on = on[on["time_s"] < seconds]
+    t0 = float(on["time_s"][0])
+    return [(float(r["time_s"]) - t0, int(r["note"]), max(1, int(r["velocity"]))) for r in on]
 
 
 def _pct(a: np.ndarray) -> str:
@@ -220,6 +233,8 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench latency", description=__doc__)
     parser.add_argument("--rates", type=float, nargs="+", default=[1.0, 100.0, 1000.0])
     parser.add_argument("--seconds", type=float, default=2.0, help="per rate (min 5 notes)")
+    parser.add_argument("--groove", type=float, default=0.0, metavar="S",
+                        help="also play the first S s of the demo groove as performed")  # fmt: skip
     parser.add_argument("--delay-ms", type=float, default=30.0)
     parser.add_argument("--lookahead-ms", type=float, default=30.0)
     parser.add_argument("--no-provisional", action="store_true",
@@ -233,15 +248,21 @@ def main(argv: list[str]) -> int:
           f"{'frame rendered':>15} | {'pose - onset':>15}")  # fmt: skip
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            for rate in args.rates:
-                count = max(5, int(rate * args.seconds))
-                r = run_rate(jack, rate, count, args.delay_ms, args.lookahead_ms,
+            runs = [(f"{rate:g}", [(i / rate, NOTES[i % 2], 64 + i % 60)
+                                   for i in range(max(5, int(rate * args.seconds)))])
+                    for rate in args.rates]  # fmt: skip
+            if args.groove > 0:
+                runs.append(("groove", groove_schedule(args.groove)))
+            for label, schedule in runs:
+                r = run_rate(jack, label, schedule, args.delay_ms, args.lookahead_ms,
                              Path(tmp), synth_args)  # fmt: skip
-                print(f"{rate:8g} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
+                print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
                       f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
                       f"{_pct(r['pose'])} | {_pct(r['frame'])} | "
                       f"{_pct(r['after_onset'])}", flush=True)  # fmt: skip
-                print(f"         {r['synth']}", flush=True)
+                fast = float(np.mean(r["after_onset"] <= 0.005)) if r["after_onset"].size else 0
+                print(f"         pose within 5 ms of the onset: {fast:.0%} of contacts; "
+                      f"{r['synth']}", flush=True)  # fmt: skip
     finally:
         jack.close()
     return 0

@@ -11,7 +11,7 @@ from livedrummer.body.animation import animate, hihat_openness
 from livedrummer.body.rig import Rig, build_rig
 from livedrummer.body.skeleton import J
 from livedrummer.cli.common import DEMO_MAP, demo_groove
-from livedrummer.events import CONTROL_DTYPE
+from livedrummer.events import CONTROL_DTYPE, ControlKind
 from livedrummer.kitfile import load_kit
 from livedrummer.live.calibration import Calibration, CalibrationError
 from livedrummer.live.predict import HandPredictor
@@ -271,3 +271,21 @@ def test_predicted_hits_get_their_contact_on_arrival(rig: Rig, groove: Performan
         final = track.rows["position"][j, tip]
         close += bool(np.linalg.norm(quick[show]["position"][tip] - final) < 0.01)
     assert close >= 0.9 * len(quick), f"{close} of {len(quick)} quick contacts on the final one"
+
+
+def test_a_moving_pedal_alone_re_animates_at_most_every_control_period(rig: Rig) -> None:
+    params = SynthParams()
+    synth = LiveSynth(rig, params)
+    now = START
+    synth.poses_until(now)
+    before = synth.animations
+    seconds, rate = 1.0, 200  # CC4 at 200 messages/s, no notes
+    for k in range(int(seconds * rate)):
+        now = START + k / rate
+        row = np.zeros((), CONTROL_DTYPE)
+        row["time_s"], row["kind"], row["number"] = now, ControlKind.HIHAT_PEDAL, 4
+        row["value"] = k % 128
+        synth.control(row)
+        synth.poses_until(now)
+    runs = synth.animations - before
+    assert 2 <= runs <= seconds / params.control_every_s + 3, runs

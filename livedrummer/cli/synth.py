@@ -97,5 +97,6 @@ def run(args: argparse.Namespace) -> int:
     s = service.summary()
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "
           f"{s['pose_samples']} pose samples in {s['pose_messages']} messages, "
-          f"{s['animations']} re-animations", file=sys.stderr)  # fmt: skip
+          f"{s['animations']} re-animations, {s['quick_contacts']} quick contacts",
+          file=sys.stderr)  # fmt: skip
     return code

@@ -45,10 +45,12 @@ the next contact, so a surprise hit strikes fast and every contact lands exactly
 Idle. With no notes the torso still sways on a slow "breathing" beat (the body's sway keyed on
 ``idle_period_s``), so the drummer never freezes.
 
-Limits: re-animation costs about 20 ms each time the notes change (up to three times per
-note: arrival with ``D > L``, guess, commit); the cross-fade blends joint positions and
-quaternions linearly (bones may shorten by a few mm mid-fade); hi-hat openness comes from
-the onsets and the pedal controller of the window only.
+Limits: re-animation costs 10-20 ms each time the window changes (about two times per note
+of a groove: arrival, a new or dropped guess; old notes leave half a window at a time, and
+a moving pedal alone re-animates at most every ``control_every_s``), so on a busy two-core
+machine a hit may wait behind one; the cross-fade blends joint positions and quaternions
+linearly (bones may shorten by a few mm mid-fade); hi-hat openness comes from the onsets and
+the pedal controller of the window only.
 """
 
 from __future__ import annotations
@@ -84,6 +86,7 @@ class SynthParams:
     chunk_s: float = 0.05  # sample this far ahead of the horizon at once (dropped on change)
     epoch_s: float = 4.0  # the torso's beat keys are rebuilt at least this often
     provisional: bool = True  # publish up to now with pending notes' guessed hands; resend
+    control_every_s: float = 0.1  # pedal (CC4) changes alone re-animate at most this often
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.lookahead_s <= self.delay_s:
@@ -152,6 +155,7 @@ class LiveSynth:
         self._guesses: dict[int, Guess] = {}
         self._horizon: float | None = None  # last sampled performance time
         self._final = -math.inf  # the committed horizon (now - L) at the last call
+        self._refreshed_at = -math.inf  # horizon of the last re-animation
         self._curves: _Curves | None = None
         self._old: _Curves | None = None
         self._fade = (0.0, 0.0)  # start, length (performance time)
@@ -343,14 +347,19 @@ class LiveSynth:
     def _refresh(self, start: float, horizon: float) -> bool:
         """Rebuild the curves if the window's notes changed; True when they were rebuilt."""
         p = self.params
-        while (
-            self._notes
-            and float(self._notes[0].row["time_s"]) < horizon - p.window_s
-            and (self._notes[0].decided)
-        ):
-            self._notes.pop(0)
-            self._first += 1
-        self._controls = [c for c in self._controls if float(c["time_s"]) >= horizon - p.window_s]
+        # old notes leave the window half a window at a time: each departure alone would
+        # otherwise cost a re-animation per note
+        if self._notes and float(self._notes[0].row["time_s"]) < horizon - 1.5 * p.window_s:
+            while (
+                self._notes
+                and float(self._notes[0].row["time_s"]) < horizon - p.window_s
+                and (self._notes[0].decided)
+            ):
+                self._notes.pop(0)
+                self._first += 1
+            self._controls = [
+                c for c in self._controls if float(c["time_s"]) >= horizon - p.window_s
+            ]
         keep: list[tuple[np.ndarray, int, int]] = []
         # arrived notes can be shown before their decision
         ahead = p.provisional or p.delay_s > p.lookahead_s
@@ -372,8 +381,12 @@ class LiveSynth:
             epoch,
             len(self._controls),
         )
-        if self._curves is not None and self._curves.key == key:
-            return False
+        if self._curves is not None and self._curves.key[:3] == key[:3]:
+            # only the pedal moved: its openness joins at most every ``control_every_s``
+            # (each hi-hat CC4 step would otherwise cost a whole re-animation)
+            if key[3] == self._curves.key[3] or horizon - self._refreshed_at < p.control_every_s:
+                return False
+        self._refreshed_at = horizon
         rows = [r for r, _, _ in keep]
         limbs = [li for _, li, _ in keep]
         pieces = [pi for _, _, pi in keep]

@@ -259,6 +259,7 @@ class SynthService:
             "pose_messages": s.pose_messages,
             "pose_samples": s.pose_samples,
             "animations": self.synth.animations,
+            "quick_contacts": self.synth.quick_contacts,
             "bad_messages": self.bad_messages(),
         }
 
