@@ -1,8 +1,8 @@
 """A flood of 10,000 notes/s through a real pseudo-terminal into the real input daemon.
 
 The daemon runs as a subprocess (``livedrummer input --serial PTY``) exactly as
-``bench/flood.py`` drives it (see its docstring for why a pty rather than JACK), but for 3 s
-instead of the bench's 10 s, to keep this file fast on a shared 2-core machine. Asserted: the
+``bench/flood.py`` drives it (see its docstring for why a pty rather than JACK), for the
+issue's whole 10 s (about 15 s of test). Asserted: the
 daemon survives and exits cleanly; every note written is in the journal; every note reached
 the subscriber, or the loss is visible (sequence gap or GAP message); its memory grows by less
 than 50 MB; no more than 2 s of notes are ever in flight, and the pty's backlog stays within
@@ -18,7 +18,7 @@ from pathlib import Path
 from bench.flood import run_flood
 
 RATE = 10_000.0
-SECONDS = 3.0
+SECONDS = 10.0  # the issue's flood, whole: 100,000 notes
 
 
 def test_a_10k_notes_per_second_flood_is_survived_journaled_and_bounded(tmp_path: Path) -> None:
