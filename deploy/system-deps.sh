@@ -3,8 +3,9 @@
 # Runs as root (CI, stage rigs set up by a technician) or through sudo when available.
 set -euo pipefail
 # jackd2: MIDI through a real JACK server in tests; EGL + Mesa: headless rendering; libportaudio2:
-# sounddevice (audio clock); xvfb + xauth: the window smoke test on a virtual screen.
-packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth)
+# sounddevice (audio clock); xvfb + xauth: the window smoke test on a virtual screen;
+# libfluidsynth3: pyfluidsynth (render --soundfont).
+packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")

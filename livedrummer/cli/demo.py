@@ -43,6 +43,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--render", action="store_true", help="make the video even with a screen")
     p.add_argument("-o", "--output", type=Path, default=DEMO_VIDEO,
                    help=f"video file (default {DEMO_VIDEO})")  # fmt: skip
+    p.add_argument("--soundfont", type=Path, metavar="SF2",
+                   help="video: drum sounds from this General MIDI SoundFont")  # fmt: skip
 
 
 def sticking_line(st: Sticking) -> str:
@@ -81,6 +83,8 @@ def run_live(args: argparse.Namespace) -> int:
               f"({size} @ {DEMO_FPS} fps)", flush=True)  # fmt: skip
         argv += ["--video", str(out), "--size", size, "--fps", str(DEMO_FPS),
                  "--out", str(out.parent / "live")]  # fmt: skip
+        if args.soundfont is not None:
+            argv += ["--soundfont", str(args.soundfont)]
     return up(build_parser().parse_args(argv))
 
 
@@ -116,7 +120,7 @@ def run_file(args: argparse.Namespace) -> int:
     bar = ProgressBar("demo", True, DEMO_FPS, every_s=0.2 if sys.stderr.isatty() else 10.0)
     start = time.perf_counter()
     report = export(performance, body, out=out, settings=settings, camera=CAMERA_NAMES[0],
-                    progress=bar)  # fmt: skip
+                    progress=bar, soundfont=args.soundfont)  # fmt: skip
     took = time.perf_counter() - start
     print(f"demo: wrote {out.resolve()} ({report.duration_s:.1f} s of video with sound) "
           f"in {took:.1f} s ({report.realtime:.2f}x real time)")  # fmt: skip

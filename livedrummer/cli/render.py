@@ -7,6 +7,8 @@ FILE it renders the bundled demo groove with the Roland map. The drummer is the 
 (the x264 speed preset is ``--x264-preset``). The progress bar goes to stderr and only when
 stderr is a terminal; the summary line goes to stdout. ``--overlay score,joints`` adds SMED's
 scrolling score and the joint-angle graph as strips at the bottom of the frame.
+``--soundfont FILE.sf2`` plays the drum track with that General MIDI SoundFont's kit
+(FluidSynth, :mod:`livedrummer.audio.soundfont`) instead of the built-in one.
 """
 
 from __future__ import annotations
@@ -57,6 +59,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--x264-preset", default="veryfast", help="x264 speed (default veryfast)")
     p.add_argument("--overlay", default="", metavar="LIST",
                    help="bottom strips: score, joints or score,joints")  # fmt: skip
+    p.add_argument("--soundfont", type=Path, metavar="SF2",
+                   help="drum sounds from this General MIDI SoundFont (FluidSynth)")  # fmt: skip
     add_motion_options(p)
 
 
@@ -137,6 +141,10 @@ def run(args: argparse.Namespace) -> int:
     overlays = parse_overlays(args.overlay)
     if not 1 <= args.fps <= 240:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
+    if args.soundfont is not None:
+        from livedrummer.audio.soundfont import check_soundfont
+
+        check_soundfont(args.soundfont)
     source = Path(args.file) if args.file else demo_groove()
     map_name = args.map or ("general-midi" if args.file else DEMO_MAP)
     note_map = load_note_map(map_name)
@@ -151,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
     report = export(
         performance, body, out=out, frames_dir=args.frames, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar, overlays=overlays,
+        soundfont=args.soundfont,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames) if p is not None)
     print(
@@ -158,7 +167,8 @@ def run(args: argparse.Namespace) -> int:
         f"{size[0]}x{size[1]} @ {args.fps} fps, camera {args.camera}, kit {kit.name}, "
         f"sticking {args.sticking}"
         f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"
-        f"{', drum track 48 kHz stereo' if out is not None else ''}; "
+        f"{', drum track 48 kHz stereo' if out is not None else ''}"
+        f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}; "
         f"{report.realtime:.2f}x real time"
     )
     return 0

@@ -9,8 +9,9 @@ projector; camera keys 1..8, Q quits the window and the rig). With no screen, or
 ``--headless``, it renders off screen into ``--out`` (default ``out/live``): numbered PNG
 frames plus ``frames.jsonl``; ``--video FILE`` records those frames on show time into an MP4
 and, when the rig stops, adds the drum track: the journaled onsets (the session's journal, a
-temporary one for ``--demo``) mixed with the built-in kit at onset + D
-(:mod:`services.display.record`), so picture and sound line up as the audience would see them.
+temporary one for ``--demo``) mixed with the built-in kit (or ``--soundfont FILE.sf2``'s) at
+onset + D (:mod:`services.display.record`), so picture and sound line up as the audience would
+see them.
 
 Security. ``--curve-secret RIG.key_secret`` makes every stream of the rig CURVE: the input
 daemon and the synth bind as CURVE servers with that key pair, and the synth and the display
@@ -69,6 +70,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
     p.add_argument("--video", type=Path, metavar="FILE",
                    help="headless: record the show and its drum track (MP4)")  # fmt: skip
+    p.add_argument("--soundfont", type=Path, metavar="SF2",
+                   help="--video: drum track from this General MIDI SoundFont")  # fmt: skip
     p.add_argument("--size", default="640x360", help="headless frame size (default 640x360)")
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
     p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
@@ -165,6 +168,10 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
     if args.video is not None and args.no_journal:
         raise ConfigError("--video: the drum track comes from the journal; drop --no-journal")
+    if args.soundfont is not None:  # now, not after the show
+        from livedrummer.audio.soundfont import check_soundfont
+
+        check_soundfont(args.soundfont)
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None
         if args.video is not None:
@@ -226,6 +233,11 @@ def add_drum_track(args: argparse.Namespace, sessions: Path, started: float) -> 
     onsets = np.concatenate(parts) if parts else np.zeros(0, ONSET_DTYPE)
     onsets["time_s"] += args.delay_ms / 1000.0 - timing.show0_s
     duration = timing.frames / timing.fps
-    mux_audio(args.video, mix_onsets(onsets, duration, load_kit(args.kit)))
+    if args.soundfont is not None:
+        from livedrummer.audio.soundfont import render_soundfont
+
+        mux_audio(args.video, render_soundfont(onsets, duration, args.soundfont))
+    else:
+        mux_audio(args.video, mix_onsets(onsets, duration, load_kit(args.kit)))
     print(f"up: wrote {args.video.resolve()} ({duration:.1f} s, {timing.frames} frames, "
           f"{onsets.size} hits in its drum track)", flush=True)  # fmt: skip

@@ -1,7 +1,8 @@
 """Headless export: a performance to an MP4 with sound, or to numbered PNG frames.
 
 One function, :func:`export`, does the whole job: it makes the EGL context and the renderer,
-mixes the drum track (:func:`livedrummer.audio.mix.mix_onsets`) to exactly the video's length,
+mixes the drum track (:func:`livedrummer.audio.mix.mix_onsets`, or with ``soundfont``
+:func:`livedrummer.audio.soundfont.render_soundfont`) to exactly the video's length,
 then renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or the PNG
 writer. The video gets each frame as I420, converted to YUV on the GPU, where the width is a
 multiple of 8 (other widths: RGBA, converted on the encoder thread); the PNGs get RGB. The
@@ -27,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from livedrummer.audio.mix import mix_onsets
+from livedrummer.audio.soundfont import render_soundfont
 from livedrummer.performance import Performance
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
@@ -70,9 +72,11 @@ def export(
     samples: int = 0,
     progress: Progress | None = None,
     overlays: frozenset[str] = frozenset(),
+    soundfont: Path | None = None,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
-    overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`)."""
+    overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
+    drum track from the SoundFont ``soundfont`` when given, else the built-in kit."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
     start = time.perf_counter()
@@ -88,8 +92,11 @@ def export(
             raise DisplayError(f"cannot make frames folder {frames_dir}: {exc.strerror}") from None
     writer: VideoWriter | None = None
     if out is not None:
+        if soundfont is not None:  # before the writer: a bad file leaves no empty video
+            audio = render_soundfont(performance.onsets, n / fps, soundfont, settings.sample_rate)
+        else:
+            audio = mix_onsets(performance.onsets, n / fps, kit, settings.sample_rate)
         writer = VideoWriter(out, settings)
-        audio = mix_onsets(performance.onsets, n / fps, kit, settings.sample_rate)
         writer.write_audio(audio)
     ctx = None
     try:

@@ -1,0 +1,256 @@
+"""The drum track from a General MIDI SoundFont (``--soundfont FILE.sf2``), through FluidSynth.
+
+The built-in kit (:mod:`~livedrummer.audio.mix`) needs nothing; a user who owns a SoundFont can
+have its drum kit instead. FluidSynth (``libfluidsynth3``, via the ``pyfluidsynth`` ctypes
+binding, imported lazily so nothing else depends on it) renders offline: a synth with no audio
+driver, the GM percussion kit (bank 128, preset 0) on channel 10, and for each onset the synth
+is advanced to the onset's sample and sent a note-on; a note-off follows :data:`NOTE_HOLD_S`
+later (or at the next stroke of the same note) since drums are one-shots and a SoundFont
+shapes their decay with its release envelope. Hi-hat chokes are the SoundFont's own exclusive
+classes. Output is float32 stereo, same length and placement as :func:`mix_onsets`, scaled
+down as a whole only if it would clip.
+
+Which note sounds (:func:`gm_notes`): the onset's own note when General MIDI means the same
+instrument, zone and hi-hat articulation by it (so a GM file keeps its 35-vs-36 kicks,
+electric snares and Latin percussion); otherwise, as for an e-kit's notes (a Roland TD sends
+22 for a closed hi-hat edge and 48 for its first tom), the GM note of the onset's instrument and
+zone, taken from the bundled ``general-midi`` map (lowest note when several fit), falling back
+to the instrument's note in any zone (cymbal edges sound as bows, tom rims as heads) and a
+half-open hi-hat to the open one (46). One choice differs from inverting the map: a snare rim
+shot sounds as the acoustic snare (38), not as the hand clap (39) that the map files under rim.
+
+Timing limit: FluidSynth starts a voice at the start of its next 64-sample block, so a note-on
+is sent at the block boundary nearest the onset: attacks land within 32 samples (0.67 ms at
+48 kHz) of their onsets, either side. Errors (no FluidSynth library, a missing or unreadable
+file, no drum kit in it) are :class:`SoundFontError` naming the file; FluidSynth's own log
+messages, and what native code prints while loading, go to :mod:`logging` at DEBUG.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import io
+import logging
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from livedrummer.audio.mix import HEADROOM
+from livedrummer.audio.synth import SAMPLE_RATE
+from livedrummer.errors import LivedrummerError
+from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
+
+log = logging.getLogger(__name__)
+
+DRUM_CHANNEL = 9  # MIDI channel 10
+DRUM_BANK, DRUM_PRESET = 128, 0
+NOTE_HOLD_S = 0.1
+BLOCK = 64  # FluidSynth's rendering block (FLUID_BUFSIZE)
+GAIN = 0.6  # FluidSynth's default 0.2 leaves a drum track quiet; clipping is scaled away
+_SNARE_RIM_NOTE = 38  # GM has no rim shot; 39 is a hand clap
+
+
+class SoundFontError(LivedrummerError):
+    """A SoundFont cannot be used: no FluidSynth, no such file, not an SF2, no drum kit."""
+
+
+GmKey = tuple[str, Zone, HiHat]
+
+
+@cache
+def _gm_tables() -> tuple[dict[int, GmKey], dict[GmKey, int], dict[str, int]]:
+    from livedrummer.notemap import load_note_map
+
+    gm = load_note_map("general-midi")
+    meaning = {n: (s.instrument, s.zone, s.hihat) for n, s in gm.notes.items()}
+    exact: dict[GmKey, int] = {}
+    anyzone: dict[str, int] = {}
+    for note in sorted(meaning):
+        exact.setdefault(meaning[note], note)
+        anyzone.setdefault(meaning[note][0], note)
+    exact[("snare", Zone.RIM, HiHat.NONE)] = _SNARE_RIM_NOTE
+    return meaning, exact, anyzone
+
+
+def gm_note(note: int, instrument: str, zone: Zone, hihat: HiHat) -> int:
+    """The General MIDI percussion note that sounds this stroke (see the module docstring)."""
+    meaning, exact, anyzone = _gm_tables()
+    key = (instrument, zone, hihat)
+    if meaning.get(note) == key:
+        return note
+    if key in exact:
+        return exact[key]
+    if instrument == "hihat":
+        wanted = HiHat.OPEN if hihat is HiHat.HALF else hihat
+        for (name, _zone, art), gm in sorted(exact.items(), key=lambda kv: kv[1]):
+            if name == "hihat" and art is wanted:
+                return gm
+    return anyzone[instrument]
+
+
+def gm_notes(onsets: np.ndarray) -> np.ndarray:
+    """:func:`gm_note` of every onset (uint8)."""
+    out = np.zeros(len(onsets), np.uint8)
+    for i, o in enumerate(onsets):
+        piece, zone = INSTRUMENTS[int(o["instrument"])], ZONES[int(o["zone"])]
+        out[i] = gm_note(int(o["note"]), piece, zone, HIHATS[int(o["hihat"])])
+    return out
+
+
+_errors: list[str] = []  # FluidSynth's error messages since the last load began
+_held: list[list[str]] = []  # while loading: its messages, logged once fd 2 is back
+_LOG_FUNC = ctypes.CFUNCTYPE(None, ctypes.c_int, ctypes.c_char_p, ctypes.c_void_p)
+
+
+def _on_log(level: int, message: bytes | None, _data: int | None) -> None:
+    """FluidSynth's messages, at DEBUG: what matters reaches the user in the error itself."""
+    text = f"fluidsynth (level {level}): " + (message or b"").decode(errors="replace").strip()
+    if level <= 1:  # FLUID_PANIC, FLUID_ERR
+        _errors.append(text.split(": ", 1)[1])
+    if _held:
+        _held[-1].append(text)
+    else:
+        log.debug("%s", text)
+
+
+@contextlib.contextmanager
+def _loading() -> Iterator[None]:
+    """Collect FluidSynth's errors, and the native noise written straight to file descriptor 2
+    (Debian's FluidSynth tries its libinstpatch DLS reader on a file its SF2 reader refused,
+    and GLib prints CRITICAL lines), for the DEBUG log instead of the user's one-line error."""
+    _errors.clear()
+    _held.append([])
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            native = sink.read().decode(errors="replace").splitlines()
+            for line in _held.pop() + [f"stderr: {x}" for x in native if x.strip()]:
+                log.debug("%s", line)
+
+
+_log_callback = _LOG_FUNC(_on_log)  # kept alive: FluidSynth holds the pointer
+
+
+@cache
+def _fluidsynth() -> tuple[Any, Any]:
+    """The pyfluidsynth module and the library's ``fluid_synth_write_float``; logs routed."""
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):  # it prints where it found the library
+            import fluidsynth
+        lib = ctypes.CDLL(fluidsynth.lib)
+    except (ImportError, OSError) as exc:
+        raise SoundFontError(
+            f"the FluidSynth library cannot be loaded ({exc}); "
+            "Debian: apt-get install libfluidsynth3"
+        ) from None
+    for level in range(5):
+        lib.fluid_set_log_function(level, _log_callback, None)
+    write = lib.fluid_synth_write_float
+    write.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
+                      ctypes.c_void_p, ctypes.c_int, ctypes.c_int]  # fmt: skip
+    write.restype = ctypes.c_int
+    return fluidsynth, write
+
+
+def _open(path: Path, sr: int) -> tuple[Any, Any]:
+    """A FluidSynth synth (no audio driver) with ``path``'s drum kit on channel 10."""
+    try:
+        fluidsynth, write = _fluidsynth()
+    except SoundFontError as exc:
+        raise SoundFontError(f"soundfont {path}: {exc}") from None
+    try:
+        with path.open("rb") as f:
+            head = f.read(12)
+    except OSError as exc:
+        raise SoundFontError(f"soundfont {path}: {exc.strerror or exc}") from None
+    if head[:4] != b"RIFF" or head[8:12] != b"sfbk":
+        raise SoundFontError(f"soundfont {path}: not a SoundFont 2 file (no RIFF sfbk header)")
+    synth = fluidsynth.Synth(gain=GAIN, samplerate=sr, **{"synth.lock-memory": 0})
+    try:
+        with _loading():
+            sfid = synth.sfload(str(path))
+        if sfid < 0:
+            why = _errors[0] if _errors else "FluidSynth cannot load it"
+            raise SoundFontError(f"soundfont {path}: not a usable SoundFont 2 file ({why})")
+        if synth.program_select(DRUM_CHANNEL, sfid, DRUM_BANK, DRUM_PRESET) < 0:
+            raise SoundFontError(
+                f"soundfont {path}: no General MIDI drum kit (bank {DRUM_BANK}, preset "
+                f"{DRUM_PRESET})"
+            )
+    except BaseException:
+        synth.delete()
+        raise
+    return synth, write
+
+
+def check_soundfont(path: Path, sr: int = SAMPLE_RATE) -> None:
+    """Raise :class:`SoundFontError` now if ``path`` would fail later (before a long show)."""
+    synth, _write = _open(path, sr)
+    synth.delete()
+
+
+def render_soundfont(
+    onsets: np.ndarray, duration_s: float, path: Path, sr: int = SAMPLE_RATE
+) -> np.ndarray:
+    """Stereo float32 (N, 2), N = round(duration_s * sr): every onset played by ``path``."""
+    n = round(duration_s * sr)
+    out = np.zeros((n, 2), np.float32)
+    synth, write = _open(path, sr)
+    try:
+        events = _events(onsets, gm_notes(onsets), n, sr)
+        pos = 0
+        for at, velocity, note in events:
+            if at > pos:
+                _render(write, synth.synth, out, pos, at)
+                pos = at
+            if velocity:
+                synth.noteon(DRUM_CHANNEL, note, velocity)
+            else:
+                synth.noteoff(DRUM_CHANNEL, note)
+        if n > pos:
+            _render(write, synth.synth, out, pos, n)
+    finally:
+        synth.delete()
+    peak = float(np.abs(out).max()) if n else 0.0
+    if peak > HEADROOM:
+        out *= HEADROOM / peak
+    return out
+
+
+def _events(onsets: np.ndarray, notes: np.ndarray, n: int, sr: int) -> list[tuple[int, int, int]]:
+    """(sample, velocity or 0 for note-off, note), in the order to send them."""
+    hold = round(NOTE_HOLD_S * sr)
+    starts = [BLOCK * round(float(t) * sr / BLOCK) for t in onsets["time_s"]]
+    events: list[tuple[int, int, int]] = []
+    next_same: dict[int, int] = {}
+    for i in sorted(range(len(starts)), key=lambda k: starts[k], reverse=True):
+        start, note = starts[i], int(notes[i])
+        if not 0 <= start < n:
+            continue
+        off = min(start + hold, next_same.get(note, start + hold))
+        next_same[note] = start
+        events.append((start, max(1, int(onsets["velocity"][i])), note))
+        if off < n:
+            events.append((off, 0, note))
+    events.sort(key=lambda e: (e[0], e[1] > 0))  # a note-off before a note-on at one sample
+    return events
+
+
+def _render(write: Any, synth: Any, out: np.ndarray, start: int, stop: int) -> None:
+    base = out.ctypes.data
+    if write(synth, stop - start, base, 2 * start, 2, base, 2 * start + 1, 2) != 0:
+        raise SoundFontError("FluidSynth failed to render")
