@@ -161,7 +161,7 @@ class LiveSynth:
         self._fade = (0.0, 0.0)  # start, length (performance time)
         self.animations = 0  # how many times the body was re-run (for benchmarks)
         self.quick_contacts = 0  # predicted hits whose contact went out before re-animating
-        self._quick: list[tuple[float, np.ndarray]] = []
+        self._quick: list[tuple[np.ndarray, np.ndarray]] = []  # (show times, rows) per hit
         self._cache_t = np.zeros(0)  # samples of the current curves ahead of the horizon
         self._cache_rows = np.zeros(0, self.dtype)
 
@@ -179,7 +179,8 @@ class LiveSynth:
     def _quick_contact(self, note: _Note) -> None:
         """A predicted hit's contact at once: the current curves already strike the guessed
         piece at the guess's time, so that pose, shown at this onset + D, is the contact (see
-        the module docstring); the re-animation that follows replaces it."""
+        the module docstring); the re-animation that follows replaces it. The current curves'
+        samples between what was published and the hit go with it, so the stream has no hole."""
         t = float(note.row["time_s"])
         piece = _piece_of(self.rig, int(note.row["instrument"]))
         drawn = cast(tuple[object, ...], self._curves.key[1] if self._curves else ())
@@ -191,21 +192,28 @@ class LiveSynth:
                 and abs(g.time_s - t) <= g.period_s / 3
             ):
                 rows = self._sample(np.array([g.time_s]))
-                self._quick.append((t + self.params.delay_s, rows))
+                lo = self._horizon if self._horizon is not None else t
+                if self._cache_end(lo) < t:
+                    self._extend_cache(self._cache_end(lo), t)
+                fill = (self._cache_t > lo) & (self._cache_t < t)
+                shows = np.append(self._cache_t[fill], t) + self.params.delay_s
+                self._quick.append((shows, np.concatenate([self._cache_rows[fill], rows])))
                 self.quick_contacts += 1
                 return
 
     def take_quick(self) -> PoseBatch:
         """Contacts of predicted hits that arrived since the last call, to publish at once,
         ahead of :meth:`poses_until` (one sample per show time, ascending)."""
-        by_show = dict(sorted(self._quick, key=lambda q: q[0]))  # a chord: the last one
+        merged: dict[float, np.ndarray] = {}
+        for shows, rows in self._quick:  # a later hit's samples win (a chord: the last one)
+            merged.update(zip(shows.tolist(), rows, strict=True))
         self._quick.clear()
-        if not by_show:
+        if not merged:
             return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
-        show = np.array(list(by_show))
-        rows = np.concatenate(list(by_show.values()))
-        rows["time_s"] = (show - show[0]).astype(np.float32)
-        return PoseBatch(show, rows)
+        show = np.array(sorted(merged))
+        out = np.array([merged[k] for k in show.tolist()], dtype=self.dtype)
+        out["time_s"] = (show - show[0]).astype(np.float32)
+        return PoseBatch(show, out)
 
     def control(self, row: np.ndarray | np.void) -> None:
         """One controller event (CONTROL_DTYPE record): the hi-hat pedal and chokes."""
