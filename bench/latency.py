@@ -87,7 +87,8 @@ class Jack:
 
 
 def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], delay_ms: float,
-             lookahead_ms: float, tmp: Path, synth_args: list[str]) -> dict[str, Any]:  # fmt: skip
+             lookahead_ms: float, tmp: Path, synth_args: list[str],
+             input_args: list[str]) -> dict[str, Any]:  # fmt: skip
     """One pipeline fed ``schedule``: (seconds from the start, note, velocity) per note-on."""
     clock = MonotonicClock()
     home = str(tmp / "home")
@@ -98,7 +99,7 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
     try:
         inp = _spawn(["input", "--midi", "kit:pads", "--api", "jack", "--map", "roland-td",
                       "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
-                      "--no-journal"], home, tmp / "input.err")  # fmt: skip
+                      "--no-journal", *input_args], home, tmp / "input.err")  # fmt: skip
         procs.append(inp)
         in_ep = _line(inp)["pub"]
         syn = _spawn(["synth", "--sub", in_ep, "--pub", "tcp://127.0.0.1:*", "--control",
@@ -237,10 +238,13 @@ def main(argv: list[str]) -> int:
                         help="also play the first S s of the demo groove as performed")  # fmt: skip
     parser.add_argument("--delay-ms", type=float, default=30.0)
     parser.add_argument("--lookahead-ms", type=float, default=30.0)
+    parser.add_argument("--realtime", type=int, default=0, metavar="PRIO",
+                        help="input daemon at SCHED_FIFO PRIO (if permitted)")  # fmt: skip
     parser.add_argument("--no-provisional", action="store_true",
                         help="the synth publishes a hit only once its hand is decided")  # fmt: skip
     args = parser.parse_args(argv)
     synth_args = ["--no-provisional"] if args.no_provisional else []
+    input_args = ["--realtime", str(args.realtime)] if args.realtime else []
     jack = Jack()
     print(f"D = {args.delay_ms:g} ms, L = {args.lookahead_ms:g} ms; ms from note-on sent, p50 p99")
     print(f"{'notes/s':>8} {'sent':>5} {'bus':>5} {'no-pose':>7} {'late':>5} | "
@@ -255,7 +259,7 @@ def main(argv: list[str]) -> int:
                 runs.append(("groove", groove_schedule(args.groove)))
             for label, schedule in runs:
                 r = run_rate(jack, label, schedule, args.delay_ms, args.lookahead_ms,
-                             Path(tmp), synth_args)  # fmt: skip
+                             Path(tmp), synth_args, input_args)  # fmt: skip
                 print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
                       f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
                       f"{_pct(r['pose'])} | {_pct(r['frame'])} | "

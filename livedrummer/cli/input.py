@@ -42,6 +42,8 @@ def register(sub: Subparsers) -> None:
                    help="open the source after N subscriptions (1 per SUB topic)")  # fmt: skip
     p.add_argument("--exit-at-end", action="store_true", help="--file: exit when played")
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
+    p.add_argument("--realtime", type=int, default=0, metavar="PRIO",
+                   help="SCHED_FIFO priority 1..60 when permitted (default 0: off)")  # fmt: skip
     p.add_argument(
         "--sessions-dir", type=Path, help="journal folder (default $LIVEDRUMMER_HOME/sessions)"
     )
@@ -64,6 +66,13 @@ def run(args: argparse.Namespace) -> int:
     if not 0 <= args.performer <= 0xFFFF:
         raise ConfigError(f"--performer: expected 0..65535 (got {args.performer})")
     security = security_from_args(args)
+    if args.realtime:
+        from services.realtime import request_realtime
+
+        try:  # before any thread starts, so they inherit it
+            request_realtime(args.realtime, "input")
+        except ValueError as exc:
+            raise ConfigError(f"--realtime: {exc}") from None
     clock = MonotonicClock()
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     note_map = load_note_map(args.map)
