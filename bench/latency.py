@@ -31,12 +31,14 @@ import subprocess
 import sys
 import tempfile
 import threading
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import zmq
 
+from bench._jack import dummy_jack, jack_env
 from livedrummer import protocol as p
 from livedrummer.body.pose import pose_dtype
 from livedrummer.clock import MonotonicClock
@@ -63,13 +65,9 @@ class Jack:
     def __init__(self) -> None:
         import rtmidi
 
-        name = f"ldlat-{os.getpid()}"
-        os.environ.update({"JACK_DEFAULT_SERVER": name, "JACK_NO_AUDIO_RESERVATION": "1"})
-        self.jackd = subprocess.Popen(
-            ["jackd", "--no-realtime", "-S", "-n", name, "-d", "dummy", "-r", "48000", "-p", "64"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        )  # fmt: skip
-        subprocess.run(["jack_wait", "-s", name, "-w", "-t", "10"], check=True, capture_output=True)
+        self._stack = ExitStack()
+        name = self._stack.enter_context(dummy_jack("ldlat", period=64))
+        os.environ.update(jack_env(name))  # the pipeline's processes inherit it
         self.out = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
         self.out.open_virtual_port("pads")
         self.loop = rtmidi.MidiIn(rtmidi.API_UNIX_JACK, "loopback")
@@ -82,8 +80,7 @@ class Jack:
     def close(self) -> None:
         self.loop.close_port()
         self.out.close_port()
-        self.jackd.terminate()
-        self.jackd.wait(10)
+        self._stack.close()
 
 
 def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], delay_ms: float,

@@ -26,13 +26,10 @@ from __future__ import annotations
 
 import argparse
 import os
-import shutil
 import statistics
-import subprocess
 import tempfile
 import threading
 import time
-import uuid
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from functools import partial
@@ -162,26 +159,16 @@ def jack_replug(tmp: Path, replugs: int = 1) -> float:
 @contextmanager
 def _jackd() -> Iterator[str | None]:
     """A ``jackd -d dummy -S`` server for the run (None when jackd is missing or fails)."""
-    if shutil.which("jackd") is None or shutil.which("jack_wait") is None:
-        yield None
-        return
-    name = f"ldbench-{uuid.uuid4().hex[:8]}"
-    old = {k: os.environ.get(k) for k in ("JACK_DEFAULT_SERVER", "JACK_NO_AUDIO_RESERVATION")}
-    os.environ.update(JACK_DEFAULT_SERVER=name, JACK_NO_AUDIO_RESERVATION="1")
-    proc = subprocess.Popen(
-        ["jackd", "--no-realtime", "-S", "-n", name, "-d", "dummy", "-r", "48000", "-p", "128"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )  # fmt: skip
+    from bench._jack import JackError, dummy_jack, jack_env
+
+    old = {k: os.environ.get(k) for k in jack_env("")}
     try:
-        ok = subprocess.run(["jack_wait", "-s", name, "-w", "-t", "10"], capture_output=True)
-        yield name if ok.returncode == 0 and proc.poll() is None else None
+        with dummy_jack("ldbench") as name:
+            os.environ.update(jack_env(name))
+            yield name
+    except JackError:
+        yield None
     finally:
-        proc.terminate()
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
         for k, v in old.items():
             if v is None:
                 os.environ.pop(k, None)

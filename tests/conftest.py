@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import os
-import shutil
-import subprocess
-import uuid
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import mido
 import pytest
+
+from bench._jack import JackError, dummy_jack, jack_env
 
 REPO = Path(__file__).resolve().parent.parent
 GROOVE = REPO.parent / "shared" / "data" / "groove"
@@ -55,6 +54,17 @@ def _unavailable(reason: str) -> None:
     pytest.skip(reason)
 
 
+@pytest.fixture(scope="session")
+def gl_ok() -> None:
+    """A headless OpenGL context (EGL; Mesa llvmpipe without a GPU) can be made."""
+    from services.display.context import DisplayError, headless_context
+
+    try:
+        headless_context().release()
+    except DisplayError as exc:
+        _unavailable(str(exc))
+
+
 @pytest.fixture
 def jack_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str]:
     """A real JACK server on the dummy backend (no sound card), synchronous mode (-S).
@@ -63,29 +73,12 @@ def jack_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str
     priority; -S delivered every note. The server gets a unique name, exported to the test
     through JACK_DEFAULT_SERVER.
     """
-    if shutil.which("jackd") is None or shutil.which("jack_wait") is None:
-        _unavailable("jackd not installed (Debian: apt-get install jackd2)")
-    name = f"ldtest-{uuid.uuid4().hex[:8]}"
-    env = {**os.environ, "JACK_NO_AUDIO_RESERVATION": "1", "JACK_DEFAULT_SERVER": name}
     log_path = tmp_path / "jackd.log"
     with log_path.open("w") as log:
-        proc = subprocess.Popen(
-            ["jackd", "--no-realtime", "-S", "-n", name, "-d", "dummy", "-r", "48000", "-p", "128"],
-            stdout=log, stderr=subprocess.STDOUT, env=env,
-        )  # fmt: skip
         try:
-            waited = subprocess.run(
-                ["jack_wait", "-s", name, "-w", "-t", "10"], capture_output=True, env=env
-            )
-            if waited.returncode != 0 or proc.poll() is not None:
-                _unavailable(f"jackd -d dummy did not start: {log_path.read_text()[-300:]}")
-            monkeypatch.setenv("JACK_DEFAULT_SERVER", name)
-            monkeypatch.setenv("JACK_NO_AUDIO_RESERVATION", "1")
-            yield name
-        finally:
-            proc.terminate()
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+            with dummy_jack("ldtest", log=log) as name:
+                for key, value in jack_env(name).items():
+                    monkeypatch.setenv(key, value)
+                yield name
+        except JackError as exc:
+            _unavailable(f"{exc}: {log_path.read_text()[-300:]}")

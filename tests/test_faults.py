@@ -29,7 +29,6 @@ import sys
 import time
 from pathlib import Path
 
-import pytest
 import zmq
 
 from bench._faultrig import INDEX, REPO, Rig
@@ -40,16 +39,6 @@ from services.net import Security, connect
 from services.supervisor import ServiceSpec, Supervisor
 
 REFUSED_WAIT_MS = 1000
-
-
-@pytest.fixture
-def gl_ok() -> None:
-    from services.display.context import DisplayError, headless_context
-
-    try:
-        headless_context().release()
-    except DisplayError as exc:
-        pytest.skip(str(exc))
 
 
 def port_base() -> int:

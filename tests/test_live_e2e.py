@@ -39,16 +39,6 @@ FPS = 30.0
 REPO = Path(__file__).resolve().parent.parent
 
 
-@pytest.fixture
-def gl_ok() -> None:
-    from services.display.context import DisplayError, headless_context
-
-    try:
-        headless_context().release()
-    except DisplayError as exc:
-        pytest.skip(str(exc))
-
-
 def spawn(args: list[str], tmp: Path, name: str) -> subprocess.Popen[str]:
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp / "home")}
     env.pop("DISPLAY", None)

@@ -14,19 +14,9 @@ import sys
 import time
 from pathlib import Path
 
-import pytest
+from bench._faultrig import children
 
 REPO = Path(__file__).resolve().parent.parent
-
-
-@pytest.fixture
-def gl_ok() -> None:
-    from services.display.context import DisplayError, headless_context
-
-    try:
-        headless_context().release()
-    except DisplayError as exc:
-        pytest.skip(str(exc))
 
 
 def launch(tmp: Path, *extra: str) -> subprocess.Popen[str]:
@@ -39,27 +29,6 @@ def launch(tmp: Path, *extra: str) -> subprocess.Popen[str]:
          "--out", str(tmp / "frames"), *extra],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
     )  # fmt: skip
-
-
-def children(pid: int) -> dict[str, int]:
-    """The launcher's children by service name (from their command lines)."""
-    out: dict[str, int] = {}
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            stat = (entry / "stat").read_text()
-            argv = (entry / "cmdline").read_bytes().split(b"\0")
-        except OSError:
-            continue
-        ppid = int(stat.rsplit(")", 1)[1].split()[1])
-        if ppid != pid:
-            continue
-        words = [a.decode() for a in argv]
-        for name in ("input", "synth", "display"):
-            if name in words:
-                out[name] = int(entry.name)
-    return out
 
 
 def wait_running(proc: subprocess.Popen[str]) -> list[str]:

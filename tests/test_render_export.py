@@ -17,7 +17,6 @@ import pytest
 from livedrummer.cli import main
 from livedrummer.midifile import read_midi_file
 from livedrummer.notemap import load_note_map
-from services.display.context import DisplayError, headless_context
 
 FPS = 30
 TAIL_S = 0.5
@@ -25,12 +24,7 @@ TAIL_S = 0.5
 NOTES = [(0, 36, 110), (240, 38, 100), (360, 42, 90), (600, 49, 120), (480, 36, 127)]
 
 
-@pytest.fixture(scope="module", autouse=True)
-def needs_egl() -> None:
-    try:
-        headless_context().release()
-    except DisplayError as exc:
-        pytest.skip(str(exc))
+pytestmark = pytest.mark.usefixtures("gl_ok")  # every test here draws
 
 
 @pytest.fixture

@@ -56,7 +56,7 @@ from livedrummer.render.overlay_raster import (
 from livedrummer.render.transport import KEYS
 from livedrummer.sticking.result import NOT_PLAYED, Sticking
 from livedrummer.vocabulary import PieceKind
-from services.display.context import DisplayError, headless_context
+from services.display.context import headless_context
 from services.display.renderer import Renderer
 from services.display.window import OVERLAY_KEYS
 
@@ -311,14 +311,6 @@ def test_strips_stack_at_the_bottom_score_above_graph(kit: Kit, groove: Path) ->
 # --- on the GPU ------------------------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def egl() -> None:
-    try:
-        headless_context().release()
-    except DisplayError as exc:
-        pytest.skip(str(exc))
-
-
 @pytest.fixture
 def groove(write_midi) -> Path:  # type: ignore[no-untyped-def]
     msgs: list[mido.Message] = [mido.MetaMessage("set_tempo", tempo=500_000, time=0)]
@@ -330,7 +322,7 @@ def groove(write_midi) -> Path:  # type: ignore[no-untyped-def]
     return path
 
 
-def test_the_overlay_is_blended_into_the_read_back_frame(egl: None, kit: Kit, groove: Path
+def test_the_overlay_is_blended_into_the_read_back_frame(gl_ok: None, kit: Kit, groove: Path
                                                          ) -> None:  # fmt: skip
     from livedrummer.midifile import read_midi_file
 
@@ -370,7 +362,7 @@ def test_the_overlay_is_blended_into_the_read_back_frame(egl: None, kit: Kit, gr
     assert 70 <= luma_now <= 100  # BT.709 luma of (255, 40, 40) in limited range: about 81
 
 
-def test_render_command_draws_the_overlays(egl: None, groove: Path, tmp_path: Path,  # type: ignore[no-untyped-def]
+def test_render_command_draws_the_overlays(gl_ok: None, groove: Path, tmp_path: Path,  # type: ignore[no-untyped-def]
                                            capsys) -> None:  # fmt: skip
     def frame(argv: list[str], name: str) -> np.ndarray:
         out = tmp_path / name

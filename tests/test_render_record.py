@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from livedrummer.kitfile import load_kit
-from services.display.context import DisplayError, headless_context
+from services.display.context import DisplayError
 from services.display.record import LiveRecorder, Timing, mux_audio
 from services.display.surface import HeadlessSurface
 from services.display.video import VideoSettings
@@ -18,12 +18,7 @@ FPS = 25
 SIZE = (160, 90)
 
 
-@pytest.fixture(scope="module", autouse=True)
-def needs_egl() -> None:
-    try:
-        headless_context().release()
-    except DisplayError as exc:
-        pytest.skip(str(exc))
+pytestmark = pytest.mark.usefixtures("gl_ok")  # every test here draws
 
 
 def test_frames_keep_show_time_and_the_drum_track_lines_up(tmp_path: Path) -> None:
