@@ -290,3 +290,33 @@ def test_a_moving_pedal_alone_re_animates_at_most_every_control_period(rig: Rig)
         synth.poses_until(now)
     runs = synth.animations - before
     assert 2 <= runs <= seconds / params.control_every_s + 3, runs
+
+
+def test_a_quick_contact_leaves_the_synth_as_it_was(rig: Rig, groove: Performance) -> None:
+    from livedrummer.live.quick import quick_contact
+
+    synth = LiveSynth(rig, SynthParams())
+    onsets = groove.onsets[groove.onsets["time_s"] < 6.0].copy()
+    onsets["time_s"] += START
+    now = float(onsets["time_s"][0]) - 0.2
+    answered = 0
+    for row in onsets:
+        t = float(row["time_s"])
+        while now + 1 / 120 < t:
+            now += 1 / 120
+            synth.poses_until(now)
+        state = synth.quick_state()
+        before = (state.cache_t.copy(), state.cache_rows.copy(), state.horizon_s, state.guesses)
+        shows, rows = quick_contact(state, row)
+        assert np.array_equal(state.cache_t, before[0])
+        assert np.array_equal(state.cache_rows, before[1])
+        assert (state.horizon_s, state.guesses) == before[2:]
+        if shows.size:
+            answered += 1
+            assert shows[-1] == pytest.approx(t + 0.03) and np.all(np.diff(shows) > 0)
+            assert rows.size == shows.size
+            assert np.all(shows[:-1] > (state.horizon_s or 0.0) + 0.03), "nothing sent twice"
+        now = t + 0.0005
+        synth.process(row, quick=False)
+        synth.poses_until(now)
+    assert answered > 5

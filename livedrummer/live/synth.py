@@ -31,6 +31,8 @@ guess's time. So when a hit arrives near a guess for its piece and zone, the pos
 the guess's contact goes out at once as the sample for onset + D
 (:meth:`LiveSynth.take_quick`, published by the service before the re-animation), and the
 re-animated curves replace it a moment later. An unpredicted hit waits for the re-animation.
+The computation is :func:`~livedrummer.live.quick.quick_contact`, a pure function of a
+read-only :meth:`LiveSynth.quick_state` snapshot, so it could also run on another thread.
 
 Prediction. A :class:`~livedrummer.live.predict.HandPredictor` places at most one *guess*
 note per hand at its expected next onset; the guess takes part in the animation (so the
@@ -61,13 +63,20 @@ from typing import cast
 
 import numpy as np
 
-from livedrummer.body.animation import Animation, animate, hihat_openness
+from livedrummer.body.animation import animate, hihat_openness
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import Rig
-from livedrummer.body.sample import sample_poses
 from livedrummer.body.strokes import StrokeParams
 from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE
 from livedrummer.live.predict import Guess, HandPredictor
+from livedrummer.live.quick import (
+    Curves,
+    QuickState,
+    merge_quick,
+    piece_of,
+    quick_contact,
+    sample_curves,
+)
 from livedrummer.sticking.online import Decision, OnlineSticker
 from livedrummer.sticking.result import NOT_PLAYED, Sticking
 from livedrummer.vocabulary import INSTRUMENTS, Limb, PieceKind
@@ -106,14 +115,6 @@ class PoseBatch:
 
     show_s: np.ndarray
     rows: np.ndarray
-
-
-@dataclass
-class _Curves:
-    anim: Animation
-    sticking: Sticking
-    key: tuple[object, ...]
-    contacts_s: np.ndarray  # committed contacts (performance time), sorted
 
 
 @dataclass
@@ -156,8 +157,8 @@ class LiveSynth:
         self._horizon: float | None = None  # last sampled performance time
         self._final = -math.inf  # the committed horizon (now - L) at the last call
         self._refreshed_at = -math.inf  # horizon of the last re-animation
-        self._curves: _Curves | None = None
-        self._old: _Curves | None = None
+        self._curves: Curves | None = None
+        self._old: Curves | None = None
         self._fade = (0.0, 0.0)  # start, length (performance time)
         self.animations = 0  # how many times the body was re-run (for benchmarks)
         self.quick_contacts = 0  # predicted hits whose contact went out before re-animating
@@ -167,53 +168,34 @@ class LiveSynth:
 
     # -- input ---------------------------------------------------------------------------------
 
-    def process(self, row: np.ndarray | np.void) -> None:
-        """One onset (ONSET_DTYPE record; its time is the arrival on the shared clock)."""
+    def process(self, row: np.ndarray | np.void, quick: bool = True) -> None:
+        """One onset (ONSET_DTYPE record; its time is the arrival on the shared clock).
+        ``quick``: also prepare its quick contact (:meth:`take_quick`); a service that
+        computes those on another thread from :meth:`quick_state` passes False."""
         rec = np.array(row, dtype=ONSET_DTYPE)
         note = _Note(rec)
         self._notes.append(note)
         self._apply(self.sticker.process(cast(np.void, rec[()])))
-        if self.params.provisional and not note.decided:
-            self._quick_contact(note)
-
-    def _quick_contact(self, note: _Note) -> None:
-        """A predicted hit's contact at once: the current curves already strike the guessed
-        piece at the guess's time, so that pose, shown at this onset + D, is the contact (see
-        the module docstring); the re-animation that follows replaces it. The current curves'
-        samples between what was published and the hit go with it, so the stream has no hole."""
-        t = float(note.row["time_s"])
-        piece = _piece_of(self.rig, int(note.row["instrument"]))
-        drawn = cast(tuple[object, ...], self._curves.key[1] if self._curves else ())
-        for g in self._guesses.values():
-            if (
-                (g.time_s, g.limb, g.piece) in drawn
-                and g.piece == piece
-                and g.zone == int(note.row["zone"])
-                and abs(g.time_s - t) <= g.period_s / 3
-            ):
-                rows = self._sample(np.array([g.time_s]))
-                lo = self._horizon if self._horizon is not None else t
-                if self._cache_end(lo) < t:
-                    self._extend_cache(self._cache_end(lo), t)
-                fill = (self._cache_t > lo) & (self._cache_t < t)
-                shows = np.append(self._cache_t[fill], t) + self.params.delay_s
-                self._quick.append((shows, np.concatenate([self._cache_rows[fill], rows])))
+        if quick and self.params.provisional and not note.decided:
+            part = quick_contact(self.quick_state(), note.row)
+            if part[0].size:
+                self._quick.append(part)
                 self.quick_contacts += 1
-                return
+
+    def quick_state(self) -> QuickState:
+        """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
+        return QuickState(
+            self.rig, self.dtype, self.params.delay_s, self.params.rate_hz, self._curves,
+            self._old, self._fade, tuple(self._guesses.values()), self._horizon,
+            self._cache_t.copy(), self._cache_rows.copy(),
+        )  # fmt: skip
 
     def take_quick(self) -> PoseBatch:
         """Contacts of predicted hits that arrived since the last call, to publish at once,
         ahead of :meth:`poses_until` (one sample per show time, ascending)."""
-        merged: dict[float, np.ndarray] = {}
-        for shows, rows in self._quick:  # a later hit's samples win (a chord: the last one)
-            merged.update(zip(shows.tolist(), rows, strict=True))
+        show, rows = merge_quick(self._quick, self.dtype)
         self._quick.clear()
-        if not merged:
-            return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
-        show = np.array(sorted(merged))
-        out = np.array([merged[k] for k in show.tolist()], dtype=self.dtype)
-        out["time_s"] = (show - show[0]).astype(np.float32)
-        return PoseBatch(show, out)
+        return PoseBatch(show, rows)
 
     def control(self, row: np.ndarray | np.void) -> None:
         """One controller event (CONTROL_DTYPE record): the hi-hat pedal and chokes."""
@@ -297,22 +279,10 @@ class LiveSynth:
         self._cache_rows = np.concatenate([self._cache_rows, self._sample(times)])
 
     def _sample(self, times: np.ndarray) -> np.ndarray:
-        new = self._curves
-        assert new is not None
-        rows = sample_poses(new.anim, new.sticking, times)
-        old = self._old
-        f0, flen = self._fade
-        if old is None:
-            return rows
-        w = np.clip((times - f0) / flen, 0.0, 1.0) if flen > 0 else np.ones_like(times)
-        fading = w < 1.0
-        if not fading.any():
+        assert self._curves is not None
+        rows, faded = sample_curves(self._curves, self._old, self._fade, times)
+        if faded:
             self._old = None
-            return rows
-        ft = times[fading]
-        prev = sample_poses(old.anim, old.sticking, ft)
-        blend_rows(prev, rows[fading], w[fading])
-        rows[fading] = prev
         return rows
 
     # -- the window ----------------------------------------------------------------------------
@@ -421,7 +391,7 @@ class LiveSynth:
         anim = animate(self.rig, st, self._beats(horizon, keep), openness, strokes=self.strokes)
         self.animations += 1
         committed = np.array(sorted(float(r["time_s"]) for r, _, _ in keep))
-        new = _Curves(anim, st, key, committed)
+        new = Curves(anim, st, key, committed)
         if self._curves is not None:
             self._old = self._curves
             nxt = committed[committed > start]
@@ -436,7 +406,7 @@ class LiveSynth:
         for g in self._guesses.values():
             if abs(g.time_s - t) <= g.period_s / 3:
                 return g.limb, g.piece
-        piece = _piece_of(self.rig, int(note.row["instrument"]))
+        piece = piece_of(self.rig, int(note.row["instrument"]))
         if piece < 0 or self.rig.kit.pieces[piece].kind is PieceKind.KICK:
             return NOT_PLAYED, -1
         for n in reversed(self._notes):
@@ -462,27 +432,6 @@ class LiveSynth:
         k0 = math.floor((lo - anchor) / period)
         k1 = math.ceil((hi - anchor) / period)
         return anchor + period * np.arange(k0, k1 + 1)
-
-
-def blend_rows(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> None:
-    """``a`` becomes ``(1 - w) a + w b`` in place: positions and channels linearly, rotations
-    by normalised linear interpolation on the same hemisphere."""
-    wc = w.astype(np.float32)
-    for name in ("position", "swing", "lift", "glow"):
-        shape = (-1,) + (1,) * (a[name].ndim - 1)
-        a[name] = a[name] + (b[name] - a[name]) * wc.reshape(shape)
-    qa, qb = a["rotation"], b["rotation"].copy()
-    flip = np.sum(qa * qb, axis=-1) < 0
-    qb[flip] *= -1.0
-    q = qa + (qb - qa) * wc[:, None, None]
-    a["rotation"] = q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), 1e-12)
-
-
-def _piece_of(rig: Rig, instrument: int) -> int:
-    piece = rig.kit.resolve(INSTRUMENTS[instrument])
-    if piece is None:
-        return -1
-    return rig.kit.pieces.index(piece)
 
 
 def _instrument_of(rig: Rig, piece: int) -> int:
