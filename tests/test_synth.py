@@ -320,3 +320,20 @@ def test_a_quick_contact_leaves_the_synth_as_it_was(rig: Rig, groove: Performanc
         synth.process(row, quick=False)
         synth.poses_until(now)
     assert answered > 5
+
+
+def test_a_batch_replaces_exactly_the_range_it_covers() -> None:
+    dtype = np.dtype([("time_s", "<f4"), ("v", "<i4")])
+
+    def batch(times: list[float], v: int) -> tuple[np.ndarray, np.ndarray]:
+        rows = np.zeros(len(times), dtype)
+        rows["v"] = v
+        return np.array(times), rows
+
+    track = PoseTrack(keep_s=100.0)
+    track.add(*batch([1.0, 2.0, 3.0, 4.0], 1))
+    track.add(*batch([6.0, 7.0], 3))  # sent ahead (a quick contact)
+    track.add(*batch([2.5, 3.0, 3.5, 5.0], 2))  # a re-sent range
+    assert track.show_s.tolist() == [1.0, 2.0, 2.5, 3.0, 3.5, 5.0, 6.0, 7.0]
+    assert track.rows["v"].tolist() == [1, 1, 2, 2, 2, 2, 3, 3]
+    assert track.at(6.5) is not None and int(track.at(6.5)[1]["v"]) == 3  # type: ignore[index]

@@ -5,6 +5,8 @@ frame will be seen. :class:`PoseTrack` keeps the last few seconds of samples (bo
 answers with the latest sample at or before ``t`` (poses are sampled at 240 Hz and every
 contact is a sample of its own, so holding one is at most 4 ms off and never skips a
 contact). When the stream stops, the last pose is held; when it resumes, newer samples win.
+A batch that covers show times already held replaces exactly that range (the synth re-sends
+what a late decision changed; a quick contact sent ahead of it is kept).
 Records become renderer frames through :func:`livedrummer.render.body_scene.frame_from_pose`,
 the same mapping the file renderer uses.
 
@@ -37,9 +39,12 @@ class PoseTrack:
         if self._rows is None or self._rows.dtype != rows.dtype:
             self._show, self._rows = show_s.copy(), rows.copy()
         else:
-            keep = self._show < show_s[0]  # a resent range replaces what it covers
-            self._show = np.concatenate([self._show[keep], show_s])
-            self._rows = np.concatenate([self._rows[keep], rows])
+            # a batch replaces the range it covers, and only that range: samples sent after
+            # it (a quick contact further on) stay
+            lo = int(np.searchsorted(self._show, show_s[0], side="left"))
+            hi = int(np.searchsorted(self._show, show_s[-1], side="right"))
+            self._show = np.concatenate([self._show[:lo], show_s, self._show[hi:]])
+            self._rows = np.concatenate([self._rows[:lo], rows, self._rows[hi:]])
         cut = np.searchsorted(self._show, self._show[-1] - self.keep_s)
         if cut > 0:
             self._show, self._rows = self._show[cut:], self._rows[cut:]
