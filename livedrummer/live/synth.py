@@ -177,17 +177,19 @@ class LiveSynth:
         self._notes.append(note)
         self._apply(self.sticker.process(cast(np.void, rec[()])))
         if quick and self.params.provisional and not note.decided:
-            part = quick_contact(self.quick_state(), note.row)
+            part = quick_contact(self.quick_state(copy=False), note.row)  # used at once
             if part[0].size:
                 self._quick.append(part)
                 self.quick_contacts += 1
 
-    def quick_state(self) -> QuickState:
-        """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
+    def quick_state(self, copy: bool = True) -> QuickState:
+        """A read-only copy for :func:`~livedrummer.live.quick.quick_contact` (``copy=False``
+        shares the held samples: only for a use before the synth runs again)."""
         return QuickState(
             self.rig, self.dtype, self.params.delay_s, self.params.rate_hz, self._curves,
             self._old, self._fade, tuple(self._guesses.values()), self._horizon,
-            self._cache_t.copy(), self._cache_rows.copy(),
+            self._cache_t.copy() if copy else self._cache_t,
+            self._cache_rows.copy() if copy else self._cache_rows,
         )  # fmt: skip
 
     def take_quick(self) -> PoseBatch:
