@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -14,6 +15,11 @@ Command = Callable[[argparse.Namespace], int]
 
 DEMO_GROOVE = "grooves/gmd-drummer1-funk-80.mid"
 DEMO_MAP = "roland-td"
+
+
+def has_screen() -> bool:
+    """A graphical session to open a window on (X11 or Wayland)."""
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def demo_groove() -> Path:

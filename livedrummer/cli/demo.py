@@ -16,13 +16,12 @@ played in the file window with transport keys.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from collections import Counter
 from pathlib import Path
 
-from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, demo_groove
+from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, demo_groove, has_screen
 from livedrummer.cli.inspect import print_summary
 from livedrummer.cli.render import ProgressBar, first_seconds
 from livedrummer.midifile import read_midi_file
@@ -55,10 +54,6 @@ def sticking_line(st: Sticking) -> str:
     parts = [f"{limb.value} {counts.get(i, 0)}" for i, limb in enumerate(LIMBS)]
     missed = sum(n for k, n in counts.items() if k < 0)
     return f"  sticking  {st.strategy}: {', '.join(parts)}, not played {missed}"
-
-
-def has_screen() -> bool:
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -29,7 +29,6 @@ the input calibration offset.
 from __future__ import annotations
 
 import argparse
-import os
 import signal
 import sys
 import tempfile
@@ -38,7 +37,14 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
-from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, add_kit_option, demo_groove
+from livedrummer.cli.common import (
+    DEMO_MAP,
+    Subparsers,
+    add_command,
+    add_kit_option,
+    demo_groove,
+    has_screen,
+)
 from livedrummer.cli.keys import add_curve_options
 
 if TYPE_CHECKING:
@@ -105,10 +111,6 @@ def curve_argv(args: argparse.Namespace) -> dict[str, list[str]]:
     serve = ["--curve-secret", secret, *allow, *insecure]
     return {"input": serve, "synth": [*serve, "--server-key", secret],
             "display": ["--curve-secret", secret, "--server-key", secret]}  # fmt: skip
-
-
-def has_screen() -> bool:
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def windowed(args: argparse.Namespace) -> bool:

@@ -17,11 +17,11 @@ from typing import Any
 
 from livedrummer.kit import Kit
 from livedrummer.render.body_scene import BODY_SKELETON
-from livedrummer.render.camera import CAMERA_NAMES, CameraMove, kit_cameras
+from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.scene import SceneFrame
 from services.display.renderer import Renderer
-from services.display.window import WindowOptions, key_name, open_window
+from services.display.window import WindowOptions, camera_key, key_name, open_window
 
 
 class HeadlessSurface:
@@ -84,9 +84,8 @@ class WindowSurface:
         for name in self._keys:
             if name in ("q", "escape"):
                 glfw.set_window_should_close(self._window, True)
-            elif name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
-                target = self._cameras[CAMERA_NAMES[int(name) - 1]]
-                self._move = CameraMove(self._move.at(self._now), target, self._now)
+            else:
+                self._move = camera_key(name, self._move, self._cameras, self._now)
         self._keys.clear()
         return not glfw.window_should_close(self._window)
 

@@ -26,7 +26,7 @@ from typing import Any
 from livedrummer.kit import Kit
 from livedrummer.performance import Performance
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
-from livedrummer.render.camera import CAMERA_NAMES, CameraMove, kit_cameras
+from livedrummer.render.camera import CAMERA_NAMES, Camera, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
@@ -72,6 +72,14 @@ def key_name(glfw: Any, key: int, mods: int) -> str:
     else:
         return ""
     return f"shift+{name}" if mods & glfw.MOD_SHIFT and name in ("left", "right") else name
+
+
+def camera_key(name: str, move: CameraMove, cameras: dict[str, Camera], now: float) -> CameraMove:
+    """Keys 1..8 start a smooth move from where the camera is now to that stored viewpoint;
+    any other key leaves ``move`` as it is."""
+    if name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
+        return CameraMove(move.at(now), cameras[CAMERA_NAMES[int(name) - 1]], now)
+    return move
 
 
 def show(
@@ -169,9 +177,8 @@ def _loop(
                 transport.apply(KEYS[name])
             elif name in OVERLAY_KEYS:
                 shown = shown ^ {OVERLAY_KEYS[name]}
-            elif name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
-                current = move.at(now)
-                move = CameraMove(current, cameras[CAMERA_NAMES[int(name) - 1]], now)
+            else:
+                move = camera_key(name, move, cameras, now)
         pending.clear()
         t = transport.advance(now - last)
         last = now
