@@ -163,14 +163,15 @@ def solve_arm(
         todo = rows[~take]
         if todo.size == 0:
             break
-    for level in (0, 1):
+    for level in (0, 1) if todo.size else ():
         for k, part in enumerate(stash):
             rows = part[0]
             pick = np.isin(rows, todo) & (fallback[level, rows] == k)
             _put(part, pick, (d, wrist, fulcrum, e, a_axis))
             todo = np.setdiff1d(todo, rows[pick])
-    last = stash[-1]
-    _put(last, np.isin(last[0], todo), (d, wrist, fulcrum, e, a_axis))
+    if todo.size:
+        last = stash[-1]
+        _put(last, np.isin(last[0], todo), (d, wrist, fulcrum, e, a_axis))
     elbow, hinge, reached = two_bone(shoulder, wrist, s.upper_arm, s.forearm, pole)
     # Let the hand follow the forearm part of the way (the fingers take the rest of the angle
     # to the stick), so the wrist is not bent more than a drummer's would be.

@@ -182,5 +182,16 @@ def _basis_q(direction: Array, side: Array) -> Array:
 def align(rest_dir: Array, rest_side: Array, direction: Array, side: Array) -> Array:
     """The rotation taking ``rest_dir`` onto ``direction`` and the plane (rest_dir, rest_side)
     onto the plane (direction, side): how a bone is aimed and twisted from its rest pose."""
-    rest = _basis_q(np.asarray(rest_dir, dtype=np.float64), np.asarray(rest_side, np.float64))
-    return mul(_basis_q(direction, side), conj(rest))
+    rd = np.asarray(rest_dir, dtype=np.float64)
+    rs = np.asarray(rest_side, dtype=np.float64)
+    if rd.ndim == 1 and rs.ndim == 1:  # a constant rest frame (every caller): built once
+        key = rd.tobytes() + rs.tobytes()
+        inv = _REST.get(key)
+        if inv is None:
+            inv = _REST[key] = conj(_basis_q(rd, rs))
+    else:
+        inv = conj(_basis_q(rd, rs))
+    return mul(_basis_q(direction, side), inv)
+
+
+_REST: dict[bytes, Array] = {}
