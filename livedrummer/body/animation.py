@@ -27,6 +27,7 @@ its home piece (hands) or rests on its pedal (feet).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -302,7 +303,13 @@ def animate(
     expression: Expression | None = None,
     strokes: StrokeParams | None = None,
     secondary: SecondaryParams | None = None,
+    pause: Callable[[], None] | None = None,
 ) -> Animation:
+    """The curves of a whole performance (see the module docstring). ``pause``, when given,
+    is called between the steps (torso, each arm, feet, each clearance search; none takes
+    more than a few milliseconds), so a live caller can answer input in the meantime; it
+    must not change anything this call reads."""
+    step = pause or _nothing
     ex = expression or Expression()
     sp = strokes or StrokeParams()
     sec = secondary or SecondaryParams()
@@ -328,6 +335,7 @@ def animate(
         np.radians(ex.head_amplitude_deg), np.asarray(beats, dtype=np.float64), times[hands],
         h_point, head_m, times[bob_mask], vel[bob_mask], times[played],
     )  # fmt: skip
+    step()
 
     amp_w, amp_e, amp_s = ex.joint_amplitude_rad(sp.full_amplitude_rad)
     ts_w, ts_e, ts_s = ex.joint_time_scale()
@@ -383,6 +391,7 @@ def animate(
         arm = _ArmKeys(keys, base, signed, amps, scales)
         arm_keys[side] = arm
         arms[side] = arm.curves()
+        step()
 
     feet: dict[str, FootCurve | None] = {}
     for code, side in ((2, "r"), (3, "l")):
@@ -406,8 +415,13 @@ def animate(
             follows_hihat=any(kit.pieces[i].kind is PieceKind.HIHAT for i in set(pz[0].tolist())),
         )  # fmt: skip
     anim = Animation(rig, torso, arms, feet, openness, hihat, extra)
-    _clear_kit(anim, arm_keys)
+    step()
+    _clear_kit(anim, arm_keys, step)
     return anim
+
+
+def _nothing() -> None:
+    return None
 
 
 @dataclass
@@ -450,7 +464,8 @@ class _ArmKeys:
             curve.rotvec[at] = self.rotvecs(j, at)
 
 
-def _clear_kit(anim: Animation, arm_keys: dict[str, _ArmKeys]) -> None:
+def _clear_kit(anim: Animation, arm_keys: dict[str, _ArmKeys], step: Callable[[], None]
+               ) -> None:  # fmt: skip
     """Keep raised sticks out of the kit. A preparation, rebound or merged key whose stick
     (or the arc next to it) dips into a piece, say a loud floor-tom preparation under the
     ride, is lowered step by step; then a travel arc that does is raised, or else lowered.
@@ -465,8 +480,9 @@ def _clear_kit(anim: Animation, arm_keys: dict[str, _ArmKeys]) -> None:
             continue
         free = bad & np.isin(kind[raised], (BEFORE, AFTER, MERGED))
         travel = bad & (kind[raised] == TRAVEL)
-        _search(anim, side, arm, raised[free], depth[free], TRIES_SCALE, scale=True)
-        _search(anim, side, arm, raised[travel], depth[travel], TRIES_TRAVEL, scale=False)
+        step()
+        _search(anim, side, arm, raised[free], depth[free], TRIES_SCALE, True, step)
+        _search(anim, side, arm, raised[travel], depth[travel], TRIES_TRAVEL, False, step)
 
 
 def _probe_depth(anim: Animation, side: str, at: np.ndarray) -> np.ndarray:
@@ -501,7 +517,8 @@ def arm_tip(anim: Animation, side: str, times: np.ndarray) -> np.ndarray:
 
 
 def _search(anim: Animation, side: str, arm: _ArmKeys, keys: np.ndarray, depth: np.ndarray,
-            tries: tuple[float, ...], scale: bool) -> None:  # fmt: skip
+            tries: tuple[float, ...], scale: bool, step: Callable[[], None]
+            ) -> None:  # fmt: skip
     """Try lift settings for ``keys`` (whose current arcs dip ``depth`` into the kit), keeping
     per key the first that clears the kit, else the shallowest."""
     if keys.size == 0:
@@ -520,6 +537,7 @@ def _search(anim: Animation, side: str, arm: _ArmKeys, keys: np.ndarray, depth: 
         best_depth[todo[better]] = depth[better]
         best_lift[todo[better]] = trial[better]
         todo = np.flatnonzero(best_depth > 0.0)
+        step()
         if todo.size == 0:
             break
     arm.set_lift(curves, keys, best_lift)

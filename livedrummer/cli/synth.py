@@ -97,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
     s = service.summary()
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "
           f"{s['pose_samples']} pose samples in {s['pose_messages']} messages, "
-          f"{s['animations']} re-animations, {s['quick_contacts']} quick contacts",
+          f"{s['animations']} re-animations, {s['quick_contacts']} quick contacts, "
+          f"answered in {s['answer_ms'][0]}/{s['answer_ms'][1]} ms p50/p99",
           file=sys.stderr)  # fmt: skip
     return code

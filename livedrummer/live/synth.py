@@ -17,22 +17,30 @@ only for the times it has not published yet. Three timelines meet here:
 Provisional poses (the default; ``SynthParams.provisional``). Waiting for the sticking's
 decision would publish a hit's contact only ``L`` after the hit (``D - L`` before it is seen:
 no slack at all with the default ``D = L``). Instead the synth samples up to ``now``: an
-arrived, undecided note joins the window with its guessed hand (the predictor's guess near
-it, else the hand that last played its piece), so its contact goes out as soon as the note
-arrives. Everything published past the committed horizon ``now - L`` is provisional: when a
-decision, an arrival or a dropped guess changes the window, the synth re-sends from the
-previous committed horizon (the display's :class:`~livedrummer.live.track.PoseTrack` lets a
-batch replace the samples it covers), cross-fading into the new curves before the next
-contact. With ``provisional=False`` samples go out only up to ``now + D - L``, never twice.
+arrived, undecided note joins the window with its guessed hand (the predictor's guess for
+its piece near it, else the hand that last played its piece), so its stroke goes out as soon
+as the window is re-animated. Everything published past the committed horizon ``now - L``
+is provisional: when a decision, an arrival or a dropped guess changes the window, the synth
+re-sends from the previous committed horizon (the display's
+:class:`~livedrummer.live.track.PoseTrack` lets a batch replace the samples it covers),
+cross-fading into the new curves before the next contact. With ``provisional=False``
+samples go out only up to ``now + D - L``, never twice.
 
-Quick contacts. Re-animating the window takes about 10-20 ms, yet most hits of a groove were
-predicted: the current curves already strike the guessed piece, with the guessed hand, at the
-guess's time. So when a hit arrives near a guess for its piece and zone, the pose sampled at
-the guess's contact goes out at once as the sample for onset + D
-(:meth:`LiveSynth.take_quick`, published by the service before the re-animation), and the
-re-animated curves replace it a moment later. An unpredicted hit waits for the re-animation.
-The computation is :func:`~livedrummer.live.quick.quick_contact`, a pure function of a
-read-only :meth:`LiveSynth.quick_state` snapshot, so it could also run on another thread.
+Quick contacts. Re-animating the window takes about 10-20 ms; a hit does not wait for it.
+:meth:`process` solves every arriving hit's contact pose at once: the body as last sampled
+near the onset, with the striking limb's IK onto its piece (its decided limb, or the
+provisional one above); :meth:`take_quick` hands it out (with the held samples since the
+last batch, so the display's track has no hole) and the service publishes it before
+re-animating; the re-animated curves replace it a moment later with the whole stroke. Hits
+that arrive together are solved in one call (:func:`~livedrummer.live.quick.quick_contact`,
+a pure function of a read-only :meth:`quick_state` snapshot).
+
+Answering during a re-animation. :attr:`pause`, when set, is called between the steps of a
+re-animation and of the sampling that follows (a few milliseconds apart at most): the
+service reads its socket there, so a hit that arrives meanwhile gets its contact out then,
+not after the re-animation. Everything a re-animation reads was taken before it started, and
+the samples held ahead are swapped only when the new ones are complete; a batch built from
+curves that lack a hit answered meanwhile still carries that hit's quick contact.
 
 Prediction. A :class:`~livedrummer.live.predict.HandPredictor` places at most one *guess*
 note per hand at its expected next onset; the guess takes part in the animation (so the
@@ -49,8 +57,10 @@ Idle. With no notes the torso still sways on a slow "breathing" beat (the body's
 
 Limits: re-animation costs 10-20 ms each time the window changes (about two times per note
 of a groove: arrival, a new or dropped guess; old notes leave half a window at a time, and
-a moving pedal alone re-animates at most every ``control_every_s``), so on a busy two-core
-machine a hit may wait behind one; the cross-fade blends joint positions and quaternions
+a moving pedal alone re-animates at most every ``control_every_s``), so at 1,000 notes/s
+most of the time goes to quick contacts and the strokes between them are re-animated only a
+few times a second; a quick contact with a wrong provisional hand shows that hand striking
+until the decision re-animates; the cross-fade blends joint positions and quaternions
 linearly (bones may shorten by a few mm mid-fade); hi-hat openness comes from the onsets and
 the pedal controller of the window only.
 """
@@ -58,6 +68,7 @@ the pedal controller of the window only.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import cast
 
@@ -72,7 +83,6 @@ from livedrummer.live.predict import Guess, HandPredictor
 from livedrummer.live.quick import (
     Curves,
     QuickState,
-    merge_quick,
     piece_of,
     quick_contact,
     sample_curves,
@@ -80,6 +90,8 @@ from livedrummer.live.quick import (
 from livedrummer.sticking.online import Decision, OnlineSticker
 from livedrummer.sticking.result import NOT_PLAYED, Sticking
 from livedrummer.vocabulary import INSTRUMENTS, Limb, PieceKind
+
+SENT_KEEP_S = 0.25  # published samples kept as the body quick contacts start from
 
 
 @dataclass(frozen=True)
@@ -145,6 +157,10 @@ class LiveSynth:
         self.dtype = pose_dtype(len(rig.kit.pieces))
         self.sticker = OnlineSticker(rig.kit, self.params.lookahead_s)
         self.predictor = HandPredictor()
+        #: called between the steps of a re-animation and of sampling (a few ms at most
+        #: apart): a service answers arriving hits there with :meth:`process` and
+        #: :meth:`take_quick` (see the module docstring)
+        self.pause: Callable[[], None] | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -161,43 +177,76 @@ class LiveSynth:
         self._old: Curves | None = None
         self._fade = (0.0, 0.0)  # start, length (performance time)
         self.animations = 0  # how many times the body was re-run (for benchmarks)
-        self.quick_contacts = 0  # predicted hits whose contact went out before re-animating
+        self.quick_contacts = 0  # hits whose contact went out before re-animating
         self._quick: list[tuple[np.ndarray, np.ndarray]] = []  # (show times, rows) per hit
+        self._struck: dict[float, np.ndarray] = {}  # quick contacts the curves do not have yet
         self._cache_t = np.zeros(0)  # samples of the current curves ahead of the horizon
         self._cache_rows = np.zeros(0, self.dtype)
+        self._sent_t = np.zeros(0)  # samples published lately (the body a quick contact uses)
+        self._sent_rows = np.zeros(0, self.dtype)
 
     # -- input ---------------------------------------------------------------------------------
 
-    def process(self, row: np.ndarray | np.void, quick: bool = True) -> None:
-        """One onset (ONSET_DTYPE record; its time is the arrival on the shared clock).
-        ``quick``: also prepare its quick contact (:meth:`take_quick`); a service that
-        computes those on another thread from :meth:`quick_state` passes False."""
-        rec = np.array(row, dtype=ONSET_DTYPE)
-        note = _Note(rec)
-        self._notes.append(note)
-        self._apply(self.sticker.process(cast(np.void, rec[()])))
-        if quick and self.params.provisional and not note.decided:
-            part = quick_contact(self.quick_state(copy=False), note.row)  # used at once
-            if part[0].size:
-                self._quick.append(part)
-                self.quick_contacts += 1
+    def process(self, rows: np.ndarray | np.void, quick: bool = True) -> None:
+        """Onsets (one ONSET_DTYPE record or an array of them, in arrival order; their times
+        are the arrivals on the shared clock). ``quick``: also prepare their quick contacts
+        (:meth:`take_quick`) with their decided or provisional limbs, all in one go (only with
+        provisional poses: without, nothing goes out before the decision)."""
+        recs = np.atleast_1d(np.asarray(rows, dtype=ONSET_DTYPE))
+        notes = []
+        for rec in recs:
+            note = _Note(np.array(rec, dtype=ONSET_DTYPE))
+            self._notes.append(note)
+            notes.append(note)
+            self._apply(self.sticker.process(cast(np.void, note.row[()])))
+        if not (quick and self.params.provisional and notes):
+            return
+        played = [(n.limb, n.piece) if n.decided else self._guess_limb(n) for n in notes]
+        limbs = np.array([li for li, _ in played], dtype=np.int64)
+        pieces = np.array([pi for _, pi in played], dtype=np.int64)
+        times, out = quick_contact(self.quick_state(), recs, limbs, pieces)
+        if times.size:
+            self._struck.update(zip(times.tolist(), out, strict=True))
+            self._quick.append((times + self.params.delay_s, out))
+            self.quick_contacts += int(np.sum((limbs >= 0) & (pieces >= 0)))
 
-    def quick_state(self, copy: bool = True) -> QuickState:
-        """A read-only copy for :func:`~livedrummer.live.quick.quick_contact` (``copy=False``
-        shares the held samples: only for a use before the synth runs again)."""
+    def quick_state(self) -> QuickState:
+        """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
+        t = np.concatenate([self._sent_t, self._cache_t])
+        order = np.argsort(t, kind="stable")
         return QuickState(
-            self.rig, self.dtype, self.params.delay_s, self.params.rate_hz, self._curves,
-            self._old, self._fade, tuple(self._guesses.values()), self._horizon,
-            self._cache_t.copy() if copy else self._cache_t,
-            self._cache_rows.copy() if copy else self._cache_rows,
+            self.rig, self.dtype, self._curves, self._old, self._fade,
+            t[order], np.concatenate([self._sent_rows, self._cache_rows])[order],
+            dict(self._struck),
         )  # fmt: skip
 
     def take_quick(self) -> PoseBatch:
-        """Contacts of predicted hits that arrived since the last call, to publish at once,
-        ahead of :meth:`poses_until` (one sample per show time, ascending)."""
-        show, rows = merge_quick(self._quick, self.dtype)
+        """Quick contacts of the hits that arrived since the last call, to publish at once,
+        ahead of :meth:`poses_until`: one batch, ascending, from the end of what was published
+        (or the first contact) to the last contact, the samples between filled in from what
+        was published and is held ahead
+        (a batch replaces the range it covers: contacts alone would hide those; without the
+        held ones, a synth busy re-animating would leave the display a hole before a hit).
+        For a time sent twice (a chord completed) the last contact wins."""
+        latest: dict[float, np.ndarray] = {}
+        for shows, rows in self._quick:
+            latest.update(zip(shows.tolist(), rows, strict=True))
         self._quick.clear()
-        return PoseBatch(show, rows)
+        if not latest:
+            return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
+        d = self.params.delay_s
+        lo, hi = min(latest) - d, max(latest) - d
+        if self._horizon is not None:  # from the end of what was published, too
+            lo = min(lo, self._horizon)
+        have_t = np.concatenate([self._sent_t, self._cache_t])
+        have = np.concatenate([self._sent_rows, self._cache_rows])
+        fill = (have_t > lo) & (have_t < hi)
+        for t, row in zip((have_t[fill] + d).tolist(), have[fill], strict=True):
+            latest.setdefault(t, row)
+        show = np.array(sorted(latest))
+        out = np.array([latest[t] for t in show.tolist()], dtype=self.dtype)
+        out["time_s"] = (show - show[0]).astype(np.float32)
+        return PoseBatch(show, out)
 
     def control(self, row: np.ndarray | np.void) -> None:
         """One controller event (CONTROL_DTYPE record): the hi-hat pedal and chokes."""
@@ -244,31 +293,72 @@ class LiveSynth:
         # what was published past the last committed horizon is provisional: a change of the
         # notes re-sends it from there (with D = L its first tick may already be on screen)
         rewind = min(start, max(self._final, final - p.delay_s)) if p.provisional else start
-        if (top > start or p.provisional) and self._refresh(rewind, final):
-            self._cache_t, self._cache_rows = np.zeros(0), np.zeros(0, self.dtype)
+        refreshed = (top > start or p.provisional) and self._refresh(rewind, final)
+        if refreshed:
             start = rewind
+            if self.pause is not None:
+                self.pause()
         self._final = max(self._final, final)
         if top <= start:
+            if refreshed:
+                self._cache_t, self._cache_rows = np.zeros(0), np.zeros(0, self.dtype)
             return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
-        if self._cache_t.size == 0 or self._cache_t[-1] < top:
-            self._extend_cache(max(start, self._cache_end(start)), top + p.chunk_s)
+        # the samples held ahead are replaced only once the new ones are ready: a quick
+        # contact answered in a pause meanwhile fills its batch from the old ones
+        if refreshed:
+            self._cache_t, self._cache_rows = self._sample_ahead(start, top + p.chunk_s)
+        elif self._cache_t.size == 0 or self._cache_t[-1] < top:
+            more_t, more = self._sample_ahead(max(start, self._cache_end(start)), top + p.chunk_s)
+            self._cache_t = np.concatenate([self._cache_t, more_t])
+            self._cache_rows = np.concatenate([self._cache_rows, more])
         take = (self._cache_t > start) & (self._cache_t <= top)
         times, rows = self._cache_t[take], self._cache_rows[take]
         later = self._cache_t > top
         self._cache_t, self._cache_rows = self._cache_t[later], self._cache_rows[later]
         self._horizon = max(top, start)
+        self._remember(times, rows, final)
+        times, rows = self._with_struck(times, rows, start, top)
         if times.size == 0:
             return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
         rows = rows.copy()
         rows["time_s"] = (times - float(times[0])).astype(np.float32)
         return PoseBatch(times + p.delay_s, rows)
 
+    def _remember(self, times: np.ndarray, rows: np.ndarray, final: float) -> None:
+        """Keep what was published for a quarter second (the body quick contacts start from;
+        a re-sent range replaces what was sent there); forget quick contacts the curves
+        now have."""
+        if times.size:
+            older = self._sent_t < times[0]
+            t_all = np.concatenate([self._sent_t[older], times])
+            recent = t_all > t_all[-1] - SENT_KEEP_S
+            self._sent_t = t_all[recent]
+            self._sent_rows = np.concatenate([self._sent_rows[older], rows])[recent]
+        contacts = self._curves.contacts_s if self._curves is not None else np.zeros(0)
+        self._struck = {
+            t: r for t, r in self._struck.items()
+            if t > final - SENT_KEEP_S and not np.any(contacts == t)
+        }  # fmt: skip
+
+    def _with_struck(self, times: np.ndarray, rows: np.ndarray, start: float, top: float
+                     ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """A batch from curves that lack a hit still carries that hit's quick contact (it
+        arrived while they were being built): the display's track would lose it otherwise."""
+        add = [t for t in self._struck if start < t <= top]
+        if not add:
+            return times, rows
+        keep = ~np.isin(times, add)
+        t_all = np.concatenate([times[keep], np.array(add)])
+        r_all = np.concatenate([rows[keep], np.array([self._struck[t] for t in add], self.dtype)])
+        order = np.argsort(t_all, kind="stable")
+        return t_all[order], r_all[order]
+
     def _cache_end(self, start: float) -> float:
         return float(self._cache_t[-1]) if self._cache_t.size else start
 
-    def _extend_cache(self, lo: float, hi: float) -> None:
-        """Sample the current curves ahead, on the rate grid plus every committed contact in
-        ``(lo, hi]``: one call per chunk costs about what one sample does."""
+    def _sample_ahead(self, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+        """Samples of the current curves in ``(lo, hi]``, on the rate grid plus every committed
+        contact: one call per chunk costs about what one sample does."""
         curves = self._curves
         assert curves is not None
         step = 1.0 / self.params.rate_hz
@@ -276,13 +366,12 @@ class LiveSynth:
         c = curves.contacts_s
         times = np.unique(np.concatenate([grid[grid > lo], c[(c > lo) & (c <= hi)]]))
         if times.size == 0:
-            return
-        self._cache_t = np.concatenate([self._cache_t, times])
-        self._cache_rows = np.concatenate([self._cache_rows, self._sample(times)])
+            return times, np.zeros(0, self.dtype)
+        return times, self._sample(times)
 
     def _sample(self, times: np.ndarray) -> np.ndarray:
         assert self._curves is not None
-        rows, faded = sample_curves(self._curves, self._old, self._fade, times)
+        rows, faded = sample_curves(self._curves, self._old, self._fade, times, self.pause)
         if faded:
             self._old = None
         return rows
@@ -390,7 +479,8 @@ class LiveSynth:
             else np.zeros(0, CONTROL_DTYPE)
         )
         openness = hihat_openness(onsets, controls, cc_open=self.cc_open)
-        anim = animate(self.rig, st, self._beats(horizon, keep), openness, strokes=self.strokes)
+        anim = animate(self.rig, st, self._beats(horizon, keep), openness, strokes=self.strokes,
+                       pause=self.pause)  # fmt: skip
         self.animations += 1
         committed = np.array(sorted(float(r["time_s"]) for r, _, _ in keep))
         new = Curves(anim, st, key, committed)
@@ -403,14 +493,15 @@ class LiveSynth:
         return True
 
     def _guess_limb(self, note: _Note) -> tuple[int, int]:
-        """A pending note's likely hand: the guess near it, else who last played its piece."""
+        """A pending note's likely hand: a guess for its piece near it, else who last played
+        its piece, else the piece's preferred hand."""
         t = float(note.row["time_s"])
-        for g in self._guesses.values():
-            if abs(g.time_s - t) <= g.period_s / 3:
-                return g.limb, g.piece
         piece = piece_of(self.rig, int(note.row["instrument"]))
         if piece < 0 or self.rig.kit.pieces[piece].kind is PieceKind.KICK:
             return NOT_PLAYED, -1
+        for g in self._guesses.values():
+            if g.piece == piece and abs(g.time_s - t) <= g.period_s / 3:
+                return g.limb, piece
         for n in reversed(self._notes):
             if n.decided and n.piece == piece and n.limb in (0, 1):
                 return n.limb, piece

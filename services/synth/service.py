@@ -6,11 +6,14 @@ until the next tick, feeds every ONSET and CONTROL row to the
 120, as soon as a note's limb is due to be committed, and at once when an onset arrives)
 publishes whatever samples the synth has for show times up to ``now + D`` (with provisional
 poses, the default; ``now + D - L`` without), as one POSE message (header time = the first
-sample's show time; each record's ``time_s`` is its offset from it). Sequence numbers of the
-input stream are tracked, so a gap upstream is counted and logged. A second thread answers HELLO
-with READY on a ROUTER control socket; the READY carries the pose format, which a display checks
-against its own. ``ready()`` tells a launcher or systemd the service is serving once both
-sockets are bound.
+sample's show time; each record's ``time_s`` is its offset from it). Each batch of onsets read
+(up to :data:`DRAIN_BATCH` messages) has its quick contacts published before anything else
+(``LiveSynth.take_quick``), and the synth's ``pause`` hook reads the socket between the steps
+of a re-animation, so a hit is answered within a step (a few ms) even while the synth is busy.
+Sequence numbers of the input stream are tracked, so a gap upstream is counted and logged. A
+second thread answers HELLO with READY on a ROUTER control socket; the READY carries the pose
+format, which a display checks against its own. ``ready()`` tells a launcher or systemd the
+service is serving once both sockets are bound.
 
 Bad input. Every message on the SUB socket (subscribed to the protocol magic, so another
 protocol version is seen, not filtered away) and on the control socket is decoded and
@@ -69,6 +72,7 @@ DEFAULT_SUB = "tcp://127.0.0.1:5710"
 _EVENT_KINDS = (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT)
 DEFAULT_PUB = "tcp://127.0.0.1:5720"
 DEFAULT_CONTROL = "tcp://127.0.0.1:5721"
+DRAIN_BATCH = 64  # input messages read before their quick contacts are published
 
 
 @dataclass
@@ -93,6 +97,7 @@ class SynthStats:
     first_seq: int | None = None
     last_seq: int | None = None
     seqs: list[int] = field(default_factory=list)
+    answer_s: list[float] = field(default_factory=list)  # read -> quick contacts sent, per batch
 
 
 class SynthService:
@@ -121,6 +126,8 @@ class SynthService:
         self._control_stop = threading.Event()
         self._control_thread: threading.Thread | None = None
         self._auth: Any = None
+        self._ticked = 0  # onsets heard when the last tick began
+        synth.pause = self._answer_hits
 
     def start(self) -> dict[str, str]:
         cfg = self.config
@@ -155,18 +162,20 @@ class SynthService:
         next_tick = self.clock.now()
         last = next_tick - period
         try:
+            provisional = self.synth.params.provisional
             while not stop.is_set():
                 due = self.synth.next_due_s(last)
                 wake = next_tick if due is None else min(next_tick, due)
-                wait_ms = max(0, math.ceil((wake - self.clock.now()) * 1000))
-                heard = self.stats.onsets
+                # hits heard during the last tick (see _answer_hits) are re-animated at once
+                waiting = provisional and self.stats.onsets != self._ticked
+                wait_ms = 0 if waiting else max(0, math.ceil((wake - self.clock.now()) * 1000))
                 if self._sub.poll(wait_ms):
-                    self._drain()
-                    self._publish(self.synth.take_quick())  # predicted hits: at once
+                    self._drain()  # every hit's contact goes out at once
                 now = self.clock.now()
-                # a hit goes out at once with its provisional hand (SynthParams.provisional)
-                fresh = self.synth.params.provisional and self.stats.onsets != heard
+                # a hit's stroke follows with its provisional hand (SynthParams.provisional)
+                fresh = provisional and self.stats.onsets != self._ticked
                 if fresh or now >= next_tick or (due is not None and now >= due):
+                    self._ticked = self.stats.onsets
                     self.tick(now)
                     last = now
                     if now >= next_tick:
@@ -177,6 +186,12 @@ class SynthService:
 
     def tick(self, now: float) -> None:
         self._publish(self.synth.poses_until(now))
+
+    def _answer_hits(self) -> None:
+        """Called by the synth between the steps of a re-animation (``LiveSynth.pause``):
+        hits that arrived meanwhile get their contact out now, not after it."""
+        if self._sub is not None and self._sub.poll(0):
+            self._drain()
 
     def _publish(self, batch: PoseBatch) -> None:
         if batch.show_s.size == 0:
@@ -190,46 +205,68 @@ class SynthService:
         self.stats.pose_samples += batch.show_s.size
 
     def _drain(self) -> None:
+        """Everything waiting on the SUB socket, in batches of up to :data:`DRAIN_BATCH`
+        messages: the onsets of a batch go to the synth together (their contacts are solved
+        at once) and their quick contacts are published before the next batch is read, so a
+        flood cannot hold them back."""
         while True:
-            try:
-                frames = self._sub.recv_multipart(zmq.NOBLOCK, copy=True)
-            except zmq.Again:
+            onsets: list[np.ndarray] = []
+            got = 0
+            read_at = self.clock.now()
+            while got < DRAIN_BATCH:
+                try:
+                    frames = self._sub.recv_multipart(zmq.NOBLOCK, copy=True)
+                except zmq.Again:
+                    break
+                got += 1
+                rows = self._receive(frames)
+                if rows is not None:
+                    onsets.append(rows)
+            if onsets:
+                self.synth.process(np.concatenate(onsets))
+                self._publish(self.synth.take_quick())
+                self.stats.answer_s.append(self.clock.now() - read_at)
+            if got < DRAIN_BATCH:
                 return
-            try:
-                msg = decode(frames)
-            except ProtocolError as exc:
-                self.stats.bad += 1
-                self.bad_events.drop(exc)
-                continue
-            if msg.kind not in _EVENT_KINDS:
-                self.stats.bad += 1
-                self.bad_events.unexpected(msg.kind.name)
-                continue
-            report = self.tracker.observe_message(msg)
-            if report.status is SeqStatus.GAP:
-                self.stats.missing += report.missing
-                log.warning("input stream: %d messages lost before #%d", report.missing, msg.seq)
-            elif report.status is SeqStatus.DUPLICATE:
-                # One publisher on one connection never repeats a number: an older one means
-                # the input daemon restarted and we reconnected after its first messages.
-                log.warning("input stream restarted at #%d (its first messages missed)", msg.seq)
-                self.tracker.reset()
-                self.tracker.observe_message(msg)
-            if self.stats.first_seq is None:
-                self.stats.first_seq = msg.seq
-            self.stats.last_seq = msg.seq
-            if msg.kind is Kind.ONSET and isinstance(msg.body, np.ndarray):
-                rows = msg.body.copy()
-                if self.config.input_offset_s:
-                    rows["time_s"] += self.config.input_offset_s
-                for row in rows:
-                    self.synth.process(row)
-                self.stats.onsets += rows.size
-                self.stats.seqs.append(msg.seq)
-            elif msg.kind is Kind.CONTROL and isinstance(msg.body, np.ndarray):
-                for row in msg.body:
-                    self.synth.control(row)
-                self.stats.controls += msg.body.size
+
+    def _receive(self, frames: list[bytes]) -> np.ndarray | None:
+        """One message from the input stream: checked, counted, controls applied; its onset
+        rows returned (None for anything else)."""
+        try:
+            msg = decode(frames)
+        except ProtocolError as exc:
+            self.stats.bad += 1
+            self.bad_events.drop(exc)
+            return None
+        if msg.kind not in _EVENT_KINDS:
+            self.stats.bad += 1
+            self.bad_events.unexpected(msg.kind.name)
+            return None
+        report = self.tracker.observe_message(msg)
+        if report.status is SeqStatus.GAP:
+            self.stats.missing += report.missing
+            log.warning("input stream: %d messages lost before #%d", report.missing, msg.seq)
+        elif report.status is SeqStatus.DUPLICATE:
+            # One publisher on one connection never repeats a number: an older one means
+            # the input daemon restarted and we reconnected after its first messages.
+            log.warning("input stream restarted at #%d (its first messages missed)", msg.seq)
+            self.tracker.reset()
+            self.tracker.observe_message(msg)
+        if self.stats.first_seq is None:
+            self.stats.first_seq = msg.seq
+        self.stats.last_seq = msg.seq
+        if msg.kind is Kind.ONSET and isinstance(msg.body, np.ndarray):
+            rows = msg.body.copy()
+            if self.config.input_offset_s:
+                rows["time_s"] += self.config.input_offset_s
+            self.stats.onsets += rows.size
+            self.stats.seqs.append(msg.seq)
+            return rows
+        if msg.kind is Kind.CONTROL and isinstance(msg.body, np.ndarray):
+            for row in msg.body:
+                self.synth.control(row)
+            self.stats.controls += msg.body.size
+        return None
 
     def close(self) -> None:
         self._control_stop.set()
@@ -260,6 +297,10 @@ class SynthService:
             "pose_samples": s.pose_samples,
             "animations": self.synth.animations,
             "quick_contacts": self.synth.quick_contacts,
+            "answer_ms": [
+                round(float(np.percentile(s.answer_s, q)) * 1000, 2) if s.answer_s else None
+                for q in (50, 99)
+            ],
             "bad_messages": self.bad_messages(),
         }
 
