@@ -55,6 +55,8 @@ def register(sub: Subparsers) -> None:
                       help="with --headless: record the frames on show time (MP4)")  # fmt: skip
     live.add_argument("--no-render", action="store_true",
                       help="only log frames (benchmarks without a GPU context)")  # fmt: skip
+    live.add_argument("--no-render-ahead", action="store_true",
+                      help="draw each frame for when it is begun, not when it is done")  # fmt: skip
     add_curve_options(p, server=False, client=True)
 
 
@@ -137,7 +139,7 @@ def run_live(args: argparse.Namespace) -> int:
         size=parse_size(args.size), camera=args.camera,
         display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
         png=not args.no_png, security=security_from_args(args), window=window,
-        video=args.video,
+        video=args.video, render_ahead=not args.no_render_ahead,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     display = LiveDisplay(load_kit(args.kit), config, clock, ctx)

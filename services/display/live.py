@@ -5,8 +5,12 @@ rendered now appears some milliseconds later (the swap, the projector). The disp
 :class:`FrameClock` for the show time of the frame it is about to render and draws the pose
 track at that time. Production uses :class:`AudioFrameClock`: the sounddevice output stream's
 time plus its reported output latency (the picture follows what the audience hears), mapped
-onto the shared clock; headless runs and CI use :class:`MonotonicFrameClock`. Calibration
-offsets (``calibration.toml``) are added: audio to the audio clock, display to every frame.
+onto the shared clock; headless runs and CI use :class:`MonotonicFrameClock`. The display's
+own latency, from starting a frame to its being done (written, or presented), is measured
+on the frames just drawn (:class:`~livedrummer.live.ahead.RenderAhead`) and added too, so a
+contact is drawn in the frame that is seen at its show time, not one render later
+(``render_ahead=False`` leaves it out). Calibration offsets (``calibration.toml``) are
+added: audio to the audio clock, display to every frame.
 
 Loop. One thread: drain the SUB socket (POSE messages into a
 :class:`~livedrummer.live.track.PoseTrack`), wait for the next frame time, render the track at
@@ -46,6 +50,7 @@ from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
 from livedrummer.errors import KeyFileError, ProtocolError
 from livedrummer.kit import Kit
+from livedrummer.live.ahead import RenderAhead
 from livedrummer.live.track import PoseTrack
 from livedrummer.protocol import Pose, PoseFormat, SeqStatus, SequenceTracker, decode
 from livedrummer.render.body_scene import frame_from_pose
@@ -128,6 +133,7 @@ class LiveConfig:
     window: WindowOptions | None = None  # a window instead of off-screen rendering
     video: Path | None = None  # record the frames (headless) into this video file
     png: bool = True  # with ``out``: write each frame as a PNG (frames.jsonl is always written)
+    render_ahead: bool = True  # draw each frame for when it is done, not when it is begun
     security: Security = field(default_factory=Security)
 
 
@@ -190,6 +196,7 @@ class LiveDisplay:
                 # Line-buffered: a watcher (tests, bench/recovery.py) sees each frame as drawn.
                 log_file = (cfg.out / "frames.jsonl").open("w", buffering=1)
             period = 1.0 / cfg.fps
+            ahead = RenderAhead()
             next_frame = self.clock.now()
             while not stop.is_set() and (cfg.frames is None or self.stats.frames < cfg.frames):
                 wait_ms = max(0, int((next_frame - self.clock.now()) * 1000))
@@ -199,7 +206,8 @@ class LiveDisplay:
                 if now < next_frame:
                     continue
                 self._drain()
-                show = now + self.clock.latency_s() + cfg.display_offset_s
+                lead = ahead.seconds if cfg.render_ahead else 0.0
+                show = now + self.clock.latency_s() + lead + cfg.display_offset_s
                 got = self.track.at(show)
                 record: dict[str, Any] = {"frame": self.stats.frames, "render_s": now,
                                           "show_s": show, "pose_s": None,
@@ -226,6 +234,7 @@ class LiveDisplay:
                 if surface is not None and not surface.present():
                     stop.set()  # the window was closed
                 record["done_s"] = self.clock.now()
+                ahead.add(record["done_s"] - now)
                 if log_file is not None:
                     log_file.write(json.dumps(record) + "\n")
                 self.stats.frames += 1
