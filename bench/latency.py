@@ -88,7 +88,7 @@ class Jack:
 
 def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], delay_ms: float,
              lookahead_ms: float, tmp: Path, synth_args: list[str],
-             input_args: list[str]) -> dict[str, Any]:  # fmt: skip
+             input_args: list[str], display_args: list[str]) -> dict[str, Any]:  # fmt: skip
     """One pipeline fed ``schedule``: (seconds from the start, note, velocity) per note-on."""
     clock = MonotonicClock()
     home = str(tmp / "home")
@@ -108,7 +108,7 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
         procs.append(syn)
         syn_ep = _line(syn)["pub"]
         disp = _spawn(["display", "--live", "--headless", "--sub", syn_ep, "--size", "320x180",
-                       "--fps", "60", "--out", str(frames_dir), "--no-png"], home,
+                       "--fps", "60", "--out", str(frames_dir), "--no-png", *display_args], home,
                       tmp / "display.err")  # fmt: skip
         procs.append(disp)
         _line(disp)
@@ -243,6 +243,9 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--lookahead-ms", type=float, default=30.0)
     parser.add_argument("--realtime", type=int, default=0, metavar="PRIO",
                         help="input daemon at SCHED_FIFO PRIO (if permitted)")  # fmt: skip
+    parser.add_argument("--no-render", action="store_true",
+                        help="the display logs frames without drawing them (the CPU a GPU "
+                        "would spare: llvmpipe draws on the pipeline's cores)")  # fmt: skip
     parser.add_argument("--no-provisional", action="store_true",
                         help="the synth publishes a hit only once its hand is decided")  # fmt: skip
     args = parser.parse_args(argv)
@@ -262,7 +265,8 @@ def main(argv: list[str]) -> int:
                 runs.append(("groove", groove_schedule(args.groove)))
             for label, schedule in runs:
                 r = run_rate(jack, label, schedule, args.delay_ms, args.lookahead_ms,
-                             Path(tmp), synth_args, input_args)  # fmt: skip
+                             Path(tmp), synth_args, input_args,
+                             ["--no-render"] if args.no_render else [])  # fmt: skip
                 print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
                       f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
                       f"{_pct(r['pose'])} | {_pct(r['frame'])} | "

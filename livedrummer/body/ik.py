@@ -136,7 +136,9 @@ def solve_arm(
     for k in range(n_cands):
         rows = todo
         if k < len(turns):
-            cand = _rotate_about(preferred[rows], normal[rows], turns[k])
+            # (a turn of 0 is the identity: skipped, the first candidate fits most strikes)
+            cand = _rotate_about(preferred[rows], normal[rows], turns[k]) if turns[k] else \
+                preferred[rows]  # fmt: skip
         else:
             b = blends[k - len(turns)]
             cand = _unit((1.0 - b) * preferred[rows] + b * straight[rows])
@@ -190,10 +192,12 @@ def solve_arm(
     tip = fulcrum + s.stick * d
     # with the elbow out and down the hinge points to the drummer's left for either arm;
     # its opposite is the bone frames' x axis, as in the rest pose, so rotations stay small
-    shoulder_q = quat.align(BONE_REST_DIR, BONE_REST_SIDE, _unit(elbow - shoulder), -hinge)
-    elbow_q = quat.align(BONE_REST_DIR, BONE_REST_SIDE, _unit(wrist_real - elbow), -hinge)
-    wrist_q = quat.align(BONE_REST_DIR, BONE_REST_SIDE, e, a_axis)  # twist: stroke axis
-    stick_q = quat.align(BONE_REST_DIR, BONE_REST_SIDE, d, a_axis)
+    # (the four bones aimed in one call: each numpy call costs more than its arithmetic here)
+    shoulder_q, elbow_q, wrist_q, stick_q = quat.align(
+        BONE_REST_DIR, BONE_REST_SIDE,
+        np.stack([_unit(elbow - shoulder), _unit(wrist_real - elbow), e, d]),
+        np.stack([-hinge, -hinge, a_axis, a_axis]),  # the wrist twists with the stroke axis
+    )  # fmt: skip
     return ArmSolution(shoulder_q, elbow_q, wrist_q, stick_q, elbow, wrist_real, fulcrum, tip,
                        reached)  # fmt: skip
 
@@ -221,7 +225,8 @@ def solve_leg(lengths: SegmentLengths, hip: np.ndarray, toe: np.ndarray) -> LegS
     ankle_real = knee + s.shin * _unit(ankle - knee)
     toe_real = ankle_real + s.foot * foot_dir
     side = hinge  # lateral axis, +x as at rest (the knee bends forward)
-    hip_q = quat.align(BONE_REST_DIR, BONE_REST_SIDE, _unit(knee - hip), side)
-    knee_q = quat.align(BONE_REST_DIR, BONE_REST_SIDE, _unit(ankle_real - knee), side)
+    hip_q, knee_q = quat.align(BONE_REST_DIR, BONE_REST_SIDE,
+                               np.stack([_unit(knee - hip), _unit(ankle_real - knee)]),
+                               np.stack([side, side]))  # fmt: skip
     ankle_q = quat.align(FOOT_REST_DIR, FOOT_REST_SIDE, foot_dir, side)
     return LegSolution(hip_q, knee_q, ankle_q, knee, ankle_real, toe_real, reached)
