@@ -339,6 +339,37 @@ def test_a_hit_during_a_re_animation_is_answered_and_kept(rig: Rig, groove: Perf
     assert np.any(np.abs(again.show_s - show) < 1e-9)
 
 
+def test_the_clearance_memo_gives_the_same_curves_without_searching_again(
+    rig: Rig, groove: Performance, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import livedrummer.body.animation as animation
+
+    on = groove.onsets[groove.onsets["time_s"] < 6.0]
+    st = stick_online(on, rig.kit, 0.03)
+    beats = groove.grid.beat_s
+    openness = hihat_openness(on, groove.controls[:0])
+    searched: list[int] = []
+    search = animation._search
+
+    def counting(*args, **kwargs):  # type: ignore[no-untyped-def]
+        searched.append(int(args[3].size))
+        return search(*args, **kwargs)
+
+    monkeypatch.setattr(animation, "_search", counting)
+    memo: animation.ClearanceMemo = {}
+    fresh = animate(rig, st, beats, openness)
+    first = sum(searched)
+    assert first > 0, "this groove has keys whose arcs dip into the kit"
+    animate(rig, st, beats, openness, memo=memo)
+    assert memo, "the search's settings are remembered"
+    searched.clear()
+    again = animate(rig, st, beats, openness, memo=memo)
+    assert sum(searched) == 0, "a window seen before is not searched again"
+    t = np.linspace(float(on["time_s"][0]), float(on["time_s"][-1]), 400)
+    for a, b in zip(fresh.world(t), again.world(t), strict=True):
+        assert np.allclose(a, b, atol=1e-9)
+
+
 def test_a_moving_pedal_alone_re_animates_at_most_every_control_period(rig: Rig) -> None:
     params = SynthParams()
     synth = LiveSynth(rig, params)

@@ -304,11 +304,13 @@ def animate(
     strokes: StrokeParams | None = None,
     secondary: SecondaryParams | None = None,
     pause: Callable[[], None] | None = None,
+    memo: ClearanceMemo | None = None,
 ) -> Animation:
     """The curves of a whole performance (see the module docstring). ``pause``, when given,
     is called between the steps (torso, each arm, feet, each clearance search; none takes
     more than a few milliseconds), so a live caller can answer input in the meantime; it
-    must not change anything this call reads."""
+    must not change anything this call reads. ``memo``: the clearance search's settings
+    carried from the previous call over an overlapping window (see :func:`_clear_kit`)."""
     step = pause or _nothing
     ex = expression or Expression()
     sp = strokes or StrokeParams()
@@ -416,7 +418,7 @@ def animate(
         )  # fmt: skip
     anim = Animation(rig, torso, arms, feet, openness, hihat, extra)
     step()
-    _clear_kit(anim, arm_keys, step)
+    _clear_kit(anim, arm_keys, step, memo)
     return anim
 
 
@@ -464,25 +466,59 @@ class _ArmKeys:
             curve.rotvec[at] = self.rotvecs(j, at)
 
 
-def _clear_kit(anim: Animation, arm_keys: dict[str, _ArmKeys], step: Callable[[], None]
-               ) -> None:  # fmt: skip
+#: What the clearance search settled, by key (side, time, kind, lift before the search): the
+#: lift it kept and how deep the arcs still dipped with it, so a live caller re-animating an
+#: overlapping window need not search again (see animate).
+ClearanceMemo = dict[tuple[str, float, int, float], tuple[float, float]]
+
+
+def _clear_kit(anim: Animation, arm_keys: dict[str, _ArmKeys], step: Callable[[], None],
+               memo: ClearanceMemo | None = None) -> None:  # fmt: skip
     """Keep raised sticks out of the kit. A preparation, rebound or merged key whose stick
     (or the arc next to it) dips into a piece, say a loud floor-tom preparation under the
     ride, is lowered step by step; then a travel arc that does is raised, or else lowered.
     Each key keeps its first clear setting (or the shallowest); what is left shows up in the
-    penetration check (and is caught by :func:`guard_sticks` when sampling)."""
+    penetration check (and is caught by :func:`guard_sticks` when sampling).
+
+    With ``memo``, a key a previous search settled starts from that setting; if its arcs dip
+    no deeper than they did then (the one probe every key gets anyway), the setting is kept;
+    else the key goes back to its own lift and is searched as usual. The memo is then
+    replaced by this call's settings."""
+    settled: ClearanceMemo = {}
     for side, arm in arm_keys.items():
         kind = arm.keys.kind
         raised = np.flatnonzero(kind != CONTACT)
+        lift0 = arm.keys.lift[raised].copy()
+        at_s = np.round(arm.keys.time_s[raised], 6).tolist()
+        ids = list(zip([side] * raised.size, at_s, kind[raised].tolist(),
+                       np.round(lift0, 6).tolist(), strict=True))  # fmt: skip
+        old = [memo.get(i) if memo is not None else None for i in ids]
+        known = np.array([m is not None for m in old], dtype=bool)
+        if known.any():
+            arm.set_lift(anim.arms[side], raised[known],
+                         np.array([m[0] for m in old if m is not None]))  # fmt: skip
         depth = _probe_depth(anim, side, raised)
-        bad = depth > 0.0
-        if not bad.any():
-            continue
-        free = bad & np.isin(kind[raised], (BEFORE, AFTER, MERGED))
-        travel = bad & (kind[raised] == TRAVEL)
-        step()
-        _search(anim, side, arm, raised[free], depth[free], TRIES_SCALE, True, step)
-        _search(anim, side, arm, raised[travel], depth[travel], TRIES_TRAVEL, False, step)
+        was = np.array([m[1] if m is not None else np.inf for m in old])
+        kept = known & (depth <= was + GUARD_TOLERANCE_M * 0.2)
+        stale = known & ~kept
+        if stale.any():  # the remembered setting no longer does: search from scratch
+            arm.set_lift(anim.arms[side], raised[stale], lift0[stale])
+            depth[stale] = _probe_depth(anim, side, raised[stale])
+        bad = (depth > 0.0) & ~kept
+        if bad.any():
+            free = bad & np.isin(kind[raised], (BEFORE, AFTER, MERGED))
+            travel = bad & (kind[raised] == TRAVEL)
+            step()
+            depth[free] = _search(anim, side, arm, raised[free], depth[free], TRIES_SCALE, True,
+                                  step)  # fmt: skip
+            depth[travel] = _search(anim, side, arm, raised[travel], depth[travel],
+                                    TRIES_TRAVEL, False, step)  # fmt: skip
+        final = arm.keys.lift[raised]
+        for k in np.flatnonzero(bad | kept).tolist():
+            settled[ids[k]] = (float(final[k]), float(depth[k]))
+    if memo is not None:
+        memo.clear()
+        memo.update(settled)
 
 
 def _probe_depth(anim: Animation, side: str, at: np.ndarray) -> np.ndarray:
@@ -518,11 +554,12 @@ def arm_tip(anim: Animation, side: str, times: np.ndarray) -> np.ndarray:
 
 def _search(anim: Animation, side: str, arm: _ArmKeys, keys: np.ndarray, depth: np.ndarray,
             tries: tuple[float, ...], scale: bool, step: Callable[[], None]
-            ) -> None:  # fmt: skip
+            ) -> np.ndarray:  # fmt: skip
     """Try lift settings for ``keys`` (whose current arcs dip ``depth`` into the kit), keeping
-    per key the first that clears the kit, else the shallowest."""
+    per key the first that clears the kit, else the shallowest; returns how deep each still
+    dips with the setting kept."""
     if keys.size == 0:
-        return
+        return depth
     curves = anim.arms[side]
     start = arm.keys.lift[keys].copy()
     best_lift = start.copy()
@@ -541,3 +578,4 @@ def _search(anim: Animation, side: str, arm: _ArmKeys, keys: np.ndarray, depth: 
         if todo.size == 0:
             break
     arm.set_lift(curves, keys, best_lift)
+    return best_depth

@@ -74,7 +74,7 @@ from typing import cast
 
 import numpy as np
 
-from livedrummer.body.animation import animate, hihat_openness
+from livedrummer.body.animation import ClearanceMemo, animate, hihat_openness
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import Rig
 from livedrummer.body.strokes import StrokeParams
@@ -174,6 +174,7 @@ class LiveSynth:
         self._final = -math.inf  # the committed horizon (now - L) at the last call
         self._refreshed_at = -math.inf  # horizon of the last re-animation
         self._curves: Curves | None = None
+        self._clearance: ClearanceMemo = {}  # the clearance search's settings, window to window
         self._old: Curves | None = None
         self._fade = (0.0, 0.0)  # start, length (performance time)
         self.animations = 0  # how many times the body was re-run (for benchmarks)
@@ -480,7 +481,7 @@ class LiveSynth:
         )
         openness = hihat_openness(onsets, controls, cc_open=self.cc_open)
         anim = animate(self.rig, st, self._beats(horizon, keep), openness, strokes=self.strokes,
-                       pause=self.pause)  # fmt: skip
+                       pause=self.pause, memo=self._clearance)  # fmt: skip
         self.animations += 1
         committed = np.array(sorted(float(r["time_s"]) for r, _, _ in keep))
         new = Curves(anim, st, key, committed)
