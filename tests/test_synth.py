@@ -415,6 +415,32 @@ def test_a_burst_s_contacts_go_out_together_without_hiding_the_samples_between(
     assert np.isin(held, track.show_s).all(), "the contacts' batch hid the samples between"
 
 
+def test_a_later_contacts_batch_keeps_the_earlier_contacts_it_covers(
+    rig: Rig, groove: Performance
+) -> None:
+    params = SynthParams()
+    synth = LiveSynth(rig, params)
+    onsets = groove.onsets[groove.onsets["time_s"] < 3.0].copy()
+    onsets["time_s"] += START
+    now = float(onsets["time_s"][0]) - 0.2
+    track = PoseTrack(keep_s=20.0)
+    for _ in range(30):
+        now += 1 / 120
+        b = synth.poses_until(now)
+        track.add(b.show_s, b.rows)
+    # hits read one after another after the last tick, while the synth is busy (no tick
+    # between them): each batch covers the range from what was published to its hit
+    hits = onsets[:4].copy()
+    hits["time_s"] = now + np.array([0.001, 0.002, 0.003, 0.006])
+    for hit in hits:
+        synth.process(hit)
+        q = synth.take_quick()
+        track.add(q.show_s, q.rows)
+    for hit in hits:
+        show = float(hit["time_s"]) + params.delay_s
+        assert np.any(np.abs(track.show_s - show) < 1e-9), f"the contact at {show} was erased"
+
+
 def test_a_quick_contact_leaves_the_synth_as_it_was(rig: Rig, groove: Performance) -> None:
     from livedrummer.live.quick import quick_contact
 

@@ -179,7 +179,7 @@ class LiveSynth:
         self._fade = (0.0, 0.0)  # start, length (performance time)
         self.animations = 0  # how many times the body was re-run (for benchmarks)
         self.quick_contacts = 0  # hits whose contact went out before re-animating
-        self._quick: list[tuple[np.ndarray, np.ndarray]] = []  # (show times, rows) per hit
+        self._quick: list[np.ndarray] = []  # onset times of quick contacts not yet taken
         self._struck: dict[float, np.ndarray] = {}  # quick contacts the curves do not have yet
         self._cache_t = np.zeros(0)  # samples of the current curves ahead of the horizon
         self._cache_rows = np.zeros(0, self.dtype)
@@ -208,7 +208,7 @@ class LiveSynth:
         times, out = quick_contact(self.quick_state(), recs, limbs, pieces)
         if times.size:
             self._struck.update(zip(times.tolist(), out, strict=True))
-            self._quick.append((times + self.params.delay_s, out))
+            self._quick.append(times)
             self.quick_contacts += int(np.sum((limbs >= 0) & (pieces >= 0)))
 
     def quick_state(self) -> QuickState:
@@ -229,21 +229,21 @@ class LiveSynth:
         (a batch replaces the range it covers: contacts alone would hide those; without the
         held ones, a synth busy re-animating would leave the display a hole before a hit).
         For a time sent twice (a chord completed) the last contact wins."""
-        latest: dict[float, np.ndarray] = {}
-        for shows, rows in self._quick:
-            latest.update(zip(shows.tolist(), rows, strict=True))
-        self._quick.clear()
-        if not latest:
+        if not self._quick:
             return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
         d = self.params.delay_s
-        lo, hi = min(latest) - d, max(latest) - d
+        lo = min(float(times.min()) for times in self._quick)
+        hi = max(float(times.max()) for times in self._quick)
+        self._quick.clear()
         if self._horizon is not None:  # from the end of what was published, too
             lo = min(lo, self._horizon)
         have_t = np.concatenate([self._sent_t, self._cache_t])
         have = np.concatenate([self._sent_rows, self._cache_rows])
-        fill = (have_t > lo) & (have_t < hi)
-        for t, row in zip((have_t[fill] + d).tolist(), have[fill], strict=True):
-            latest.setdefault(t, row)
+        fill = (have_t > lo) & (have_t <= hi)
+        latest = dict(zip((have_t[fill] + d).tolist(), have[fill], strict=True))
+        # every quick contact the curves lack, in the range: this one's and earlier ones (a
+        # batch replaces its range, so leaving one out would erase it from the display)
+        latest.update((t + d, row) for t, row in self._struck.items() if lo <= t <= hi)
         show = np.array(sorted(latest))
         out = np.array([latest[t] for t in show.tolist()], dtype=self.dtype)
         out["time_s"] = (show - show[0]).astype(np.float32)
