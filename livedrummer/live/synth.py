@@ -180,6 +180,7 @@ class LiveSynth:
         self.animations = 0  # how many times the body was re-run (for benchmarks)
         self.quick_contacts = 0  # hits whose contact went out before re-animating
         self._quick: list[np.ndarray] = []  # onset times of quick contacts not yet taken
+        self._quick_end = -math.inf  # the last onset time a quick batch reached
         self._struck: dict[float, np.ndarray] = {}  # quick contacts the curves do not have yet
         self._cache_t = np.zeros(0)  # samples of the current curves ahead of the horizon
         self._cache_rows = np.zeros(0, self.dtype)
@@ -235,8 +236,10 @@ class LiveSynth:
         lo = min(float(times.min()) for times in self._quick)
         hi = max(float(times.max()) for times in self._quick)
         self._quick.clear()
-        if self._horizon is not None:  # from the end of what was published, too
-            lo = min(lo, self._horizon)
+        # from the end of what was published (grid samples, or the last quick batch) on
+        sent_end = max(self._horizon if self._horizon is not None else -math.inf, self._quick_end)
+        lo = min(lo, sent_end)
+        self._quick_end = max(self._quick_end, hi)
         have_t = np.concatenate([self._sent_t, self._cache_t])
         have = np.concatenate([self._sent_rows, self._cache_rows])
         fill = (have_t > lo) & (have_t <= hi)
