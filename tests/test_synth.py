@@ -388,10 +388,11 @@ def test_a_moving_pedal_alone_re_animates_at_most_every_control_period(rig: Rig)
     assert 2 <= runs <= seconds / params.control_every_s + 3, runs
 
 
-def test_a_burst_s_contacts_go_out_together_without_hiding_the_samples_between(
-    rig: Rig, groove: Performance
-) -> None:
-    params = SynthParams()
+def _idling(
+    rig: Rig, groove: Performance, params: SynthParams
+) -> tuple[LiveSynth, np.ndarray, float, PoseTrack]:
+    """A synth that has published a quarter second of poses into a track, no hit yet; the
+    groove's first 3 s of onsets on the shared clock; the clock's now."""
     synth = LiveSynth(rig, params)
     onsets = groove.onsets[groove.onsets["time_s"] < 3.0].copy()
     onsets["time_s"] += START
@@ -401,6 +402,14 @@ def test_a_burst_s_contacts_go_out_together_without_hiding_the_samples_between(
         now += 1 / 120
         b = synth.poses_until(now)
         track.add(b.show_s, b.rows)
+    return synth, onsets, now, track
+
+
+def test_a_burst_s_contacts_go_out_together_without_hiding_the_samples_between(
+    rig: Rig, groove: Performance
+) -> None:
+    params = SynthParams()
+    synth, onsets, now, track = _idling(rig, groove, params)
     # three hits that arrived in one message (a flam, then a hit 10 ms later)
     burst = onsets[:3].copy()
     burst["time_s"] = now - np.array([0.014, 0.012, 0.002])
@@ -419,15 +428,7 @@ def test_a_later_contacts_batch_keeps_the_earlier_contacts_it_covers(
     rig: Rig, groove: Performance
 ) -> None:
     params = SynthParams()
-    synth = LiveSynth(rig, params)
-    onsets = groove.onsets[groove.onsets["time_s"] < 3.0].copy()
-    onsets["time_s"] += START
-    now = float(onsets["time_s"][0]) - 0.2
-    track = PoseTrack(keep_s=20.0)
-    for _ in range(30):
-        now += 1 / 120
-        b = synth.poses_until(now)
-        track.add(b.show_s, b.rows)
+    synth, onsets, now, track = _idling(rig, groove, params)
     # hits read one after another after the last tick, while the synth is busy (no tick
     # between them): each batch covers the range from what was published to its hit
     hits = onsets[:4].copy()
