@@ -17,7 +17,9 @@ sample. Measured per note, on the shared clock, from the moment the note-on is s
   first, possibly provisional, contact sample). ``late`` counts notes whose contact sample
   arrived after onset + D, when it should already be on screen;
 * pose - bus: pose available minus onset on the bus, both seen by the same subscriber: the
-  synth's own share (one hop in, its work, one hop out).
+  synth's own share (one hop in, its work, one hop out);
+* in the input daemon: its ONSET message's send time minus the onset's stamp (the daemon's
+  own share of "onset on the bus"; the rest is ZeroMQ and the subscriber waking up).
 
 Prints p50/p99 per stage and rate and the counts lost at each stage (sent vs on the bus, on
 the bus vs contact samples; a note the sticking leaves out, e.g. a third hand note of a
@@ -120,6 +122,7 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
         poses.setsockopt(zmq.RCVHWM, 0)
         poses.connect(syn_ep)
         onsets: list[tuple[float, np.ndarray]] = []
+        sent_by_daemon: list[float] = []  # header send time of each onset's message
         pose_in: list[tuple[float, np.ndarray]] = []
 
         def pump(seconds: float) -> None:
@@ -132,6 +135,7 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
                     msg = p.decode(sock.recv_multipart(), fmt)
                     if msg.kind is p.Kind.ONSET and isinstance(msg.body, np.ndarray):
                         onsets.append((clock.now(), msg.body.copy()))
+                        sent_by_daemon.extend([msg.send_time_s] * msg.body.size)
                     elif isinstance(msg.body, p.Pose):
                         show = msg.body.time_s + msg.body.rows["time_s"].astype(np.float64)
                         pose_in.append((clock.now(), show))
@@ -141,6 +145,7 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
             pump(0.2)
         pump(1.0)
         onsets.clear()
+        sent_by_daemon.clear()
         pose_in.clear()
         jack.loop_times.clear()
         sent: list[float] = []
@@ -211,6 +216,7 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
         "bus": bus, "pose": np.asarray(pose_lat), "frame": np.asarray(frame_lat),
         "frame_onset": np.asarray(frame_onset),
         "after_onset": after_onset, "after_bus": after_bus, "late": late,
+        "in_daemon": np.array(sent_by_daemon[:n]) - stamps[:n],
         "no_contact": missing_pose, "synth": (tmp / "synth.err").read_text().strip()[-260:],
     }  # fmt: skip
 
@@ -274,7 +280,8 @@ def main(argv: list[str]) -> int:
                 ab = r["after_bus"]
                 fast = float(np.mean(ab <= 0.001)) if ab.size else 0.0
                 print(f"         pose within 1 ms of the onset on the bus: {fast:.0%} of "
-                      f"contacts; frame - onset {_pct(r['frame_onset'])}; {r['synth']}",
+                      f"contacts; frame - onset {_pct(r['frame_onset'])}; in the input daemon "
+                      f"(stamp -> sent) {_pct(r['in_daemon'])}; {r['synth']}",
                       flush=True)  # fmt: skip
     finally:
         jack.close()
