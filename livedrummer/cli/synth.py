@@ -95,9 +95,10 @@ def run(args: argparse.Namespace) -> int:
     finally:
         ctx.term()
     s = service.summary()
+    p50, p99 = ("-" if v is None else v for v in s["answer_ms"])
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "
           f"{s['pose_samples']} pose samples in {s['pose_messages']} messages, "
           f"{s['animations']} re-animations, {s['quick_contacts']} quick contacts, "
-          f"answered in {s['answer_ms'][0]}/{s['answer_ms'][1]} ms p50/p99",
+          f"answered in {p50}/{p99} ms p50/p99",
           file=sys.stderr)  # fmt: skip
     return code
