@@ -290,7 +290,7 @@ def test_every_hit_gets_its_contact_on_arrival_on_its_target(rig: Rig, groove: P
         assert abs(track.show_s[j] - show) < 1e-9, "the contact sample stays on the track"
         final = track.rows["position"][j, ENDS[limb]].astype(np.float64)
         assert np.linalg.norm(final - target) < 1e-3, f"note {i}: final contact off target"
-    assert same_hand >= 0.85 * hands, f"provisional hand right for {same_hand} of {hands}"
+    assert same_hand >= 0.95 * hands, f"provisional hand right for {same_hand} of {hands}"
 
 
 def test_a_hit_during_a_re_animation_is_answered_and_kept(rig: Rig, groove: Performance) -> None:
@@ -410,9 +410,9 @@ def test_a_burst_s_contacts_go_out_together_without_hiding_the_samples_between(
 ) -> None:
     params = SynthParams()
     synth, onsets, now, track = _idling(rig, groove, params)
-    # three hits that arrived in one message (a flam, then a hit 10 ms later)
+    # three hits that arrived in one message (a flam, then a hit 36 ms later)
     burst = onsets[:3].copy()
-    burst["time_s"] = now - np.array([0.014, 0.012, 0.002])
+    burst["time_s"] = now - np.array([0.040, 0.038, 0.002])
     synth.process(burst)
     quick = synth.take_quick()
     contacts = list(burst["time_s"] + params.delay_s)

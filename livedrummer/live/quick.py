@@ -37,7 +37,7 @@ from livedrummer.body.rig import Rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import ARM, LEG, J
 from livedrummer.sticking.result import Sticking
-from livedrummer.vocabulary import INSTRUMENTS, ZONES, PieceKind, Zone
+from livedrummer.vocabulary import ZONES, PieceKind, Zone
 
 #: a published or held sample this close to the onset stands for the body at the onset
 NEAR_S = 0.02
@@ -106,14 +106,6 @@ def blend_rows(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> None:
     qb[flip] *= -1.0
     q = qa + (qb - qa) * wc[:, None, None]
     a["rotation"] = q / np.maximum(np.linalg.norm(q, axis=-1, keepdims=True), 1e-12)
-
-
-def piece_of(rig: Rig, instrument: int) -> int:
-    """The kit piece index playing a note map's instrument code, or -1."""
-    piece = rig.kit.resolve(INSTRUMENTS[instrument])
-    if piece is None:
-        return -1
-    return rig.kit.pieces.index(piece)
 
 
 def quick_contact(

@@ -17,11 +17,11 @@ only for the times it has not published yet. Three timelines meet here:
 Provisional poses (the default; ``SynthParams.provisional``). Waiting for the sticking's
 decision would publish a hit's contact only ``L`` after the hit (``D - L`` before it is seen:
 no slack at all with the default ``D = L``). Instead the synth samples up to ``now``: an
-arrived, undecided note joins the window with its guessed hand (the predictor's guess for
-its piece near it, else the hand that last played its piece), so its stroke goes out as soon
-as the window is re-animated. Everything published past the committed horizon ``now - L``
-is provisional: when a decision, an arrival or a dropped guess changes the window, the synth
-re-sends from the previous committed horizon (the display's
+arrived, undecided note joins the window with its provisional hand (what the online
+sticking's cheapest path so far gives it: its decision in 99.5 % of cases), so its stroke
+goes out as soon as the window is re-animated. Everything published past the committed
+horizon ``now - L`` is provisional: when a decision, an arrival or a dropped guess changes
+the window, the synth re-sends from the previous committed horizon (the display's
 :class:`~livedrummer.live.track.PoseTrack` lets a batch replace the samples it covers),
 cross-fading into the new curves before the next contact. With ``provisional=False``
 samples go out only up to ``now + D - L``, never twice.
@@ -83,13 +83,12 @@ from livedrummer.live.predict import Guess, HandPredictor
 from livedrummer.live.quick import (
     Curves,
     QuickState,
-    piece_of,
     quick_contact,
     sample_curves,
 )
 from livedrummer.sticking.online import Decision, OnlineSticker
 from livedrummer.sticking.result import NOT_PLAYED, Sticking
-from livedrummer.vocabulary import INSTRUMENTS, Limb, PieceKind
+from livedrummer.vocabulary import INSTRUMENTS
 
 SENT_KEEP_S = 0.25  # published samples kept as the body quick contacts start from
 
@@ -132,6 +131,7 @@ class PoseBatch:
 @dataclass
 class _Note:
     row: np.ndarray  # one ONSET_DTYPE record (0-d array)
+    index: int  # its position in the stream (the sticking's index)
     limb: int = NOT_PLAYED
     piece: int = -1
     decided: bool = False
@@ -197,13 +197,13 @@ class LiveSynth:
         recs = np.atleast_1d(np.asarray(rows, dtype=ONSET_DTYPE))
         notes = []
         for rec in recs:
-            note = _Note(np.array(rec, dtype=ONSET_DTYPE))
+            note = _Note(np.array(rec, dtype=ONSET_DTYPE), self._first + len(self._notes))
             self._notes.append(note)
             notes.append(note)
             self._apply(self.sticker.process(cast(np.void, note.row[()])))
         if not (quick and self.params.provisional and notes):
             return
-        played = [(n.limb, n.piece) if n.decided else self._guess_limb(n) for n in notes]
+        played = [(n.limb, n.piece) if n.decided else self._provisional_limb(n) for n in notes]
         limbs = np.array([li for li, _ in played], dtype=np.int64)
         pieces = np.array([pi for _, pi in played], dtype=np.int64)
         times, out = quick_contact(self.quick_state(), recs, limbs, pieces)
@@ -443,7 +443,7 @@ class LiveSynth:
                 if n.limb >= 0 and n.piece >= 0 and (ahead or float(n.row["time_s"]) <= horizon):
                     keep.append((n.row, n.limb, n.piece))
             elif ahead:
-                limb, piece = self._guess_limb(n)
+                limb, piece = self._provisional_limb(n)
                 if limb >= 0:
                     keep.append((n.row, limb, piece))
         guesses = sorted(self._guesses.values(), key=lambda g: g.time_s)
@@ -496,20 +496,11 @@ class LiveSynth:
         self._curves = new
         return True
 
-    def _guess_limb(self, note: _Note) -> tuple[int, int]:
-        """A pending note's likely hand: a guess for its piece near it, else who last played
-        its piece, else the piece's preferred hand."""
-        t = float(note.row["time_s"])
-        piece = piece_of(self.rig, int(note.row["instrument"]))
-        if piece < 0 or self.rig.kit.pieces[piece].kind is PieceKind.KICK:
-            return NOT_PLAYED, -1
-        for g in self._guesses.values():
-            if g.piece == piece and abs(g.time_s - t) <= g.period_s / 3:
-                return g.limb, piece
-        for n in reversed(self._notes):
-            if n.decided and n.piece == piece and n.limb in (0, 1):
-                return n.limb, piece
-        return (1 if self.rig.kit.pieces[piece].preferred_limb is Limb.LH else 0), piece
+    def _provisional_limb(self, note: _Note) -> tuple[int, int]:
+        """A pending note's likely limb and piece: what the online sticking's cheapest path
+        so far gives it (99.5 % the same as its decision L later, on 12 GMD grooves; the
+        old rule, a predictor guess near it or the hand that last played its piece, 87 %)."""
+        return self.sticker.provisional(note.index)
 
     def _beats(self, horizon: float, keep: list[tuple[np.ndarray, int, int]]) -> np.ndarray:
         """Beat times for the torso's sway: the hands' pulse while playing, breathing when idle."""

@@ -27,7 +27,7 @@ import numpy as np
 from livedrummer.events import ONSET_DTYPE
 from livedrummer.kit import Kit
 from livedrummer.sticking.cost import CostModel, Weights
-from livedrummer.sticking.optimal import Snapshot, Trellis, apply_step, feed
+from livedrummer.sticking.optimal import Snapshot, Trellis, apply_step, feed, hand_of
 from livedrummer.sticking.prepare import (
     CHORD_WINDOW_S,
     Routed,
@@ -131,6 +131,24 @@ class OnlineSticker:
         while due < len(self._steps) and self._steps[due].time_s + self.lookahead_s <= now_s:
             due += 1
         return self._commit(due)
+
+    def provisional(self, index: int) -> tuple[int, int]:
+        """The limb and piece onset ``index`` has now: its decision when made, else what the
+        cheapest path so far gives it (what a lookahead of 0 would commit now);
+        (NOT_PLAYED, -1) for an index not seen."""
+        r = self._routed
+        if not 0 <= index < self._count:
+            return NOT_PLAYED, -1
+        if not r.hand[index] or r.limb[index] != NOT_PLAYED:
+            return int(r.limb[index]), int(r.piece[index])
+        path = self._trellis.best_path(self._pending)
+        for k in range(self._pending, len(self._steps)):
+            played = self._steps[k].played
+            if index in played:
+                h = hand_of(int(path[k - self._pending]), self.model.pieces)
+                hand = h if played[0] == index else 1 - h
+                return LIMB_CODE[Limb.RH if hand == 0 else Limb.LH], int(r.piece[index])
+        return NOT_PLAYED, int(r.piece[index])  # left out of its chord (so far)
 
     def flush(self) -> list[Decision]:
         """End of stream: commit everything still pending."""
