@@ -115,11 +115,11 @@ def quick_contact(
     pieces: np.ndarray | int,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Onset times and pose records to send at once (shown at onset + D) for onsets ``rows``
-    (ONSET_DTYPE), played
-    by ``limbs`` (0-3: right hand, left hand, right foot, left foot; -1: not played) on kit
-    pieces ``pieces``: one record per distinct onset time, ascending (the limbs of a chord
-    strike together in it); empty when there is nothing to start from yet (see the module
-    docstring). One IK solve per limb for the whole batch: a burst costs what a hit does."""
+    (ONSET_DTYPE), played by ``limbs`` (0-3: right hand, left hand, right foot, left foot;
+    -1: not played) on kit pieces ``pieces``: one record per distinct onset time, ascending
+    (the limbs of a chord strike together in it); empty when there is nothing to start from
+    yet (see the module docstring). One IK solve per limb for the whole batch: a burst costs
+    what a hit does."""
     rows = np.atleast_1d(np.asarray(rows))
     limbs, pieces = np.atleast_1d(limbs), np.atleast_1d(pieces)
     play = (limbs >= 0) & (pieces >= 0)
@@ -132,7 +132,7 @@ def quick_contact(
     hits, limb, piece = rows[play], limbs[play], pieces[play]
     for code in range(4):
         sel = np.flatnonzero(limb == code)
-        # a limb twice at one time (a dropped third hand note): the last one is drawn
+        # a limb given two notes at one time: the last one is drawn
         _, last = np.unique(at[sel][::-1], return_index=True)
         sel = sel[::-1][last]
         if sel.size:
