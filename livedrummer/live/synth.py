@@ -214,25 +214,19 @@ class LiveSynth:
 
     def quick_state(self) -> QuickState:
         """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
-        t = np.concatenate([self._sent_t, self._cache_t])
-        order = np.argsort(t, kind="stable")
-        return QuickState(
-            self.rig, self.dtype, self._curves, self._old, self._fade,
-            t[order], np.concatenate([self._sent_rows, self._cache_rows])[order],
-            dict(self._struck),
-        )  # fmt: skip
+        return QuickState(self.rig, self.dtype, self._curves, self._old, self._fade,
+                          *self._held(), dict(self._struck))  # fmt: skip
 
     def take_quick(self) -> PoseBatch:
         """Quick contacts of the hits that arrived since the last call, to publish at once,
         ahead of :meth:`poses_until`: one batch, ascending, from the end of what was published
         (or the first contact) to the last contact, the samples between filled in from what
-        was published and is held ahead
-        (a batch replaces the range it covers: contacts alone would hide those; without the
-        held ones, a synth busy re-animating would leave the display a hole before a hit).
+        was published and is held ahead (a batch replaces the range it covers: contacts
+        alone would hide those; without the held ones, a synth busy re-animating would leave
+        the display a hole before a hit).
         For a time sent twice (a chord completed) the last contact wins."""
         if not self._quick:
-            return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
-        d = self.params.delay_s
+            return self._batch(np.zeros(0), np.zeros(0, self.dtype))
         lo = min(float(times.min()) for times in self._quick)
         hi = max(float(times.max()) for times in self._quick)
         self._quick.clear()
@@ -240,17 +234,12 @@ class LiveSynth:
         sent_end = max(self._horizon if self._horizon is not None else -math.inf, self._quick_end)
         lo = min(lo, sent_end)
         self._quick_end = max(self._quick_end, hi)
-        have_t = np.concatenate([self._sent_t, self._cache_t])
-        have = np.concatenate([self._sent_rows, self._cache_rows])
-        fill = (have_t > lo) & (have_t <= hi)
-        latest = dict(zip((have_t[fill] + d).tolist(), have[fill], strict=True))
-        # every quick contact the curves lack, in the range: this one's and earlier ones (a
-        # batch replaces its range, so leaving one out would erase it from the display)
-        latest.update((t + d, row) for t, row in self._struck.items() if lo <= t <= hi)
-        show = np.array(sorted(latest))
-        out = np.array([latest[t] for t in show.tolist()], dtype=self.dtype)
-        out["time_s"] = (show - show[0]).astype(np.float32)
-        return PoseBatch(show, out)
+        held_t, held = self._held()
+        fill = (held_t > lo) & (held_t <= hi)
+        # with every quick contact the curves lack in the range, this one's and earlier ones
+        # (a batch replaces its range: leaving one out would erase it from the display)
+        return self._batch(*self._with_struck(held_t[fill], held[fill],
+                                              np.nextafter(lo, -math.inf), hi))  # fmt: skip
 
     def control(self, row: np.ndarray | np.void) -> None:
         """One controller event (CONTROL_DTYPE record): the hi-hat pedal and chokes."""
@@ -321,12 +310,22 @@ class LiveSynth:
         self._cache_t, self._cache_rows = self._cache_t[later], self._cache_rows[later]
         self._horizon = max(top, start)
         self._remember(times, rows, final)
-        times, rows = self._with_struck(times, rows, start, top)
+        return self._batch(*self._with_struck(times, rows, start, top))
+
+    def _batch(self, times: np.ndarray, rows: np.ndarray) -> PoseBatch:
+        """Samples at performance ``times`` as a batch on show time (see :class:`PoseBatch`)."""
         if times.size == 0:
             return PoseBatch(np.zeros(0), np.zeros(0, self.dtype))
         rows = rows.copy()
         rows["time_s"] = (times - float(times[0])).astype(np.float32)
-        return PoseBatch(times + p.delay_s, rows)
+        return PoseBatch(times + self.params.delay_s, rows)
+
+    def _held(self) -> tuple[np.ndarray, np.ndarray]:
+        """The samples published lately and held ahead, by time (after a re-animation the
+        held ones may start before the end of the published ones)."""
+        t = np.concatenate([self._sent_t, self._cache_t])
+        order = np.argsort(t, kind="stable")
+        return t[order], np.concatenate([self._sent_rows, self._cache_rows])[order]
 
     def _remember(self, times: np.ndarray, rows: np.ndarray, final: float) -> None:
         """Keep what was published for a quarter second (the body quick contacts start from;

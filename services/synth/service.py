@@ -34,6 +34,7 @@ from __future__ import annotations
 import logging
 import math
 import threading
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -97,7 +98,8 @@ class SynthStats:
     first_seq: int | None = None
     last_seq: int | None = None
     seqs: list[int] = field(default_factory=list)
-    answer_s: list[float] = field(default_factory=list)  # read -> quick contacts sent, per batch
+    # read -> quick contacts sent, per batch (the latest ones: a show runs for hours)
+    answer_s: deque[float] = field(default_factory=lambda: deque(maxlen=10_000))
 
 
 class SynthService:
