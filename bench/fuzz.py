@@ -2,11 +2,11 @@
 
 Prints the figures of the README's reliability section, all from one seed:
 
-* serial: bytes of noise with valid messages in it (:func:`livedrummer.fuzz.noisy_serial_stream`)
+* serial: bytes of noise with valid messages in it (:func:`bench._fuzz.noisy_serial_stream`)
   fed to :class:`~livedrummer.midistream.MidiStreamParser` in random chunks; the parse rate,
   how many inserted messages came out intact (all of them, or it says so), garbage counted;
 * files: ``--files`` Groove MIDI Dataset files, ``--variants`` of each mutation kind
-  (:func:`livedrummer.fuzz.mutations`) plus absurd note counts, each read by
+  (:func:`bench._fuzz.mutations`) plus absurd note counts, each read by
   :func:`~livedrummer.midifile.read_midi_bytes`; how many ended in a named error and how many
   in a result, per kind, anything else raised (must be 0), and the median and maximum time.
 
@@ -24,8 +24,8 @@ import time
 from collections import Counter
 from pathlib import Path
 
+from bench._fuzz import Variant, absurd_note_file, mutations, noisy_serial_stream
 from livedrummer.errors import MidiFileError
-from livedrummer.fuzz import Variant, absurd_note_file, mutations, noisy_serial_stream
 from livedrummer.midifile import read_midi_bytes
 from livedrummer.midistream import MidiMessage, MidiStreamParser
 from livedrummer.notemap import load_note_map

@@ -3,7 +3,7 @@
 Each groove (Groove MIDI Dataset beside the checkout, Roland TD map) is fed to a
 :class:`~livedrummer.live.synth.LiveSynth` one onset at a time on a stepped clock, polled at
 the service's tick rate, as if played live; the offline animation of the same (online)
-sticking is the reference. :func:`~livedrummer.live.upswing.upswing_visible` counts the hand
+sticking is the reference. :func:`~bench._upswing.upswing_visible` counts the hand
 notes whose live stick, one preparation window (50 ms) before the contact, is at least half
 as high as offline. Printed with and without prediction. Figures from one run; no assertions.
 """
@@ -16,12 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
+from bench._upswing import Upswing, upswing_visible
 from livedrummer.body.animation import animate, hihat_openness
 from livedrummer.body.rig import Rig, build_rig
 from livedrummer.body.skeleton import J
 from livedrummer.kitfile import load_kit
 from livedrummer.live.synth import LiveSynth, SynthParams
-from livedrummer.live.upswing import Upswing, upswing_visible
 from livedrummer.midifile import read_midi_file
 from livedrummer.notemap import load_note_map
 from livedrummer.sticking.online import stick_online

@@ -1,6 +1,6 @@
 """Mutated Groove MIDI Dataset files: a named one-line error or a bounded, correct result.
 
-Variants come from :func:`livedrummer.fuzz.mutations` (truncated, bit-flipped, random runs,
+Variants come from :func:`bench._fuzz.mutations` (truncated, bit-flipped, random runs,
 huge and long delta times, zero tempo, a track longer than the file, 65,535 declared tracks)
 for a seeded sample of the corpus, plus files built with absurd note counts. Each is read in
 process with a generous time bound ("never hangs", not a speed figure: those are in
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bench._fuzz import Variant, absurd_note_file, mutations
 from livedrummer.errors import MidiFileError
-from livedrummer.fuzz import Variant, absurd_note_file, mutations
 from livedrummer.midifile import MAX_DURATION_S, MAX_FILE_BYTES, read_midi_bytes
 from livedrummer.notemap import load_note_map
 from livedrummer.performance import Performance

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from scene_rest import REST_SKELETON, rest_frame
 
 from livedrummer.kitfile import load_kit
 from livedrummer.render.camera import (
@@ -29,7 +30,6 @@ from livedrummer.scene import (
     Tone,
     empty_channels,
 )
-from livedrummer.scene_rest import REST_SKELETON, rest_frame
 
 
 @pytest.fixture(scope="module")

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bench._upswing import upswing_visible
 from livedrummer.body.animation import animate, hihat_openness
 from livedrummer.body.rig import Rig, build_rig
 from livedrummer.body.skeleton import J
@@ -17,7 +18,6 @@ from livedrummer.live.calibration import Calibration, CalibrationError
 from livedrummer.live.predict import HandPredictor
 from livedrummer.live.synth import LiveSynth, PoseBatch, SynthParams
 from livedrummer.live.track import PoseTrack
-from livedrummer.live.upswing import upswing_visible
 from livedrummer.midifile import read_midi_file
 from livedrummer.notemap import load_note_map
 from livedrummer.performance import Performance

@@ -1,11 +1,11 @@
-"""A seated rest pose built from kit geometry: the drummer before the first stroke.
+"""A seated rest pose built from kit geometry: the drummer before the first stroke (tests only).
 
-A stand-in for the body model (``livedrummer/body/``), which computes the real poses:
-``livedrummer render`` and ``display`` now draw the body (:mod:`livedrummer.render.body_scene`);
-this pose and its 22-joint :data:`REST_SKELETON` remain for the live display
-(``services/display/live.py``, :mod:`livedrummer.live.track`) and renderer tests that want a
-pose without animating a performance. It follows the :mod:`livedrummer.scene` contract exactly,
-so swapping it for the body is swapping one ``SceneFrame`` source for another.
+A stand-in for the body model (``livedrummer/body/``), which computes the real poses for
+``livedrummer render``, ``display`` and the live synth (:mod:`livedrummer.render.body_scene`).
+Renderer tests use this pose and its 22-joint :data:`REST_SKELETON` when they want a drummer
+without animating a performance, so it lives with the tests, not in the installed package. It
+follows the :mod:`livedrummer.scene` contract exactly, so swapping it for the body is swapping
+one ``SceneFrame`` source for another.
 
 The pose is placed from the kit, not typed in: the pelvis sits on the throne at
 ``kit.seat_height_m``; the right stick's tip rests just above the hi-hat and the left's above

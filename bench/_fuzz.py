@@ -1,8 +1,8 @@
 """Seeded hostile input: a noisy serial byte stream and mutated Standard MIDI Files.
 
 The hardening tests (``tests/test_fuzz_*.py``) and ``livedrummer bench fuzz`` need the same
-inputs, reproducible from a seed, so they are made here, as pure functions of a
-:class:`random.Random`.
+inputs, reproducible from a seed, so they are made here (in ``bench/``, beside the benchmark and
+outside the installed package), as pure functions of a :class:`random.Random`.
 
 **Serial stream** (:func:`noisy_serial_stream`). Runs of uniformly random bytes (every value:
 status bytes, SysEx starts and ends, real-time and undefined bytes; now and then a SysEx too

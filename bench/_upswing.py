@@ -6,7 +6,7 @@ point, the offline animation (whole performance known, same sticking) being the 
 the prep height is the tip's height at ``onset - prep_s`` above its height at the onset.
 Notes whose offline preparation is lower than ``min_prep_m`` (fast rolls, ghost notes) are
 left out: there is no upswing to see. Pure arrays in, a figure out, so the bench and the
-tests share it.
+tests share it; it lives in ``bench/``, outside the installed package.
 """
 
 from __future__ import annotations
