@@ -323,10 +323,8 @@ def test_a_hit_during_a_re_animation_is_answered_and_kept(rig: Rig, groove: Perf
         calls += 1
         answer()
 
-    synth.pause = pause
     before = synth.animations
-    batch = synth.poses_until(float(late["time_s"]) + 0.0005)
-    synth.pause = None
+    batch = synth.poses_until(float(late["time_s"]) + 0.0005, answer=pause)
     assert synth.animations == before + 1 and calls >= 5, calls
     show = float(late["time_s"]) + params.delay_s
     assert answered and answered[0].show_s[-1] == pytest.approx(show, abs=1e-9)

@@ -34,10 +34,11 @@ import numpy as np
 
 from livedrummer.body import fk, quat, spline
 from livedrummer.body.expression import Expression
-from livedrummer.body.ik import solve_arm, solve_leg
+from livedrummer.body.ik import solve_leg
 from livedrummer.body.rig import Rig, neutral_world
 from livedrummer.body.secondary import BOB_KINDS, SecondaryParams, Torso, build_torso
 from livedrummer.body.skeleton import ARM, LEG, N_JOINTS, J
+from livedrummer.body.strike import leg_locals, solve_strike, to_local
 from livedrummer.body.strokes import (
     AFTER,
     BEFORE,
@@ -183,16 +184,14 @@ class Animation:
             for j, curve in joints.items():
                 local[:, j] = curve.sample(times)
                 if PARENT_IS_CHEST[j]:
-                    local[:, j] = quat.mul(quat.conj(chest_w), local[:, j])
+                    local[:, j] = to_local(chest_w, local[:, j])[0]
         skel = self.rig.skeleton
         for side in ("r", "l"):
             hip_j, knee_j, ankle_j, _ = LEG[side.upper()]
             hip = skel.root_m + skel.offsets[hip_j]
             toe = self.toe_target(side, times)
             leg = solve_leg(skel.lengths, np.broadcast_to(hip, toe.shape), toe)
-            local[:, hip_j] = leg.hip_q
-            local[:, knee_j] = quat.mul(quat.conj(leg.hip_q), leg.knee_q)
-            local[:, ankle_j] = quat.mul(quat.conj(leg.knee_q), leg.ankle_q)
+            local[:, hip_j], local[:, knee_j], local[:, ankle_j] = leg_locals(leg)
         return local, np.broadcast_to(skel.root_m, (t, 3)).copy()
 
     def toe_target(self, side: str, times: np.ndarray) -> np.ndarray:
@@ -344,7 +343,7 @@ def animate(
     arms: dict[str, dict[int, JointCurve]] = {}
     arm_keys: dict[str, _ArmKeys] = {}
     extra: dict[str, np.ndarray] = {}
-    for code, side, sign in ((0, "r", 1.0), (1, "l", -1.0)):
+    for code, side in ((0, "r"), (1, "l")):
         notes = idx_all[sticking.limb[idx_all] == code]
         sh_j, el_j, wr_j, st_j, _ = ARM[side.upper()]
         t = times[notes]
@@ -358,17 +357,13 @@ def animate(
             pz = (piece[notes], zone[notes])
             lift_v = vel[notes]
             openn = on["openness"][notes]
-        point, normal, pitch = rig.targets.lookup(pz[0], pz[1], openn)
         chest_q, r_sh, l_sh = _spine(rig, torso, t)
         shoulder = r_sh if side == "r" else l_sh
-        sol = solve_arm(rig.skeleton.lengths, shoulder, chest_q, sign, point, normal, pitch)
+        sol, point, normal = solve_strike(rig, code, shoulder, chest_q, pz[0], pz[1], openn)
         world = {sh_j: sol.shoulder_q, el_j: sol.elbow_q, wr_j: sol.wrist_q, st_j: sol.stick_q}
-        base = {
-            sh_j: sol.shoulder_q,  # world: see Animation.locals
-            el_j: quat.mul(quat.conj(sol.shoulder_q), sol.elbow_q),
-            wr_j: quat.mul(quat.conj(sol.elbow_q), sol.wrist_q),
-            st_j: quat.mul(quat.conj(sol.wrist_q), sol.stick_q),
-        }
+        # the shoulder's stays in the world frame (see Animation.locals), the rest local
+        base = dict(zip((sh_j, el_j, wr_j, st_j),
+                        to_local(None, *world.values()), strict=True))  # fmt: skip
         pivots = {sh_j: shoulder, el_j: sol.elbow, wr_j: sol.wrist, st_j: sol.fulcrum}
         n_notes = t.size
         flexion = _angle(sol.elbow - shoulder, sol.wrist - sol.elbow)

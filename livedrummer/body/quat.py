@@ -106,6 +106,25 @@ def log(q: Array) -> Array:
     return out
 
 
+def slerp(a: Array, b: Array, w: Array | float) -> Array:
+    """Spherical interpolation from unit ``a`` (w = 0) to unit ``b`` (w = 1) along the shorter
+    arc, at constant angular speed; ``w`` broadcasts over the leading axes. Near-equal
+    rotations (under 1e-6 rad apart) are interpolated linearly and normalised."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    w = np.asarray(w, dtype=np.float64)[..., None]
+    d = np.sum(a * b, axis=-1, keepdims=True)
+    b = np.where(d < 0.0, -b, b)
+    d = np.clip(np.abs(d), 0.0, 1.0)
+    theta = np.arccos(d)
+    s = np.sin(theta)
+    small = s < 1e-6
+    safe = np.where(small, 1.0, s)
+    ka = np.where(small, 1.0 - w, np.sin((1.0 - w) * theta) / safe)
+    kb = np.where(small, w, np.sin(w * theta) / safe)
+    return normalize(ka * a + kb * b)
+
+
 def between(a: Array, b: Array) -> Array:
     """Shortest rotation taking unit vectors ``a`` onto unit vectors ``b``."""
     a = np.asarray(a, dtype=np.float64)

@@ -14,6 +14,7 @@ from livedrummer.body.animation import Animation
 from livedrummer.body.channels import KitChannels, VibrationParams, kit_channels
 from livedrummer.body.pose import pack_poses
 from livedrummer.events import ControlKind
+from livedrummer.kit import Kit
 from livedrummer.notemap import NoteMap
 from livedrummer.sticking.result import Sticking
 from livedrummer.vocabulary import Limb, PieceKind, Zone
@@ -23,7 +24,11 @@ CHUNK = 50_000
 
 def choke_times(controls: np.ndarray, note_map: NoteMap, anim: Animation) -> list[np.ndarray]:
     """Per piece, sorted times of grabs (aftertouch > 0) on the notes that sound it."""
-    kit = anim.rig.kit
+    return kit_choke_times(controls, note_map, anim.rig.kit)
+
+
+def kit_choke_times(controls: np.ndarray, note_map: NoteMap, kit: Kit) -> list[np.ndarray]:
+    """:func:`choke_times` for a kit (the live synth's window has no animation yet)."""
     index = {p.name: i for i, p in enumerate(kit.pieces)}
     out: list[list[float]] = [[] for _ in kit.pieces]
     if controls.size:

@@ -14,8 +14,12 @@ live caller whose stream may pause should also call :meth:`advance` with its clo
 decision waits longer than the lookahead. A hand note arriving within the chord window of an
 already committed note joins its chord with the other hand; when both hands are committed, a
 hi-hat goes to the pedal and anything else is left out (with the reason). Committed steps of the
-recursion are dropped, so its state stays a few steps long however long the show; the onsets
-themselves are kept (``onsets()``), a few dozen bytes each.
+recursion are dropped, so its state stays a few steps long however long the show. The onsets
+themselves are kept (``onsets()``, a few dozen bytes each) unless ``keep_onsets=False``: then
+the notes no pending step needs are dropped whenever the arrays fill (their reasons with
+them), so a live show's sticker holds a few hundred notes at most, however long it runs.
+Indices (``Decision.index``, :meth:`OnlineSticker.provisional`) count from the start of the
+stream either way.
 """
 
 from __future__ import annotations
@@ -77,12 +81,14 @@ class OnlineSticker:
         *,
         beat_s: np.ndarray | None = None,
         weights: Weights | None = None,
+        keep_onsets: bool = True,
     ) -> None:
         if not lookahead_s >= 0.0:
             raise ValueError(f"lookahead_s must be >= 0, not {lookahead_s!r}")
         self.kit = kit
         self.lookahead_s = float(lookahead_s)
         self.beat_s = beat_s
+        self.keep_onsets = keep_onsets
         self.model = CostModel.from_kit(kit, weights)
         self._table = piece_table(kit)
         self._trellis = Trellis(self.model)
@@ -99,7 +105,8 @@ class OnlineSticker:
             {},
         )
         self._strength = np.zeros(_INITIAL)
-        self._count = 0
+        self._count = 0  # notes held, the first of them the stream's note number _base
+        self._base = 0
         self._steps: list[_Step] = []
         self._pending = 0  # index into _steps of the first uncommitted step
         self._kicks: dict[int, tuple[float, int]] = {}
@@ -135,8 +142,9 @@ class OnlineSticker:
     def provisional(self, index: int) -> tuple[int, int]:
         """The limb and piece onset ``index`` has now: its decision when made, else what the
         cheapest path so far gives it (what a lookahead of 0 would commit now);
-        (NOT_PLAYED, -1) for an index not seen."""
+        (NOT_PLAYED, -1) for an index not seen (or dropped, see the module docstring)."""
         r = self._routed
+        index -= self._base
         if not 0 <= index < self._count:
             return NOT_PLAYED, -1
         if not r.hand[index] or r.limb[index] != NOT_PLAYED:
@@ -157,6 +165,8 @@ class OnlineSticker:
     # -- internals -----------------------------------------------------------------------------
 
     def _append(self, row: np.void) -> int:
+        if self._count == self._original.size and not self.keep_onsets:
+            self._compact()
         i = self._count
         if i == self._original.size:
             self._grow()
@@ -205,6 +215,25 @@ class OnlineSticker:
             r.reasons,
         )
         self._strength = grow(self._strength, 0.0)
+
+    def _compact(self) -> None:
+        """Drop the notes before the first one a step still holds (the arrays grow only when
+        more than half of them is still needed)."""
+        lo = min((min(s.notes) for s in self._steps), default=self._count)
+        if lo < self._original.size // 2:
+            return
+        n = self._count - lo
+        r = self._routed
+        for a in (self._original, r.onsets, r.piece, r.limb, r.hand, self._strength):
+            a[:n] = a[lo : self._count]
+        reasons = {k - lo: v for k, v in r.reasons.items() if k >= lo}
+        r.reasons.clear()
+        r.reasons.update(reasons)
+        for s in self._steps:
+            s.notes = [j - lo for j in s.notes]
+            s.played = tuple(j - lo for j in s.played)
+        self._count = n
+        self._base += lo
 
     def _restore_note(self, i: int) -> None:
         r = self._routed
@@ -288,10 +317,11 @@ class OnlineSticker:
     def _decision(self, i: int) -> Decision:
         r = self._routed
         pedal = bool(r.onsets["zone"][i] != self._original["zone"][i])
-        return Decision(i, int(r.limb[i]), int(r.piece[i]), r.reasons.get(i), pedal)
+        return Decision(self._base + i, int(r.limb[i]), int(r.piece[i]), r.reasons.get(i), pedal)
 
     def onsets(self) -> np.ndarray:
-        """Every onset so far, after substitutions (a copy)."""
+        """Every onset so far, after substitutions (a copy); with ``keep_onsets=False``, those
+        still held."""
         return self._routed.onsets[: self._count].copy()
 
 

@@ -8,8 +8,10 @@ publishes whatever samples the synth has for show times up to ``now + D`` (with 
 poses, the default; ``now + D - L`` without), as one POSE message (header time = the first
 sample's show time; each record's ``time_s`` is its offset from it). Each batch of onsets read
 (up to :data:`DRAIN_BATCH` messages) has its quick contacts published before anything else
-(``LiveSynth.take_quick``), and the synth's ``pause`` hook reads the socket between the steps
-of a re-animation, so a hit is answered within a step (a few ms) even while the synth is busy.
+(``LiveSynth.take_quick``), and each tick passes :meth:`SynthService._answer_hits` to
+``LiveSynth.poses_until`` (``answer=``), which calls it between the steps of a re-animation:
+it reads the socket there, so a hit is answered within a step (a few ms) even while the synth
+is busy.
 Sequence numbers of the input stream are tracked, so a gap upstream is counted and logged. A
 second thread answers HELLO with READY on a ROUTER control socket; the READY carries the pose
 format, which a display checks against its own. ``ready()`` tells a launcher or systemd the
@@ -97,7 +99,6 @@ class SynthStats:
     pose_samples: int = 0
     first_seq: int | None = None
     last_seq: int | None = None
-    seqs: list[int] = field(default_factory=list)
     # read -> quick contacts sent, per batch (the latest ones: a show runs for hours)
     answer_s: deque[float] = field(default_factory=lambda: deque(maxlen=10_000))
 
@@ -129,7 +130,6 @@ class SynthService:
         self._control_thread: threading.Thread | None = None
         self._auth: Any = None
         self._ticked = 0  # onsets heard when the last tick began
-        synth.pause = self._answer_hits
 
     def start(self) -> dict[str, str]:
         cfg = self.config
@@ -187,11 +187,13 @@ class SynthService:
         return 0
 
     def tick(self, now: float) -> None:
-        self._publish(self.synth.poses_until(now))
+        # hits that arrive while the synth re-animates are answered between its steps
+        self._publish(self.synth.poses_until(now, answer=self._answer_hits))
 
     def _answer_hits(self) -> None:
-        """Called by the synth between the steps of a re-animation (``LiveSynth.pause``):
-        hits that arrived meanwhile get their contact out now, not after it."""
+        """Passed to ``LiveSynth.poses_until`` as ``answer`` (see :meth:`tick`): called
+        between the steps of a re-animation, so hits that arrived meanwhile get their
+        contact out now, not after it."""
         if self._sub is not None and self._sub.poll(0):
             self._drain()
 
@@ -262,7 +264,6 @@ class SynthService:
             if self.config.input_offset_s:
                 rows["time_s"] += self.config.input_offset_s
             self.stats.onsets += rows.size
-            self.stats.seqs.append(msg.seq)
             return rows
         if msg.kind is Kind.CONTROL and isinstance(msg.body, np.ndarray):
             for row in msg.body:

@@ -1,0 +1,162 @@
+"""The live synth's curve set: the body's current curves and the cross-fade from the old ones.
+
+Why this shape. The synth re-animates its window of notes whenever the notes change (see
+:mod:`livedrummer.live.synth`); the new curves must not jump away from what the display is
+showing, so for a short while after each rebuild a sample is a blend of the old curves and
+the new. This module owns exactly that: the current :class:`Curves`, the previous ones while
+the fade lasts, the fade itself, the clearance search's memo carried from one window to the
+next, and how often the body was re-run. Everything else of the synth (which notes, which
+samples were published) lives elsewhere.
+
+The blend. Rotations are interpolated by slerp (:func:`~livedrummer.body.quat.slerp`), the
+root position linearly, and the joint positions are then rebuilt by forward kinematics from
+the blended rotations, so every bone keeps its length mid-fade (a linear blend of positions
+would shorten a bone whose two ends turn apart). The kit channels (swing, lift, glow) are
+blended linearly. A fade's weight rises linearly from its start to its end; the synth ends
+it at the next contact, so every contact is sampled from the new curves alone.
+
+:func:`sample_curves` is pure (a :class:`CurveView` is a frozen snapshot), so a quick
+contact can sample the curves without touching the set. Limits: the stick guard
+(:func:`~livedrummer.body.animation.guard_sticks`) is not run again on blended samples (each
+side of the blend was guarded; their blend may graze a piece for a few milliseconds).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from livedrummer.body import fk, quat
+from livedrummer.body.animation import Animation, ClearanceMemo, Openness, animate
+from livedrummer.body.rig import Rig
+from livedrummer.body.sample import sample_poses
+from livedrummer.body.strokes import StrokeParams
+from livedrummer.sticking.result import Sticking
+
+Answer = Callable[[], None]
+
+
+@dataclass(frozen=True)
+class Curves:
+    """One animation of the synthesizer's window, and what it was built from."""
+
+    anim: Animation
+    sticking: Sticking
+    key: tuple[object, ...]
+    contacts_s: np.ndarray  # committed contacts (performance time), sorted
+    chokes: list[np.ndarray] | None = None  # per piece, choke (grab) times in the window
+
+
+@dataclass(frozen=True)
+class CurveView:
+    """A read-only snapshot of a :class:`CurveSet`: the curves, and the ones being faded out
+    with the fade's (start, length) in performance time."""
+
+    curves: Curves | None
+    old: Curves | None = None
+    fade: tuple[float, float] = (0.0, 0.0)
+
+
+def sample_curves(view: CurveView, times: np.ndarray, answer: Answer | None = None
+                  ) -> tuple[np.ndarray, bool]:  # fmt: skip
+    """Pose records at ``times``, cross-faded from ``view.old`` over its fade; and whether the
+    fade is over for all of them (then the old curves can be dropped). ``answer``: called
+    between the two samplings (see :func:`~livedrummer.body.animation.animate`)."""
+    curves = view.curves
+    if curves is None:
+        raise ValueError("no curves to sample yet")
+    rows = sample_poses(curves.anim, curves.sticking, times, curves.chokes)
+    old = view.old
+    if old is None:
+        return rows, True
+    f0, flen = view.fade
+    w = np.clip((times - f0) / flen, 0.0, 1.0) if flen > 0 else np.ones_like(times)
+    fading = w < 1.0
+    if not fading.any():
+        return rows, True
+    if answer is not None:
+        answer()
+    prev = sample_poses(old.anim, old.sticking, times[fading], old.chokes)
+    rows[fading] = blend_rows(curves.anim.rig, prev, rows[fading], w[fading])
+    return rows, False
+
+
+def blend_rows(rig: Rig, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Pose records ``a`` blended towards ``b`` by ``w`` (0: ``a``, 1: ``b``), as the module
+    docstring says: rotations by slerp, positions by forward kinematics from them (the root
+    linearly), channels linearly."""
+    out = a.copy()
+    wc = w.astype(np.float64)
+    for name in ("swing", "lift", "glow"):
+        shape = (-1,) + (1,) * (a[name].ndim - 1)
+        out[name] = a[name] + (b[name] - a[name]) * wc.reshape(shape).astype(np.float32)
+    q = quat.slerp(a["rotation"].astype(np.float64), b["rotation"].astype(np.float64),
+                   wc[:, None])  # fmt: skip
+    pa = a["position"][:, 0].astype(np.float64)
+    root = pa + (b["position"][:, 0].astype(np.float64) - pa) * wc[:, None]
+    _, pos = fk.forward(rig.skeleton, q, root)
+    out["rotation"] = q
+    out["position"] = pos
+    return out
+
+
+class CurveSet:
+    """The current curves and the fade from the previous ones (see the module docstring)."""
+
+    def __init__(self, rig: Rig, blend_s: float, strokes: StrokeParams | None = None) -> None:
+        self.rig = rig
+        self.blend_s = blend_s
+        self.strokes = strokes or StrokeParams()
+        self.reset()
+
+    def reset(self) -> None:
+        self._view = CurveView(None)
+        self._memo: ClearanceMemo = {}  # the clearance search's settings, window to window
+        self.animations = 0  # how many times the body was re-run (for benchmarks)
+        self.built_at = -np.inf  # the committed horizon of the last rebuild
+
+    @property
+    def current(self) -> Curves | None:
+        return self._view.curves
+
+    def view(self) -> CurveView:
+        return self._view
+
+    def rebuild(
+        self,
+        sticking: Sticking,
+        beats: np.ndarray,
+        openness: Openness,
+        key: tuple[object, ...],
+        contacts_s: np.ndarray,
+        chokes: list[np.ndarray] | None,
+        start_s: float,
+        horizon_s: float,
+        answer: Answer | None = None,
+    ) -> Curves:
+        """Animate ``sticking`` (``answer`` is called between the steps) and make it current,
+        fading from the old curves from ``start_s`` until the first of ``contacts_s`` (the
+        sorted times of its committed notes, guesses left out) after it, at most ``blend_s``."""
+        anim = animate(self.rig, sticking, beats, openness, strokes=self.strokes, pause=answer,
+                       memo=self._memo)  # fmt: skip
+        self.animations += 1
+        self.built_at = horizon_s
+        new = Curves(anim, sticking, key, contacts_s, chokes)
+        old = self._view.curves
+        if old is None:
+            self._view = CurveView(new)
+        else:
+            nxt = contacts_s[contacts_s > start_s]
+            length = self.blend_s if nxt.size == 0 else min(self.blend_s, float(nxt[0]) - start_s)
+            self._view = CurveView(new, old, (start_s, max(length, 0.0)))
+        return new
+
+    def sample(self, times: np.ndarray, answer: Answer | None = None) -> np.ndarray:
+        """Pose records of the current curves at ``times`` (see :func:`sample_curves`); the old
+        curves are dropped once the fade is over."""
+        rows, done = sample_curves(self._view, times, answer)
+        if done and self._view.old is not None:
+            self._view = CurveView(self._view.curves)
+        return rows
