@@ -28,7 +28,7 @@ def register(sub: Subparsers) -> None:
                    help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
     add_kit_option(p)
     p.add_argument("--map", default="roland-td",
-                   help="note map, for the hi-hat pedal (default roland-td)")  # fmt: skip
+                   help="note map, for hi-hat pedal and chokes (default roland-td)")  # fmt: skip
     p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L",
                    help="limb decisions wait L ms for later notes (default 30)")  # fmt: skip
     p.add_argument("--delay-ms", type=float, default=30.0, metavar="D",
@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     note_map = load_note_map(args.map)
     cc_open = np.array([note_map.openness(v) for v in range(128)])
     rig = build_rig(load_kit(args.kit))
-    synth = LiveSynth(rig, params, cc_open=cc_open)
+    synth = LiveSynth(rig, params, cc_open=cc_open, note_map=note_map)
     calibration = Calibration.load()
     config = SynthConfig(
         sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
