@@ -26,8 +26,18 @@ def jack_env(name: str) -> dict[str, str]:
 
 
 @contextmanager
-def dummy_jack(prefix: str, period: int = 128, log: IO[str] | None = None) -> Iterator[str]:
-    """Run a server named ``PREFIX-xxxxxxxx`` while the block runs; yields its name."""
+def dummy_jack(
+    prefix: str,
+    period: int = 128,
+    log: IO[str] | None = None,
+    sync: bool = True,
+    realtime: bool = False,
+) -> Iterator[str]:
+    """Run a server named ``PREFIX-xxxxxxxx`` while the block runs; yields its name.
+
+    ``sync=False`` runs JACK's default asynchronous mode, ``realtime=True`` asks for realtime
+    scheduling (``-R``; it falls back to normal scheduling where that is not permitted).
+    """
     if shutil.which("jackd") is None or shutil.which("jack_wait") is None:
         raise JackError("jackd not installed (Debian: apt-get install jackd2)")
     import os
@@ -36,8 +46,8 @@ def dummy_jack(prefix: str, period: int = 128, log: IO[str] | None = None) -> It
     env = {**os.environ, **jack_env(name)}
     out = log if log is not None else subprocess.DEVNULL
     proc = subprocess.Popen(
-        ["jackd", "--no-realtime", "-S", "-n", name, "-d", "dummy", "-r", "48000",
-         "-p", str(period)],
+        ["jackd", "-R" if realtime else "--no-realtime", *(["-S"] if sync else []), "-n", name,
+         "-d", "dummy", "-r", "48000", "-p", str(period)],
         stdout=out, stderr=subprocess.STDOUT, env=env,
     )  # fmt: skip
     try:

@@ -22,7 +22,7 @@ from livedrummer.clock import MonotonicClock
 from livedrummer.decode import MessageDecoder
 from livedrummer.notemap import load_note_map
 from services.input.daemon import DaemonConfig, InputDaemon
-from services.input.midiport import MidiPortSource, list_ports
+from services.input.midiport import MidiPortSource, list_ports, list_ports_by_api
 
 rtmidi = pytest.importorskip("rtmidi")
 
@@ -40,11 +40,12 @@ def test_daemon_receives_notes_from_a_jack_port_and_reconnects(
     assert "kit:pads" in list_ports("jack")
     listed = subprocess.run([sys.executable, "-m", "livedrummer", "ports", "--api", "jack"],
                             capture_output=True, text=True, timeout=60, check=True).stdout  # fmt: skip
-    assert ": kit:pads" in listed
+    assert ": kit:pads  [jack]" in listed
+    assert ("jack", "kit:pads") in list_ports_by_api("auto")  # ALSA absent or not: JACK found
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     clock = MonotonicClock()
     source = MidiPortSource(
-        "pads", clock, MessageDecoder(load_note_map("roland-td"), 3), api="jack"
+        "pads", clock, MessageDecoder(load_note_map("roland-td"), 3), api="auto"
     )
     config = DaemonConfig(pub="tcp://127.0.0.1:*", control="tcp://127.0.0.1:*", performer=3,
                           sessions_dir=tmp_path, reconnect_s=0.05)  # fmt: skip
@@ -77,6 +78,7 @@ def test_daemon_receives_notes_from_a_jack_port_and_reconnects(
             kit.send_message([0x99, 36, 100])
             collect(lambda: bool(onsets()), 0.1)
         assert onsets(), "no note reached the daemon through JACK"
+        assert source.api_used == "jack"  # --api auto took the system the port is on
         received.clear()
         notes = [38, 42, 46, 36, 49, 51] * 20
         for i, note in enumerate(notes):
@@ -106,3 +108,11 @@ def test_daemon_receives_notes_from_a_jack_port_and_reconnects(
         thread.join(5)
         sub.close(0)
         ctx.term()
+
+
+def test_an_unknown_midi_api_is_one_clear_error() -> None:
+    from livedrummer.errors import MidiInputError
+
+    with pytest.raises(MidiInputError, match="'coremidi': expected one of auto, alsa, jack"):
+        MidiPortSource("pads", MonotonicClock(), MessageDecoder(load_note_map("roland-td")),
+                       api="coremidi")  # fmt: skip

@@ -16,7 +16,7 @@ import threading
 from pathlib import Path
 from types import FrameType
 
-from livedrummer.cli.common import Subparsers, add_command, add_map_option
+from livedrummer.cli.common import Subparsers, add_api_option, add_command, add_map_option
 from livedrummer.cli.keys import add_curve_options, security_from_args
 
 
@@ -30,8 +30,7 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--file", metavar="F.mid", type=Path, help="play a MIDI file as if live")
     src.add_argument("--remote", metavar="ENDPOINT", help="another site's input daemon (pub)")
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
-    p.add_argument("--api", choices=("default", "alsa", "jack"), default="default",
-                   help="MIDI system for --midi (default: rtmidi's choice)")  # fmt: skip
+    add_api_option(p)
     p.add_argument("--loop", action="store_true", help="--file: start again at the end")
     p.add_argument("--pub", default=DEFAULT_PUB, help=f"publish endpoint (default {DEFAULT_PUB})")
     p.add_argument("--control", default=DEFAULT_CONTROL,

@@ -4,21 +4,20 @@ from __future__ import annotations
 
 import argparse
 
-from livedrummer.cli.common import Subparsers, add_command
+from livedrummer.cli.common import Subparsers, add_api_option, add_command
 
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "ports", run, "list MIDI input ports (for livedrummer input --midi)")
-    p.add_argument("--api", choices=("default", "alsa", "jack"), default="default",
-                   help="MIDI system to ask (default: rtmidi's choice)")  # fmt: skip
+    add_api_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from services.input.midiport import list_ports
+    from services.input.midiport import list_ports_by_api
 
-    ports = list_ports(args.api)
+    ports = list_ports_by_api(args.api)
     if not ports:
         print(f"no MIDI input ports ({args.api})")
-    for i, name in enumerate(ports):
-        print(f"{i}: {name}")
+    for i, (system, name) in enumerate(ports):
+        print(f"{i}: {name}  [{system}]")
     return 0

@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING
 from livedrummer.cli.common import (
     DEMO_MAP,
     Subparsers,
+    add_api_option,
     add_command,
     add_kit_option,
     demo_groove,
@@ -62,6 +63,7 @@ def register(sub: Subparsers) -> None:
     add_kit_option(p)
     p.add_argument("--map", help="note map (default roland-td)")
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
+    add_api_option(p)
     p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L")
     p.add_argument("--delay-ms", type=float, default=30.0, metavar="D")
     p.add_argument("--seconds", type=float, metavar="S", help="stop everything after S seconds")
@@ -134,7 +136,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     elif args.serial:
         source = ["--serial", args.serial, "--baud", str(args.baud)]
     else:
-        source = ["--midi", args.midi]
+        source = ["--midi", args.midi, "--api", args.api]
     if sessions is not None:
         journal = ["--sessions-dir", str(sessions)]
     else:
@@ -219,27 +221,26 @@ def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
 
 
 def add_drum_track(args: argparse.Namespace, sessions: Path, started: float) -> None:
-    """Mix the journaled onsets at onset + D into the recording (see the module docstring)."""
+    """Mix the journaled onsets at onset + D, their chokes applied, into the recording (see the
+    module docstring)."""
     import numpy as np
 
-    from livedrummer.audio.mix import mix_onsets
-    from livedrummer.events import ONSET_DTYPE
+    from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE
     from livedrummer.journal import SUFFIX
     from livedrummer.kitfile import load_kit
-    from services.display.record import Timing, mux_audio
+    from livedrummer.notemap import load_note_map
+    from services.display.record import Timing, mux_audio, recording_track
     from services.journal import load_journal
 
     timing = Timing.load(args.video)
-    parts = [load_journal(path).onsets for path in sorted(sessions.glob(f"*{SUFFIX}"))
-             if path.stat().st_mtime >= started - 1.0]  # fmt: skip
-    onsets = np.concatenate(parts) if parts else np.zeros(0, ONSET_DTYPE)
-    onsets["time_s"] += args.delay_ms / 1000.0 - timing.show0_s
+    journals = [load_journal(path) for path in sorted(sessions.glob(f"*{SUFFIX}"))
+                if path.stat().st_mtime >= started - 1.0]  # fmt: skip
+    onsets = np.concatenate([j.onsets for j in journals] or [np.zeros(0, ONSET_DTYPE)])
+    controls = np.concatenate([j.controls for j in journals] or [np.zeros(0, CONTROL_DTYPE)])
+    track = recording_track(onsets, controls, timing, delay_s=args.delay_ms / 1000.0,
+                            kit=load_kit(args.kit), note_map=load_note_map(args.map or DEMO_MAP),
+                            soundfont=args.soundfont)  # fmt: skip
+    mux_audio(args.video, track)
     duration = timing.frames / timing.fps
-    if args.soundfont is not None:
-        from livedrummer.audio.soundfont import render_soundfont
-
-        mux_audio(args.video, render_soundfont(onsets, duration, args.soundfont))
-    else:
-        mux_audio(args.video, mix_onsets(onsets, duration, load_kit(args.kit)))
     print(f"up: wrote {args.video.resolve()} ({duration:.1f} s, {timing.frames} frames, "
           f"{onsets.size} hits in its drum track)", flush=True)  # fmt: skip
