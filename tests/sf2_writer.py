@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 GEN_KEY_RANGE, GEN_INSTRUMENT, GEN_SAMPLE_ID, GEN_SAMPLE_MODES, GEN_ROOT_KEY = 43, 41, 53, 54, 58
+GEN_RELEASE_VOL_ENV = 38  # timecents: 1200 * log2(seconds)
 
 
 def tone(freq_hz: float = 440.0, seconds: float = 0.2, sr: int = 48_000) -> np.ndarray:
@@ -43,9 +44,11 @@ def _name(text: str) -> bytes:
     return text.encode("ascii")[:19].ljust(20, b"\0")
 
 
-def sf2_bytes(sample: np.ndarray, sr: int = 48_000, root_key: int = 60, bank: int = 128) -> bytes:
+def sf2_bytes(sample: np.ndarray, sr: int = 48_000, root_key: int = 60, bank: int = 128,
+              release_s: float | None = None) -> bytes:  # fmt: skip
     """The whole file: ``sample`` (int16) played by every key 35..81 of the preset at ``bank``
-    (128: the GM drum kit), preset 0."""
+    (128: the GM drum kit), preset 0; ``release_s``: the volume envelope's release (SoundFont
+    default: 1 ms), so a voice may ring on after its note-off as a cymbal's does."""
     n = int(sample.size)
     info = _list(
         b"INFO",
@@ -61,10 +64,12 @@ def sf2_bytes(sample: np.ndarray, sr: int = 48_000, root_key: int = 60, bank: in
     pmod = b"\0" * 10
     pgen = struct.pack("<Hh", GEN_INSTRUMENT, 0) + b"\0" * 4
     inst = struct.pack("<20sH", _name("Tone"), 0) + struct.pack("<20sH", _name("EOI"), 1)
+    release = [] if release_s is None else [round(1200 * np.log2(release_s))]
     igens = [
         struct.pack("<HBB", GEN_KEY_RANGE, 35, 81),  # must come first
         struct.pack("<Hh", GEN_ROOT_KEY, root_key),
         struct.pack("<Hh", GEN_SAMPLE_MODES, 0),  # no loop: a one-shot
+        *(struct.pack("<Hh", GEN_RELEASE_VOL_ENV, tc) for tc in release),
         struct.pack("<Hh", GEN_SAMPLE_ID, 0),  # must come last
     ]
     ibag = struct.pack("<HH", 0, 0) + struct.pack("<HH", len(igens), 0)
@@ -82,9 +87,13 @@ def sf2_bytes(sample: np.ndarray, sr: int = 48_000, root_key: int = 60, bank: in
 
 
 def write_sf2(
-    path: Path, sample: np.ndarray | None = None, root_key: int = 60, bank: int = 128
+    path: Path,
+    sample: np.ndarray | None = None,
+    root_key: int = 60,
+    bank: int = 128,
+    release_s: float | None = None,
 ) -> Path:
     """Write :func:`sf2_bytes` of ``sample`` (default :func:`tone`) to ``path``."""
     sample = tone() if sample is None else sample
-    path.write_bytes(sf2_bytes(sample, root_key=root_key, bank=bank))
+    path.write_bytes(sf2_bytes(sample, root_key=root_key, bank=bank, release_s=release_s))
     return path

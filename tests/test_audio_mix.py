@@ -1,16 +1,20 @@
-"""The synthesized drum kit and the offline mixer."""
+"""The synthesized drum kit and the offline mixer, cymbal chokes included."""
 
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from livedrummer.audio.mix import mix_onsets, voice_for
+from livedrummer.audio.mix import GRAB_FADE_S, choke_cut_s, mix_onsets, voice_for
 from livedrummer.audio.synth import LAYERS, SAMPLE_RATE, layer_for, voice_layers, voice_names
+from livedrummer.body.sample import kit_choke_times
 from livedrummer.events import ONSET_DTYPE
 from livedrummer.kitfile import load_kit
+from livedrummer.midifile import read_midi_file
+from livedrummer.notemap import load_note_map
 from livedrummer.vocabulary import HIHATS, INSTRUMENT_CODE, ZONES, HiHat, Zone
 
 KIT = load_kit("rock5")
@@ -102,3 +106,78 @@ def test_loud_mixes_are_scaled_not_clipped() -> None:
                   for inst in ("kick", "snare", "crash1", "crash2", "tom1", "tom2")))  # fmt: skip
     mix = mix_onsets(on, 1.0, KIT)
     assert 0.5 < np.abs(mix).max() <= 0.9 + 1e-6
+
+
+def grabs(**times: list[float]) -> list[np.ndarray]:
+    """Chokes per piece of KIT: ``grabs(crash1=[0.6])``."""
+    names = [p.name for p in KIT.pieces]
+    assert set(times) <= set(names), times
+    return [np.asarray(times.get(name, []), np.float64) for name in names]
+
+
+def rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(x, dtype=np.float64)))) if x.size else 0.0
+
+
+def test_a_grab_stops_the_crash_after_a_short_fade_and_the_next_stroke_rings() -> None:
+    sr, grab, again = SAMPLE_RATE, 0.6, 1.3
+    on = onsets((0.1, "crash1", 90, Zone.BOW, HiHat.NONE),
+                (again, "crash1", 90, Zone.BOW, HiHat.NONE))  # fmt: skip
+    free = mix_onsets(on, 2.0, KIT)
+    choked = mix_onsets(on, 2.0, KIT, chokes=grabs(crash1=[grab]))
+    g, f, a = round(grab * sr), round(GRAB_FADE_S * sr), round(again * sr)
+    np.testing.assert_array_equal(choked[:g], free[:g])  # untouched up to the grab
+    assert rms(free[g + f : a]) > 0.02  # a crash rings for seconds ...
+    assert not choked[g + f : a].any()  # ... and after the grab's fade it is silent
+    # the fade: the choked sound is the free one times a ramp from 1 to 0 over GRAB_FADE_S,
+    # so it never jumps more than the crash itself does from one sample to the next
+    gain = choked[g : g + f, 0] / free[g : g + f, 0]
+    np.testing.assert_allclose(gain, np.linspace(1.0, 0.0, f), atol=1e-5)
+    assert np.abs(np.diff(choked[g - f : g + f + 1, 0])).max() <= np.abs(
+        np.diff(free[g - f : g + f + 1, 0])).max() + 1e-6  # fmt: skip
+    # the stroke after the grab sounds in full (the free mix also has the first one's tail)
+    alone = mix_onsets(on[1:], 2.0, KIT)
+    np.testing.assert_allclose(choked[a:], alone[a:], atol=1e-6)
+
+
+def test_a_grab_stops_only_its_own_cymbal() -> None:
+    both = onsets((0.1, "crash1", 80, Zone.BOW, HiHat.NONE), (0.1, "ride", 80, Zone.BOW,
+                                                               HiHat.NONE))  # fmt: skip
+    choked = mix_onsets(both, 1.5, KIT, chokes=grabs(crash1=[0.5]))
+    ride = mix_onsets(both[1:], 1.5, KIT)
+    after = round((0.5 + GRAB_FADE_S) * SAMPLE_RATE)
+    np.testing.assert_allclose(choked[after:], ride[after:], atol=1e-6)
+    assert rms(ride[after:]) > 0.01
+
+
+def test_choke_rule_a_grab_stops_what_rings_at_or_before_it() -> None:
+    on = onsets(*((t, "crash1", 100, Zone.BOW, HiHat.NONE) for t in (0.1, 0.5, 0.9)),
+                (0.2, "crash2", 100, Zone.BOW, HiHat.NONE))  # fmt: skip
+    cut = choke_cut_s(on, KIT, grabs(crash1=[0.5, 0.7]))
+    assert cut.tolist() == [0.5, 0.5, np.inf, np.inf]  # a grab on the stroke's own time too
+    assert np.isinf(choke_cut_s(on, KIT, None)).all()
+    with pytest.raises(ValueError, match="kit"):
+        mix_onsets(on, 1.0, None, chokes=grabs(crash1=[0.5]))
+
+
+def test_drummer6s_grab_stops_the_crash_in_the_mix(groove_dir: Path) -> None:
+    # GMD drummer6 grabs crash 1 (Roland notes 49 and 55) 0.43 s after its last stroke.
+    path = groove_dir / "drummer6" / "session3" / "2_rock_100_beat_4-4.mid"
+    note_map = load_note_map("roland-td")
+    perf = read_midi_file(path, note_map)
+    chokes = kit_choke_times(perf.controls, note_map, KIT)
+    crash = [p.name for p in KIT.pieces].index("crash1")
+    assert chokes[crash].size == 2 and not any(c.size for k, c in enumerate(chokes) if k != crash)
+    grab = float(chokes[crash][0])
+    on = perf.onsets[perf.onsets["time_s"] > grab - 5.0]  # the last bars: a fast mix
+    dur = perf.duration_s + 2.0
+    after = slice(round((grab + 0.01) * SAMPLE_RATE), round((grab + 0.3) * SAMPLE_RATE))
+    is_crash = on["instrument"] == INSTRUMENT_CODE["crash1"]
+    free_crash = mix_onsets(on[is_crash], dur, KIT)
+    assert rms(free_crash[after]) > 0.01
+    assert not mix_onsets(on[is_crash], dur, KIT, chokes=chokes)[after].any()
+    # in the full mix what sounds after the grab is everything but the crash
+    rest = mix_onsets(on[~is_crash], dur, KIT)
+    full = mix_onsets(on, dur, KIT, chokes=chokes)
+    np.testing.assert_allclose(full[after], rest[after], atol=1e-6)
+    assert rms(mix_onsets(on, dur, KIT)[after] - full[after]) > 0.5 * rms(free_crash[after])

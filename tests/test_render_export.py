@@ -81,6 +81,39 @@ def test_video_frames_audio_and_onsets_line_up(groove: Path, tmp_path: Path, cap
     assert env[: int(perf.onsets["time_s"][0] * rate)].max(initial=0) < 0.01
 
 
+def choked_crash(write_midi) -> Path:  # type: ignore[no-untyped-def]
+    """A GM crash at 0.25 s, grabbed (polyphonic aftertouch 127) at 0.75 s, let go at 1.0 s."""
+    msgs: list[mido.Message] = [mido.MetaMessage("set_tempo", tempo=500_000, time=0),
+        mido.Message("note_on", channel=9, note=49, velocity=120, time=240),
+        mido.Message("note_off", channel=9, note=49, velocity=0, time=30),
+        mido.Message("polytouch", channel=9, note=49, value=127, time=450),
+        mido.Message("polytouch", channel=9, note=49, value=0, time=240)]  # fmt: skip
+    path: Path = write_midi(msgs, name="choke.mid")
+    return path
+
+
+def crash_rms_around_the_grab(audio: np.ndarray, rate: int) -> tuple[float, float]:
+    """RMS of the track 50-300 ms before and after :func:`choked_crash`'s grab (AAC's priming
+    and the 5 ms fade stay out of both windows)."""
+
+    def rms(a: float, b: float) -> float:
+        x = audio[round(a * rate) : round(b * rate)].astype(np.float64)
+        return float(np.sqrt(np.mean(x**2)))
+
+    return rms(0.45, 0.70), rms(0.80, 1.05)
+
+
+def test_a_choked_crash_stops_sounding_in_the_video(write_midi, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    out = tmp_path / "out.mp4"
+    code = main(["render", str(choked_crash(write_midi)), "-o", str(out), "--size", "96x54",
+                 "--fps", "10", "--tail", "1.0", "--camera", "front"])  # fmt: skip
+    assert code == 0
+    _frames, _video_s, audio, rate, _size = read_back(out)
+    before, after = crash_rms_around_the_grab(audio, rate)
+    assert before > 0.01  # the crash rings up to the grab (it would for seconds) ...
+    assert after < 0.02 * before, (before, after)  # ... and is silent after it
+
+
 def test_frames_folder_gets_pngs(groove: Path, tmp_path: Path) -> None:
     frames = tmp_path / "frames"
     code = main(["render", str(groove), "--frames", str(frames), "--size", "96x54",

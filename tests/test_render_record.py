@@ -2,17 +2,25 @@
 
 from __future__ import annotations
 
+import argparse
+import json
+import math
 from pathlib import Path
 
 import av
 import numpy as np
 import pytest
+from sf2_writer import write_sf2
 
+from livedrummer.clock import MonotonicClock
+from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind, Onset
 from livedrummer.kitfile import load_kit
+from livedrummer.notemap import load_note_map
 from services.display.context import DisplayError
-from services.display.record import LiveRecorder, Timing, mux_audio
+from services.display.record import LiveRecorder, Timing, mux_audio, timing_path
 from services.display.surface import HeadlessSurface
-from services.display.video import VideoSettings
+from services.display.video import VideoSettings, VideoWriter
+from services.journal import JournalWriter
 
 FPS = 25
 SIZE = (160, 90)
@@ -58,3 +66,52 @@ def test_a_bad_video_path_is_one_error(tmp_path: Path) -> None:
         LiveRecorder(tmp_path / "no" / "x.mp4", VideoSettings(size=SIZE, fps=FPS))
     with pytest.raises(DisplayError, match="no recording timing"):
         Timing.load(tmp_path / "x.mp4")
+
+
+@pytest.mark.parametrize("sound", ["built-in", "soundfont"])
+def test_up_videos_drum_track_stops_a_crash_the_journal_says_was_grabbed(
+    sound: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from livedrummer.cli.up import add_drum_track
+
+    soundfont = None
+    if sound == "soundfont":
+        pytest.importorskip("fluidsynth")  # tests/test_soundfont.py fails under CI without it
+        t = np.arange(3 * 48_000) / 48_000  # rings for seconds, through its note-off
+        wave = 0.8 * np.cos(2 * np.pi * 440.0 * t) * np.exp(-t / 1.5)
+        soundfont = write_sf2(tmp_path / "ringing.sf2", np.round(wave * 32767).astype("<i2"),
+                              release_s=8.0)  # fmt: skip
+    video, frames, show0 = tmp_path / "show.mp4", 2 * FPS, 1000.0
+    writer = VideoWriter(video, VideoSettings(size=SIZE, fps=FPS))
+    for _ in range(frames):
+        writer.write(np.zeros((SIZE[1] * 3 // 2, SIZE[0]), np.uint8))
+    writer.close()
+    timing_path(video).write_text(json.dumps({"show0_s": show0, "fps": FPS, "frames": frames}))
+    # the session as the input daemon journals it: a GM crash on show time 1000.25, grabbed
+    # (polyphonic aftertouch on its note) at 1000.75
+    spec = load_note_map("general-midi").lookup(49)
+    assert spec is not None
+    hit = np.array([Onset(show0 + 0.25, 49, 120, 9, spec.instrument, spec.zone, spec.hihat,
+                          math.nan).to_record()], ONSET_DTYPE)  # fmt: skip
+    grab = np.array([(show0 + 0.75, ControlKind.CHOKE, 9, 49, 127, 0)], CONTROL_DTYPE)
+    sessions = tmp_path / "sessions"
+    journal = JournalWriter.create({"performer": 0}, MonotonicClock(), sessions, "s1", 0.0)
+    journal.append_onsets(hit, show0 + 0.25, 0)
+    journal.append_controls(grab, show0 + 0.75, 0)
+    journal.close()
+    args = argparse.Namespace(video=video, delay_ms=30.0, kit="rock5", map="general-midi",
+                              soundfont=soundfont)  # fmt: skip
+    add_drum_track(args, sessions, started=0.0)
+    assert "1 hits in its drum track" in capsys.readouterr().out
+    with av.open(str(video)) as c:
+        a = c.streams.audio[0]
+        audio = np.concatenate([f.to_ndarray() for f in c.decode(a)], axis=1).T
+        rate = a.rate
+
+    def rms(lo: float, hi: float) -> float:  # on the video's time: the hit sounds at +D
+        x = audio[round((lo + 0.03) * rate) : round((hi + 0.03) * rate)].astype(np.float64)
+        return float(np.sqrt(np.mean(x**2)))
+
+    before, after = rms(0.45, 0.70), rms(0.80, 1.05)  # the grab at 0.75, its fade to 0.755
+    assert before > 0.005  # the crash rings up to the grab (it would for seconds) ...
+    assert after < 0.02 * before, (before, after)  # ... and is silent after it

@@ -1,7 +1,8 @@
 """The drum track from a SoundFont: real FluidSynth on a SoundFont 2 file written by the test.
 
 The SoundFont (:mod:`sf2_writer`) has one drum preset whose every key plays a 440 Hz cosine
-burst at root key 60, so attacks, levels and pitches in FluidSynth's output can be measured.
+burst at root key 60, so attacks, levels and pitches in FluidSynth's output can be measured; a
+second one rings for seconds after its note-off, as a cymbal does, for the chokes.
 Without libfluidsynth3 these tests skip on a developer's machine and fail under CI.
 """
 
@@ -18,10 +19,13 @@ import mido
 import numpy as np
 import pytest
 from sf2_writer import write_sf2
+from test_render_export import choked_crash, crash_rms_around_the_grab, read_back
 
+from livedrummer.audio.mix import GRAB_FADE_S
 from livedrummer.audio.soundfont import check_soundfont, gm_note, render_soundfont
 from livedrummer.cli import main
 from livedrummer.events import ONSET_DTYPE, Onset
+from livedrummer.kitfile import load_kit
 from livedrummer.notemap import load_note_map
 
 SR = 48_000
@@ -42,6 +46,15 @@ def needs_fluidsynth() -> None:
 @pytest.fixture(scope="module")
 def sf2(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return write_sf2(tmp_path_factory.mktemp("sf") / "tiny.sf2")
+
+
+@pytest.fixture(scope="module")
+def ringing_sf2(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """440 Hz for 3 s, decaying slowly, with an 8 s release: a note-off does not stop it."""
+    t = np.arange(3 * SR) / SR
+    wave = 0.8 * np.cos(2 * np.pi * 440.0 * t) * np.exp(-t / 1.5)
+    sample = np.round(wave * 32767).astype("<i2")
+    return write_sf2(tmp_path_factory.mktemp("sf") / "ringing.sf2", sample, release_s=8.0)
 
 
 def onsets(hits: list[tuple[float, int, int]], map_name: str = "general-midi") -> np.ndarray:
@@ -99,6 +112,32 @@ def test_pitch_follows_the_key_relative_to_the_root(sf2: Path, note: int) -> Non
     assert peak_hz == pytest.approx(expected, rel=0.01)
 
 
+def rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(x, dtype=np.float64))))
+
+
+def test_a_grab_stops_a_ringing_cymbal_after_a_short_fade(ringing_sf2: Path) -> None:
+    kit = load_kit("rock5")
+    grab, again = 0.6, 1.3
+    hits = onsets([(0.1, 49, 110), (again, 49, 110)])  # GM 49: crash 1
+    chokes = [np.array([grab]) if p.name == "crash1" else np.zeros(0) for p in kit.pieces]
+    free = render_soundfont(hits, 2.0, ringing_sf2, SR)
+    choked = render_soundfont(hits, 2.0, ringing_sf2, SR, kit, chokes)
+    g, f, a = round(grab * SR), round(GRAB_FADE_S * SR), round(again * SR)
+    np.testing.assert_allclose(choked[:g], free[:g], atol=1e-5)  # the same up to the grab
+    assert rms(free[g + f : a]) > 0.01  # the note-off at 0.2 s did not stop it ...
+    assert rms(choked[g + f : a]) < 1e-5  # ... the grab did, after a fade, not a step:
+    gain = choked[g : g + f, 0] / free[g : g + f, 0]
+    ramp = np.linspace(1.0, 0.0, f)
+    loud = np.abs(free[g : g + f, 0]) > 0.05  # a ratio means something where there is sound
+    np.testing.assert_allclose(gain[loud], ramp[loud], atol=1e-3)
+    assert np.abs(np.diff(choked[g - f : g + f + 1, 0])).max() <= np.abs(
+        np.diff(free[g - f : g + f + 1, 0])).max() + 1e-4  # fmt: skip
+    # the stroke after the grab sounds as if alone (the free track has the first one's tail)
+    alone = render_soundfont(hits[1:], 2.0, ringing_sf2, SR)
+    np.testing.assert_allclose(choked[a:], alone[a:], atol=1e-5)
+
+
 def test_e_kit_notes_sound_as_their_general_midi_equivalents() -> None:
     roland = load_note_map("roland-td")
     expect = {22: 42, 26: 46, 48: 50, 50: 50, 45: 48, 40: 38, 55: 49, 59: 51, 36: 36, 38: 38}
@@ -153,6 +192,28 @@ def test_render_cli_puts_the_soundfont_track_in_the_video(
     piece = audio[int(times[0] * rate) : int((times[0] + 0.2) * rate), 0].astype(np.float64)
     spectrum = np.abs(np.fft.rfft(piece * np.hanning(piece.size), n=1 << 17))
     assert float(np.argmax(spectrum)) * rate / (1 << 17) == pytest.approx(110.0, rel=0.02)
+
+
+def test_render_cli_stops_a_choked_crash_in_the_soundfont_track(
+    write_midi,
+    ringing_sf2: Path,
+    tmp_path: Path,  # type: ignore[no-untyped-def]
+) -> None:
+    from services.display.context import DisplayError, headless_context
+
+    try:
+        headless_context().release()
+    except DisplayError as exc:
+        pytest.skip(str(exc))
+    out = tmp_path / "out.mp4"
+    code = main(["render", str(choked_crash(write_midi)), "-o", str(out), "--size", "96x54",
+                 "--fps", "10", "--tail", "1.0", "--camera", "front",
+                 "--soundfont", str(ringing_sf2)])  # fmt: skip
+    assert code == 0
+    _frames, _video_s, audio, rate, _size = read_back(out)
+    before, after = crash_rms_around_the_grab(audio, rate)
+    assert before > 0.005  # the crash rings through its note-off up to the grab ...
+    assert after < 0.02 * before, (before, after)  # ... and is silent after it
 
 
 def _cli(*argv: str) -> subprocess.CompletedProcess[str]:

@@ -10,6 +10,18 @@ shapes their decay with its release envelope. Hi-hat chokes are the SoundFont's 
 classes. Output is float32 stereo, same length and placement as :func:`mix_onsets`, scaled
 down as a whole only if it would clip.
 
+Cymbal chokes (grabs per kit piece; :func:`~livedrummer.audio.mix.choke_cut_s` is the rule
+the built-in kit applies too). A note-off at the grab would only start the SoundFont's own
+release, which for a crash lasts seconds, so the strokes a grab stops are rendered apart: each
+group of strokes ended by one grab goes through a second synth, from its first note-on to the
+grab plus :data:`~livedrummer.audio.mix.GRAB_FADE_S`, fades out over those last 5 ms and is
+added to the mix; all other strokes play through the main synth as before. FluidSynth mixes
+linearly, so the sum is the unchoked render with the choked strokes stopped. Limits: a choked
+stroke shares no voice stealing or exclusive class with the main synth's strokes; between two
+groups the second synth's voices are turned off and :data:`FLUSH_S` of silence is rendered and
+dropped, so one group's reverb does not sound in the next (a system reset, in FluidSynth 2.3,
+left the voices playing), about 20 ms of work per grab that stops something.
+
 Which note sounds (:func:`gm_notes`): the onset's own note when General MIDI means the same
 instrument, zone and hi-hat articulation by it (so a GM file keeps its 35-vs-36 kicks,
 electric snares and Latin percussion); otherwise, as for an e-kit's notes (a Roland TD sends
@@ -35,16 +47,17 @@ import logging
 import os
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from functools import cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from livedrummer.audio.mix import HEADROOM
+from livedrummer.audio.mix import GRAB_FADE_S, HEADROOM, choke_cut_s
 from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.errors import LivedrummerError
+from livedrummer.kit import Kit
 from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
 
 log = logging.getLogger(__name__)
@@ -53,6 +66,7 @@ DRUM_CHANNEL = 9  # MIDI channel 10
 DRUM_BANK, DRUM_PRESET = 128, 0
 NOTE_HOLD_S = 0.1
 BLOCK = 64  # FluidSynth's rendering block (FLUID_BUFSIZE)
+FLUSH_S = 3.0  # silence rendered between choked groups: the default reverb falls 100 dB
 GAIN = 0.6  # FluidSynth's default 0.2 leaves a drum track quiet; clipping is scaled away
 _SNARE_RIM_NOTE = 38  # GM has no rim shot; 39 is a hand clap
 
@@ -166,8 +180,9 @@ def _fluidsynth() -> tuple[Any, Any]:
     return fluidsynth, write
 
 
-def _open(path: Path, sr: int) -> tuple[Any, Any]:
-    """A FluidSynth synth (no audio driver) with ``path``'s drum kit on channel 10."""
+def _open(path: Path, sr: int) -> tuple[Any, Any, int]:
+    """A FluidSynth synth (no audio driver) with ``path``'s drum kit on channel 10, the
+    library's write function and the SoundFont's id in the synth."""
     try:
         fluidsynth, write = _fluidsynth()
     except SoundFontError as exc:
@@ -194,41 +209,83 @@ def _open(path: Path, sr: int) -> tuple[Any, Any]:
     except BaseException:
         synth.delete()
         raise
-    return synth, write
+    return synth, write, sfid
 
 
 def check_soundfont(path: Path, sr: int = SAMPLE_RATE) -> None:
     """Raise :class:`SoundFontError` now if ``path`` would fail later (before a long show)."""
-    synth, _write = _open(path, sr)
+    synth, _write, _sfid = _open(path, sr)
     synth.delete()
 
 
 def render_soundfont(
-    onsets: np.ndarray, duration_s: float, path: Path, sr: int = SAMPLE_RATE
+    onsets: np.ndarray,
+    duration_s: float,
+    path: Path,
+    sr: int = SAMPLE_RATE,
+    kit: Kit | None = None,
+    chokes: Sequence[np.ndarray] | None = None,
 ) -> np.ndarray:
-    """Stereo float32 (N, 2), N = round(duration_s * sr): every onset played by ``path``."""
+    """Stereo float32 (N, 2), N = round(duration_s * sr): every onset played by ``path``; a
+    grab in ``chokes`` (per piece of ``kit``) stops its piece's strokes (module docstring)."""
     n = round(duration_s * sr)
     out = np.zeros((n, 2), np.float32)
-    synth, write = _open(path, sr)
+    notes = gm_notes(onsets)
+    cuts = choke_cut_s(onsets, kit, chokes)
+    free = ~np.isfinite(cuts)
+    synth, write, _sfid = _open(path, sr)
     try:
-        events = _events(onsets, gm_notes(onsets), n, sr)
-        pos = 0
-        for at, velocity, note in events:
-            if at > pos:
-                _render(write, synth.synth, out, pos, at)
-                pos = at
-            if velocity:
-                synth.noteon(DRUM_CHANNEL, note, velocity)
-            else:
-                synth.noteoff(DRUM_CHANNEL, note)
-        if n > pos:
-            _render(write, synth.synth, out, pos, n)
+        _play(synth, write, out, _events(onsets[free], notes[free], n, sr), 0)
     finally:
         synth.delete()
+    if not free.all():
+        _add_choked(out, onsets, notes, cuts, path, sr)
     peak = float(np.abs(out).max()) if n else 0.0
     if peak > HEADROOM:
         out *= HEADROOM / peak
     return out
+
+
+def _play(synth: Any, write: Any, out: np.ndarray, events: list[tuple[int, int, int]],
+          pos: int) -> None:  # fmt: skip
+    """Send ``events`` to ``synth``, rendering into ``out`` from sample ``pos`` to its end."""
+    for at, velocity, note in events:
+        if at > pos:
+            _render(write, synth.synth, out, pos, at)
+            pos = at
+        if velocity:
+            synth.noteon(DRUM_CHANNEL, note, velocity)
+        else:
+            synth.noteoff(DRUM_CHANNEL, note)
+    if out.shape[0] > pos:
+        _render(write, synth.synth, out, pos, out.shape[0])
+
+
+def _add_choked(out: np.ndarray, onsets: np.ndarray, notes: np.ndarray, cuts: np.ndarray,
+                path: Path, sr: int) -> None:  # fmt: skip
+    """Each group of strokes one grab stops, rendered alone to the grab and faded into ``out``."""
+    n = out.shape[0]
+    fade = max(1, round(GRAB_FADE_S * sr))
+    flush = np.zeros((round(FLUSH_S * sr), 2), np.float32)
+    synth, write, _sfid = _open(path, sr)
+    try:
+        for cut_s in np.unique(cuts[np.isfinite(cuts)]).tolist():
+            group = cuts == cut_s
+            events = _events(onsets[group], notes[group], n, sr)
+            stop = min(n, round(cut_s * sr) + fade)
+            if not events or events[0][0] >= stop:
+                continue
+            first, grab = events[0][0], round(cut_s * sr)
+            synth.all_sounds_off(DRUM_CHANNEL)  # the last group's voices; then its reverb
+            _render(write, synth.synth, flush, 0, flush.shape[0])  # and chorus die away
+            part = np.zeros((stop - first, 2), np.float32)
+            _play(synth, write, part, [(at - first, v, k) for at, v, k in events if at < stop], 0)
+            begin = max(grab, first)  # a grab on the stroke's own sample: before its block
+            ramp = np.linspace(1.0, 0.0, fade, dtype=np.float32)[begin - grab : stop - grab]
+            part[begin - first :] *= ramp[:, None]
+            out[first:stop] += part
+    finally:
+        synth.delete()
 
 
 def _events(onsets: np.ndarray, notes: np.ndarray, n: int, sr: int) -> list[tuple[int, int, int]]:

@@ -2,11 +2,12 @@
 
 One function, :func:`export`, does the whole job: it makes the EGL context and the renderer,
 mixes the drum track (:func:`livedrummer.audio.mix.mix_onsets`, or with ``soundfont``
-:func:`livedrummer.audio.soundfont.render_soundfont`) to exactly the video's length,
-then renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or the PNG
-writer. The video gets each frame as I420, converted to YUV on the GPU, where the width is a
-multiple of 8 (other widths: RGBA, converted on the encoder thread); the PNGs get RGB. The
-drummer and the kit's motion come from a
+:func:`livedrummer.audio.soundfont.render_soundfont`) to exactly the video's length, with the
+cymbal chokes the body plays (``body.performed.chokes``: a grab stops the sound where it stops
+the cymbal), then renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or
+the PNG writer. The video gets each frame as I420, converted to YUV on the GPU, where the
+width is a multiple of 8 (other widths: RGBA, converted on the encoder thread); the PNGs get
+RGB. The drummer and the kit's motion come from a
 :class:`~livedrummer.render.body_scene.BodyScene` (the body model), sampled in chunks of frames
 as the render goes, so memory stays bounded however long the file.
 
@@ -93,9 +94,11 @@ def export(
     writer: VideoWriter | None = None
     if out is not None:
         if soundfont is not None:  # before the writer: a bad file leaves no empty video
-            audio = render_soundfont(performance.onsets, n / fps, soundfont, settings.sample_rate)
+            audio = render_soundfont(performance.onsets, n / fps, soundfont, settings.sample_rate,
+                                     kit, body.performed.chokes)  # fmt: skip
         else:
-            audio = mix_onsets(performance.onsets, n / fps, kit, settings.sample_rate)
+            audio = mix_onsets(performance.onsets, n / fps, kit, settings.sample_rate,
+                               body.performed.chokes)  # fmt: skip
         writer = VideoWriter(out, settings)
         writer.write_audio(audio)
     ctx = None

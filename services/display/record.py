@@ -9,8 +9,10 @@ time, and a sound placed at ``t - show0`` lines up with what was shown at ``t``.
 
 The live display hears no sound (it subscribes to poses), so the recording is written as video
 only; its timing goes into a sidecar ``<file>.timing.json`` (``show0_s``, ``fps``,
-``frames``), and whoever knows the onsets (``livedrummer demo`` subscribes to the input
-daemon) mixes them with the built-in kit and calls :func:`mux_audio`, which copies the video
+``frames``), and whoever knows the onsets (``livedrummer up --video`` reads them back from the
+session journal) makes the track with :func:`recording_track` (onsets at onset + D on the
+video's time, cymbal chokes from the journaled controls stopping the sound as they stop the
+cymbal, the built-in kit or a SoundFont) and calls :func:`mux_audio`, which copies the video
 packets into a new file beside an AAC track (no re-encoding of the picture).
 
 Limits: the sidecar is written when the recorder closes (a killed display leaves a playable
@@ -28,6 +30,8 @@ from typing import Any
 
 import numpy as np
 
+from livedrummer.kit import Kit
+from livedrummer.notemap import NoteMap
 from services.display.context import DisplayError
 from services.display.renderer import Renderer, i420_ok
 from services.display.video import VideoSettings, VideoWriter, encode_audio
@@ -95,6 +99,38 @@ class LiveRecorder:
         log.info("recorded %d frames to %s (%d repeated, %d skipped)", self.frames, self.path,
                  self.repeated, self.skipped)  # fmt: skip
         return timing
+
+
+def recording_track(
+    onsets: np.ndarray,
+    controls: np.ndarray,
+    timing: Timing,
+    *,
+    delay_s: float,
+    kit: Kit,
+    note_map: NoteMap,
+    soundfont: Path | None = None,
+    sample_rate: int = 48_000,
+) -> np.ndarray:
+    """The drum track of a recording, (frames / fps * sample_rate, 2) float32: ``onsets`` and
+    ``controls`` (stamped on the shared clock) sounded at ``time + delay_s`` on the video's
+    time, each grab in ``controls`` stopping its cymbal (the notes read through ``note_map``
+    onto ``kit``'s pieces, as the body does), with ``soundfont``'s kit when given."""
+    from livedrummer.audio.mix import mix_onsets
+    from livedrummer.body.sample import kit_choke_times
+
+    shift = delay_s - timing.show0_s
+    on = np.sort(onsets, order="time_s")
+    on["time_s"] += shift
+    ctl = np.sort(controls, order="time_s")
+    ctl["time_s"] += shift
+    chokes = kit_choke_times(ctl, note_map, kit)
+    duration = timing.frames / timing.fps
+    if soundfont is not None:
+        from livedrummer.audio.soundfont import render_soundfont
+
+        return render_soundfont(on, duration, soundfont, sample_rate, kit, chokes)
+    return mix_onsets(on, duration, kit, sample_rate, chokes)
 
 
 def mux_audio(video: Path, stereo: np.ndarray, sample_rate: int = 48_000) -> None:
