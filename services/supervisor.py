@@ -14,7 +14,15 @@ process so each can crash, restart and move machine alone. The supervisor:
   in reverse start order, then SIGKILL for any process still alive after ``stop_timeout_s``.
 
 It is single-threaded: a child's death and a ready line are both events on file descriptors
-(the notify pipes and a self-pipe woken by SIGCHLD), multiplexed with :mod:`selectors`.
+multiplexed with :mod:`selectors`: the notify pipes, and per child a pidfd (Linux >= 5.3),
+readable the moment the child dies, so a death is learnt of at once, never by a poll. The
+death is timed when its pidfd wakes the supervisor; where pidfds are missing, a self-pipe
+woken by SIGCHLD does the same job. A service's "ready" is its own word that it does its job
+(the synth after its first poses are published, the display after its first frame with a
+pose is drawn), so a recovery figure is from the death to the service working again.
+
+Limits: under CPU load the supervisor itself may run late, so the time it logs can start
+after the real death; ``livedrummer bench recovery`` times from the kill instead.
 """
 
 from __future__ import annotations
@@ -32,6 +40,18 @@ from livedrummer.errors import LivedrummerError
 from services.notify import NOTIFY_FD_ENV
 
 log = logging.getLogger(__name__)
+
+
+#: Selector data of a child's pidfd: (EXITED, service name).
+EXITED = "exited"
+
+
+def _pidfd(pid: int) -> int | None:
+    """A pidfd for ``pid`` (readable once it exits), or None where the OS has none."""
+    try:
+        return os.pidfd_open(pid)
+    except (AttributeError, OSError):
+        return None
 
 
 class SupervisorError(LivedrummerError):
@@ -56,6 +76,8 @@ class _Running:
     proc: subprocess.Popen[bytes]
     notify_fd: int | None
     started_at: float
+    pidfd: int | None = None
+    exited_at: float | None = None  # when its pidfd said it died
     ready: bool = False
     detail: str = ""
     buffer: bytes = b""
@@ -166,6 +188,7 @@ class Supervisor:
                 r.proc.kill()
                 r.proc.wait()
             self._close_notify(r)
+            self._close_pidfd(r)
         self._running.clear()
         if self._signals is not None:
             old_fd, old_handler = self._signals
@@ -201,7 +224,11 @@ class Supervisor:
         os.close(write_fd)
         os.set_blocking(read_fd, False)
         self._selector.register(read_fd, selectors.EVENT_READ, spec.name)
-        self._running[spec.name] = _Running(spec, proc, read_fd, time.monotonic(), died_at=died_at)
+        pidfd = _pidfd(proc.pid)
+        if pidfd is not None:
+            self._selector.register(pidfd, selectors.EVENT_READ, (EXITED, spec.name))
+        self._running[spec.name] = _Running(spec, proc, read_fd, time.monotonic(), pidfd=pidfd,
+                                            died_at=died_at)  # fmt: skip
         log.info("started %s (pid %d)", spec.name, proc.pid)
 
     def _poll(self, timeout_s: float) -> None:
@@ -212,6 +239,12 @@ class Supervisor:
                         pass
                 except BlockingIOError:
                     pass
+                continue
+            if isinstance(key.data, tuple):  # a pidfd: that child has died, now
+                r = self._running.get(key.data[1])
+                if r is not None and r.pidfd == key.fd:
+                    r.exited_at = time.monotonic()
+                    self._close_pidfd(r)
                 continue
             r = self._running.get(key.data)
             if r is not None and r.notify_fd == key.fd:
@@ -246,12 +279,19 @@ class Supervisor:
             os.close(r.notify_fd)
             r.notify_fd = None
 
+    def _close_pidfd(self, r: _Running) -> None:
+        if r.pidfd is not None:
+            self._selector.unregister(r.pidfd)
+            os.close(r.pidfd)
+            r.pidfd = None
+
     def _reap(self) -> None:
         for name, r in list(self._running.items()):
             code = r.proc.poll()
             if code is None or self._stopping:
                 continue
             self._close_notify(r)
+            self._close_pidfd(r)
             del self._running[name]
             if code == 0 and r.spec.ends_rig:
                 log.info("%s finished", name)
@@ -260,9 +300,10 @@ class Supervisor:
             if not r.spec.restart:
                 log.warning("%s exited with %s; not restarting", name, code)
                 continue
-            delay = self._backoff[name].next_delay(time.monotonic() - r.started_at)
+            died = r.exited_at if r.exited_at is not None else time.monotonic()
+            delay = self._backoff[name].next_delay(died - r.started_at)
             self.restarts[name] += 1
-            self._died_at[name] = time.monotonic()
+            self._died_at[name] = died
             log.warning("%s exited with %s; restart #%d in %.1f s", name, code,
                         self.restarts[name], delay)  # fmt: skip
-            self._pending[name] = time.monotonic() + delay
+            self._pending[name] = died + delay

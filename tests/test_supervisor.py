@@ -97,3 +97,25 @@ def test_backoff_doubles_on_quick_crashes_and_resets_after_a_healthy_run() -> No
     b = Backoff(first_s=0.1, max_s=0.5, healthy_after_s=10)
     assert [b.next_delay(0.0) for _ in range(5)] == [0.1, 0.2, 0.4, 0.5, 0.5]
     assert b.next_delay(11.0) == 0.1
+
+
+def test_a_death_is_learnt_from_the_pidfd_without_sigchld(tmp_path: Path) -> None:
+    log = tmp_path / "log"
+    sup = Supervisor([serving(log, "a")])
+    try:
+        sup.start()
+        signal.signal(signal.SIGCHLD, signal.SIG_DFL)  # no SIGCHLD wake-up: the pidfd alone
+        pid = sup.pid("a")
+        assert pid is not None
+        killed = time.monotonic()
+        os.kill(pid, signal.SIGKILL)
+        running = sup._running["a"]  # the record the pidfd event fills in
+        deadline = time.monotonic() + 30
+        while running.exited_at is None and time.monotonic() < deadline:
+            sup._poll(1.0)  # events only: no waitpid poll here
+        assert running.exited_at is not None and killed <= running.exited_at
+        wait_for(lambda: sup.is_ready("a") and sup.pid("a") != pid, sup)
+        assert sup.restarts["a"] == 1
+        assert sup.recoveries["a"] and sup.recoveries["a"][0] > 0
+    finally:
+        sup.stop()

@@ -4,7 +4,13 @@ Keys: space play/pause, left/right step a frame, shift+left/right seek 5 s, home
 reverse, +/- speed, 0 normal speed, m set a marker, [ ] previous/next marker, 1..8 cameras
 (stage, front, drummer, overhead, left, right, back, kick), o the scrolling score and g the
 joint-angle graph (``--overlay score,joints`` shows them from the start), q or Esc quit. On a
-machine with no screen use ``livedrummer render``.
+machine with no screen use ``livedrummer render``. The limbs are those of
+:func:`livedrummer.sticking.stick_performance` (``--sticking``, ``--score``), as ``livedrummer
+sticking`` prints them.
+
+Options share their names with the other commands: ``--seconds`` (as in ``up`` and ``demo``)
+closes the window, ``--frames-dir`` (as in ``render`` and ``up``) is where ``--live
+--headless`` writes its frames, ``--max-frames`` stops it after so many.
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ from livedrummer.cli.common import (
     add_command,
     add_kit_option,
     add_motion_options,
+    add_renamed,
     demo_groove,
 )
 from livedrummer.cli.keys import add_curve_options, security_from_args
@@ -26,7 +33,7 @@ from livedrummer.render.camera import CAMERA_NAMES
 
 
 def register(sub: Subparsers) -> None:
-    p = add_command(sub, "display", run, "play a MIDI file in a window with transport keys")
+    p = add_command(sub, "display", run)
     p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
     add_kit_option(p)
     p.add_argument("--map", help="note map (default general-midi; roland-td for the demo)")
@@ -35,24 +42,32 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--fullscreen", action="store_true", help="full screen (projectors)")
     p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
     p.add_argument("--aa", type=int, default=4, metavar="N", help="multisample N (default 4)")
-    p.add_argument("--quit-after", type=float, metavar="S", help="close after S seconds")
+    add_renamed(p, "--quit-after", p.add_argument(
+        "--seconds", type=float, metavar="S",
+        help="close the window after S seconds (default: when you close it)"))  # fmt: skip
     p.add_argument("--overlay", default="", metavar="LIST",
-                   help="strips shown first: score, joints or both (keys o, g)")  # fmt: skip
+                   help="strips shown first: score, joints or both; keys o, g "
+                   "(default: none)")  # fmt: skip
     add_motion_options(p)
     live = p.add_argument_group("live (poses from a running synth)")
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
     live.add_argument("--sub", default="tcp://127.0.0.1:5720",
                       help="the synth's pose endpoint (default tcp://127.0.0.1:5720)")  # fmt: skip
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
-    live.add_argument("--frames", type=int, metavar="N", help="stop after N frames")
-    live.add_argument("--out", type=Path, metavar="DIR",
-                      help="write frame PNGs and frames.jsonl into DIR")  # fmt: skip
+    add_renamed(live, "--frames", live.add_argument(
+        "--max-frames", type=int, metavar="N",
+        help="stop after N frames (default: when stopped)"))  # fmt: skip
+    add_renamed(live, "--out", live.add_argument(
+        "--frames-dir", type=Path, metavar="DIR",
+        help="write frame PNGs and frames.jsonl into DIR (default: none)"))  # fmt: skip
     live.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
     live.add_argument("--clock", choices=("auto", "audio", "monotonic"), default="auto",
                       help="frame clock: the audio output's (auto: when not headless)")  # fmt: skip
-    live.add_argument("--no-png", action="store_true", help="--out: frames.jsonl only, no PNGs")
+    live.add_argument("--no-png", action="store_true",
+                      help="--frames-dir: frames.jsonl only, no PNGs")  # fmt: skip
     live.add_argument("--video", type=Path, metavar="FILE",
-                      help="with --headless: record the frames on show time (MP4)")  # fmt: skip
+                      help="with --headless: record the frames on show time as MP4 "
+                      "(default: none)")  # fmt: skip
     live.add_argument("--no-render", action="store_true",
                       help="only log frames (benchmarks without a GPU context)")  # fmt: skip
     live.add_argument("--no-render-ahead", action="store_true",
@@ -75,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     performance = read_midi_file(source, note_map)
     options = WindowOptions(
         size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
-        camera=args.camera, samples=args.aa, quit_after_s=args.quit_after,
+        camera=args.camera, samples=args.aa, quit_after_s=args.seconds,
         overlays=parse_overlays(args.overlay),
     )  # fmt: skip
     kit = load_kit(args.kit)
@@ -110,13 +125,14 @@ def run_live(args: argparse.Namespace) -> int:
     if not args.headless:
         from services.display.window import WindowOptions
 
-        if args.video is not None or args.out is not None:
-            raise ConfigError("display --live: --video and --out record off screen: add --headless")
+        if args.video is not None or args.frames_dir is not None:
+            raise ConfigError("display --live: --video and --frames-dir record off screen: "
+                              "add --headless")  # fmt: skip
         window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
                                monitor=args.monitor, camera=args.camera, samples=args.aa,
                                vsync=False)  # fmt: skip
-    if args.frames is not None and args.frames < 1:
-        raise ConfigError(f"--frames: expected >= 1 (got {args.frames})")
+    if args.max_frames is not None and args.max_frames < 1:
+        raise ConfigError(f"--max-frames: expected >= 1 (got {args.max_frames})")
     if not 0 < args.fps <= 1000:
         raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps})")
     calibration = Calibration.load()
@@ -135,7 +151,7 @@ def run_live(args: argparse.Namespace) -> int:
     else:
         clock = MonotonicFrameClock(calibration.audio_ms / 1000.0)
     config = LiveConfig(
-        sub=args.sub, fps=args.fps, frames=args.frames, out=args.out,
+        sub=args.sub, fps=args.fps, frames=args.max_frames, out=args.frames_dir,
         size=parse_size(args.size), camera=args.camera,
         display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
         png=not args.no_png, security=security_from_args(args), window=window,
@@ -153,12 +169,11 @@ def run_live(args: argparse.Namespace) -> int:
     try:
         display.start()
         print(json.dumps({"service": "display", "sub": args.sub}), flush=True)
-        ready(args.sub)
-        code = display.run(stop)
+        code = display.run(stop, on_ready=lambda: ready(args.sub))
     finally:
         ctx.term()
     s = display.summary()
-    where = f" into {args.out}" if args.out else ""
+    where = f" into {args.frames_dir}" if args.frames_dir else ""
     print(f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "
           f"{s['missing']} pose messages lost", file=sys.stderr)  # fmt: skip
     return code

@@ -90,8 +90,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         endpoints = service.start()
         print(json.dumps({"service": "synth", **endpoints}), flush=True)
-        ready(endpoints["pub"])
-        code = service.run(stop)
+        code = service.run(stop, on_ready=lambda: ready(endpoints["pub"]))
     finally:
         ctx.term()
     s = service.summary()

@@ -39,6 +39,7 @@ import json
 import logging
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any, Protocol
@@ -178,7 +179,9 @@ class LiveDisplay:
             raise
         self._sub = sub
 
-    def run(self, stop: threading.Event) -> int:
+    def run(self, stop: threading.Event, on_ready: Callable[[], None] | None = None) -> int:
+        """Draw until ``stop``; ``on_ready`` is called once, after the first frame that drew
+        a pose (the display is "ready" when it shows the drummer, not when it has a socket)."""
         cfg = self.config
         surface: HeadlessSurface | WindowSurface | None = None
         recorder: LiveRecorder | None = None
@@ -239,6 +242,9 @@ class LiveDisplay:
                     log_file.write(json.dumps(record) + "\n")
                 self.stats.frames += 1
                 next_frame = max(next_frame + period, now)
+                if on_ready is not None and got is not None:
+                    on_ready()
+                    on_ready = None
         finally:
             if log_file is not None:
                 log_file.close()

@@ -37,6 +37,7 @@ import logging
 import math
 import threading
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -159,7 +160,9 @@ class SynthService:
     def hello(self) -> Hello:
         return Hello("synth", "poses", self.config.performer, dict(self.endpoints), self.format)
 
-    def run(self, stop: threading.Event) -> int:
+    def run(self, stop: threading.Event, on_ready: Callable[[], None] | None = None) -> int:
+        """Serve until ``stop``; ``on_ready`` is called once the first poses are published
+        (the synth is "ready" when it does its job, not when its sockets are bound)."""
         period = 1.0 / self.config.tick_hz
         next_tick = self.clock.now()
         last = next_tick - period
@@ -180,6 +183,9 @@ class SynthService:
                     self._ticked = self.stats.onsets
                     self.tick(now)
                     last = now
+                    if on_ready is not None and self.stats.pose_messages:
+                        on_ready()
+                        on_ready = None
                     if now >= next_tick:
                         next_tick = max(next_tick + period, now)
         finally:
