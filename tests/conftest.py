@@ -65,20 +65,30 @@ def gl_ok() -> None:
         _unavailable(str(exc))
 
 
-@pytest.fixture
-def jack_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str]:
-    """A real JACK server on the dummy backend (no sound card), synchronous mode (-S).
-
-    The asynchronous mode lost or repeated MIDI on a busy 2-core machine without realtime
-    priority; -S delivered every note. The server gets a unique name, exported to the test
-    through JACK_DEFAULT_SERVER.
-    """
+def _jack(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, sync: bool) -> Iterator[str]:
     log_path = tmp_path / "jackd.log"
     with log_path.open("w") as log:
         try:
-            with dummy_jack("ldtest", log=log) as name:
+            with dummy_jack("ldtest", log=log, sync=sync, realtime=not sync) as name:
                 for key, value in jack_env(name).items():
                     monkeypatch.setenv(key, value)
                 yield name
         except JackError as exc:
             _unavailable(f"{exc}: {log_path.read_text()[-300:]}")
+
+
+@pytest.fixture
+def jack_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str]:
+    """A real JACK server on the dummy backend (no sound card), synchronous mode (-S).
+
+    The server gets a unique name, exported to the test through JACK_DEFAULT_SERVER.
+    """
+    yield from _jack(monkeypatch, tmp_path, sync=True)
+
+
+@pytest.fixture
+def jack_default_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str]:
+    """The same in JACK's default mode (asynchronous, realtime asked for), as a rig left at
+    jackd's defaults runs it: the input daemon must lose nothing there either (it runs no
+    Python in JACK's thread, see services.input.midiport)."""
+    yield from _jack(monkeypatch, tmp_path, sync=False)
