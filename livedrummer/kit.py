@@ -24,11 +24,13 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from livedrummer.errors import KitError
 from livedrummer.vocabulary import HiHat, Limb, PieceKind, Zone
+
+if TYPE_CHECKING:  # numpy is imported where it is used: listing kits must not load it
+    import numpy as np
 
 Vec3 = tuple[float, float, float]
 
@@ -55,6 +57,8 @@ class Piece:
     @property
     def normal(self) -> np.ndarray:
         """Unit normal of the playing surface (pointing away from the shell, into the air)."""
+        import numpy as np
+
         tilt = math.radians(self.tilt_deg)
         # Azimuth 0 points from the piece towards the seat (the -y side for a piece in front).
         to_seat = -np.asarray(self.position_m[:2], dtype=np.float64)

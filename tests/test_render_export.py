@@ -116,7 +116,7 @@ def test_a_choked_crash_stops_sounding_in_the_video(write_midi, tmp_path: Path) 
 
 def test_frames_folder_gets_pngs(groove: Path, tmp_path: Path) -> None:
     frames = tmp_path / "frames"
-    code = main(["render", str(groove), "--frames", str(frames), "--size", "96x54",
+    code = main(["render", str(groove), "--frames-dir", str(frames), "--size", "96x54",
                  "--fps", "10", "--tail", "0"])  # fmt: skip
     assert code == 0
     pngs = sorted(frames.glob("*.png"))

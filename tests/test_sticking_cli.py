@@ -22,12 +22,19 @@ def test_json_lists_every_onset_in_time_order(capsys: pytest.CaptureFixture[str]
     assert code == 0
     rows = json.loads(out)
     assert [r["time_s"] for r in rows] == sorted(r["time_s"] for r in rows)
-    assert set(rows[0]) == {"time_s", "note", "piece", "limb", "reason"}
+    assert set(rows[0]) == {
+        "time_s", "note", "piece", "limb", "reason", "too_fast", "crossed", "hard"
+    }  # fmt: skip
     assert {r["limb"] for r in rows} <= {"RH", "LH", "RF", "LF"}
     assert all(r["reason"] is None or isinstance(r["reason"], str) for r in rows)
+    # a note is hard exactly when it is too fast or crossed, and then it says why
+    assert all((r["hard"] is not None) == (r["too_fast"] or r["crossed"]) for r in rows)
+    assert any(r["too_fast"] for r in rows)  # the demo groove has a few fast flams
 
 
-@pytest.mark.parametrize("args", [("--strategy", "smed"), ("--lookahead-ms", "30")])
+@pytest.mark.parametrize(
+    "args", [("--sticking", "smed"), ("--strategy", "smed"), ("--lookahead-ms", "30")]
+)
 def test_other_strategies_and_online(
     capsys: pytest.CaptureFixture[str], args: tuple[str, ...]
 ) -> None:
@@ -52,8 +59,21 @@ def test_edited_text_score_is_honoured(capsys: pytest.CaptureFixture[str], tmp_p
 def test_bad_options_are_one_line_errors(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:
-    code, _, err = run(capsys, "--lookahead-ms", "30", "--strategy", "smed")
+    code, _, err = run(capsys, "--lookahead-ms", "30", "--sticking", "smed")
     assert code == 2 and "lookahead" in err
     missing = tmp_path / "none.txt"
     code, _, err = run(capsys, "--score", str(missing))
     assert code == 2 and "none.txt" in err
+
+
+def test_sheet_marks_and_explains_notes_too_hard_to_play(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    _, out, _ = run(capsys, "--json")
+    hard = [r for r in json.loads(out) if r["hard"]]
+    _, sheet, _ = run(capsys)
+    marked = [line for line in sheet.splitlines() if line.startswith("    ! ")]
+    assert len(marked) == len(hard) > 0
+    assert all(r["hard"] in line for r, line in zip(hard, marked, strict=True))
+    assert sheet.count("!") >= 2 * len(hard)  # the mark in the row, and the line after the bar
+    assert f"too hard to play (!): {len(hard)} of" in sheet.splitlines()[-1]

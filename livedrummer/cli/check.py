@@ -1,9 +1,16 @@
 """``livedrummer check FILE.mid...``: is the drummer's motion physically true?
 
-Animates each file on the kit (optimal limb assignment unless --sticking says otherwise) and
-measures contact error at every onset, the deepest stick-tip penetration and joint-limit
-violations (see :mod:`livedrummer.body.check`). Several files or folders are checked one by
-one and summarised together (max over files; p99 and mean over all onsets).
+Animates each file on the kit and measures contact error at every onset, the deepest stick-tip
+penetration and joint-limit violations (see :mod:`livedrummer.body.check`). Several files or
+folders are checked one by one and summarised together (max over files; p99 and mean over all
+onsets). Limbs come from :func:`livedrummer.sticking.stick_performance` (``--sticking``, and
+``--score`` for one file), as for ``livedrummer sticking``.
+
+``--json`` prints the summary and, per file, every note as the animation played it: time,
+note, piece, limb, whether it is too fast for one hand or made with the arms crossed (and how,
+in ``hard``), and its contact error, so a program can hold the animation against the sticking
+sheet note by note. That list grows with the notes (about 200 bytes each); ``--summary`` leaves
+it out, e.g. for the whole Groove MIDI Dataset.
 """
 
 from __future__ import annotations
@@ -11,9 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from livedrummer.cli.common import (
     Subparsers,
@@ -21,18 +26,26 @@ from livedrummer.cli.common import (
     add_kit_option,
     add_map_option,
     add_motion_options,
+    sticking_of,
 )
 from livedrummer.errors import LivedrummerError
 
+if TYPE_CHECKING:
+    import numpy as np
+
+    from livedrummer.kit import Kit
+    from livedrummer.sticking.result import Sticking
+
 
 def register(sub: Subparsers) -> None:
-    p = add_command(sub, "check", run, "check contact, penetration and joint limits of the motion")
+    p = add_command(sub, "check", run)
     p.add_argument("files", nargs="+", help="Standard MIDI File(s) or folders of them")
     add_kit_option(p)
     add_map_option(p)
     add_motion_options(p)
     p.add_argument("--fps", type=float, default=200.0, help="frames per second checked")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--summary", action="store_true", help="--json: without the notes of each file")
 
 
 def midi_files(specs: list[str]) -> list[Path]:
@@ -49,9 +62,11 @@ def midi_files(specs: list[str]) -> list[Path]:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from livedrummer.body.check import check
     from livedrummer.body.expression import load_expression
-    from livedrummer.body.perform import named_sticking, perform
+    from livedrummer.body.perform import perform
     from livedrummer.body.rig import build_rig
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.kitfile import load_kit
@@ -63,19 +78,25 @@ def run(args: argparse.Namespace) -> int:
     note_map = load_note_map(args.map)
     expression = load_expression(args.preset) if args.preset else None
     strokes = StrokeParams(model=args.strokes)
-    sticker = named_sticking(args.sticking)
     files = midi_files(args.files)
+    if args.score is not None and len(files) != 1:
+        raise LivedrummerError(f"--score {args.score}: a score is of one MIDI file, "
+                               f"not of {len(files)}")  # fmt: skip
     errors: list[np.ndarray] = []
     worst: dict[str, Any] = {"penetration_mm": 0.0, "file": None, "at_s": 0.0}
     totals = {"notes": 0, "not_played": 0, "joint_limit_violations": 0, "frames": 0}
     by_limit: dict[str, int] = {}
     worst_contact: tuple[float, str] = (0.0, "")
+    per_file: list[dict[str, Any]] = []
     for path in files:
-        done = perform(
-            read_midi_file(path, note_map), rig, note_map, expression, strokes, sticking=sticker
-        )
+        performance = read_midi_file(path, note_map)
+        done = perform(performance, rig, note_map, expression, strokes,
+                       sticking=sticking_of(args, performance, kit))  # fmt: skip
         r = check(done.animation, done.sticking, args.fps)
         errors.append(r.contact_error_m)
+        if args.json and not args.summary:
+            notes = notes_json(done.sticking, kit, r.contact_error_m)
+            per_file.append({"file": str(path), "sticking": done.sticking.strategy, "notes": notes})
         for key in totals:
             totals[key] += getattr(r, key)
         for k, v in r.violations_by_limit.items():
@@ -104,7 +125,9 @@ def run(args: argparse.Namespace) -> int:
         "violations_by_limit": by_limit,
     }
     if args.json:
-        print(json.dumps(summary, indent=2))
+        if per_file:
+            summary["per_file"] = per_file
+        print(json.dumps(summary, indent=1))
     else:
         c = summary["contact_error_mm"]
         print(f"{len(files)} file(s), kit {kit.name}, map {note_map.name}")
@@ -118,3 +141,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"  joint-limit hits   {summary['joint_limit_violations']} of "
               f"{summary['frames']} frames  {by_limit}")  # fmt: skip
     return 0
+
+
+def notes_json(sticking: Sticking, kit: Kit, contact_error_m: np.ndarray) -> list[dict[str, Any]]:
+    """Every note as animated: what ``sticking --json`` says of it, and its contact error
+    (``None`` for a note no limb plays)."""
+    from livedrummer.cli.sticking import as_json
+
+    rows = as_json(sticking, kit)
+    played = (sticking.limb >= 0) & (sticking.piece >= 0)
+    error_mm = iter((contact_error_m * 1000.0).tolist())
+    for row, is_played in zip(rows, played.tolist(), strict=True):
+        row["contact_error_mm"] = round(next(error_mm), 4) if is_played else None
+    return rows

@@ -6,11 +6,13 @@ if from a kit, the synthesizer assigns hands and strokes online and the display 
 drummer on its clock. Where there is a screen (``DISPLAY`` or ``WAYLAND_DISPLAY`` set) that is
 a window (Q quits); otherwise the headless display records the show, and its drum track, to
 ``out/demo.mp4`` (1280x720, 30 fps) and the demo says where it is. ``--seconds S`` sets how
-long it plays (default 30; it runs in real time); ``--render`` records even with a screen.
+long it plays (default 30; it runs in real time); ``--headless`` records even with a screen.
 
-``--file`` is the offline twin: the same groove read as a file with full lookahead (optimal
-sticking over the whole piece), rendered to the same video as fast as the machine allows, or
-played in the file window with transport keys.
+``--offline`` is the offline twin: the same groove read as a file with full lookahead (the
+sticking of :func:`livedrummer.sticking.stick_performance`, as ``livedrummer sticking`` prints
+it), rendered to the same video as fast as the machine allows, or played in the file window
+with transport keys. (``--file`` and ``--render`` are the former spellings of ``--offline``
+and ``--headless``.)
 """
 
 from __future__ import annotations
@@ -20,13 +22,19 @@ import sys
 import time
 from collections import Counter
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from livedrummer.cli.common import DEMO_MAP, Subparsers, add_command, demo_groove, has_screen
-from livedrummer.cli.inspect import print_summary
-from livedrummer.cli.render import ProgressBar, first_seconds
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
-from livedrummer.sticking.result import Sticking
+from livedrummer.cli.common import (
+    DEMO_MAP,
+    Subparsers,
+    add_command,
+    add_renamed,
+    demo_groove,
+    has_screen,
+)
+
+if TYPE_CHECKING:
+    from livedrummer.sticking.result import Sticking
 
 DEMO_VIDEO = Path("out/demo.mp4")
 DEMO_SIZE = (1280, 720)
@@ -35,15 +43,19 @@ LIVE_SECONDS = 30.0
 
 
 def register(sub: Subparsers) -> None:
-    p = add_command(sub, "demo", run, "run the pipeline on the bundled demo groove and show it")
+    p = add_command(sub, "demo", run)
     p.add_argument("--seconds", type=float, metavar="S",
-                   help=f"play S s (default {LIVE_SECONDS:g}; --file: the first S)")  # fmt: skip
-    p.add_argument("--file", action="store_true", help="offline: the groove as a file")
-    p.add_argument("--render", action="store_true", help="make the video even with a screen")
+                   help=f"play S s (default {LIVE_SECONDS:g}; --offline: the first S s, "
+                   "default all)")  # fmt: skip
+    add_renamed(p, "--file", p.add_argument(
+        "--offline", action="store_true", help="the groove as a file, not live"))  # fmt: skip
+    add_renamed(p, "--render", p.add_argument(
+        "--headless", action="store_true", help="record the video even with a screen"))  # fmt: skip
     p.add_argument("-o", "--output", type=Path, default=DEMO_VIDEO,
                    help=f"video file (default {DEMO_VIDEO})")  # fmt: skip
     p.add_argument("--soundfont", type=Path, metavar="SF2",
-                   help="video: drum sounds from this General MIDI SoundFont")  # fmt: skip
+                   help="video: drum sounds from this General MIDI SoundFont "
+                   "(default: the built-in kit)")  # fmt: skip
 
 
 def sticking_line(st: Sticking) -> str:
@@ -57,19 +69,22 @@ def sticking_line(st: Sticking) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    return run_file(args) if args.file else run_live(args)
+    return run_file(args) if args.offline else run_live(args)
 
 
 def run_live(args: argparse.Namespace) -> int:
     from livedrummer.cli import build_parser
+    from livedrummer.cli.inspect import print_summary
     from livedrummer.cli.up import run as up
+    from livedrummer.midifile import read_midi_file
+    from livedrummer.notemap import load_note_map
 
     groove = demo_groove()
     print(f"demo: {groove.name} (Groove MIDI Dataset, CC BY 4.0), played live into the pipeline")
     print_summary(read_midi_file(groove, load_note_map(DEMO_MAP)).summary())
     seconds = LIVE_SECONDS if args.seconds is None else args.seconds
     argv = ["up", "--demo", "--seconds", f"{seconds:g}"]
-    if has_screen() and not args.render:
+    if has_screen() and not args.headless:
         print("demo: in a window (Q quits)", flush=True)
     else:
         out: Path = args.output
@@ -77,14 +92,18 @@ def run_live(args: argparse.Namespace) -> int:
         print(f"demo: no screen: recording {seconds:g} s of the live show to {out} "
               f"({size} @ {DEMO_FPS} fps)", flush=True)  # fmt: skip
         argv += ["--video", str(out), "--size", size, "--fps", str(DEMO_FPS),
-                 "--out", str(out.parent / "live")]  # fmt: skip
+                 "--frames-dir", str(out.parent / "live")]  # fmt: skip
         if args.soundfont is not None:
             argv += ["--soundfont", str(args.soundfont)]
-    return up(build_parser().parse_args(argv))
+    return up(build_parser(argv).parse_args(argv))
 
 
 def run_file(args: argparse.Namespace) -> int:
+    from livedrummer.cli.inspect import print_summary
+    from livedrummer.cli.render import ProgressBar, first_seconds
     from livedrummer.kitfile import load_kit
+    from livedrummer.midifile import read_midi_file
+    from livedrummer.notemap import load_note_map
     from livedrummer.render.body_scene import BodyScene
     from livedrummer.render.camera import CAMERA_NAMES
 
@@ -98,7 +117,7 @@ def run_file(args: argparse.Namespace) -> int:
     kit = load_kit("rock5")
     body = BodyScene.perform(performance, kit, note_map)
     print(sticking_line(body.performed.sticking))
-    if has_screen() and not args.render:
+    if has_screen() and not args.headless:
         from services.display.window import show
 
         show(performance, kit, body=body)

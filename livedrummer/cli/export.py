@@ -1,7 +1,8 @@
 """``livedrummer export FILE.mid -o out.bvh``: the drummer's motion as a BVH file.
 
-Animates the file on the kit (optimal limb assignment unless --sticking says otherwise) and
-samples it at ``--fps`` from the first onset minus a second to the last plus a second.
+Animates the file on the kit, with the limbs :func:`livedrummer.sticking.stick_performance`
+gives (``--sticking``, ``--score``: what ``livedrummer sticking`` prints), and samples it at
+``--fps`` from the first onset minus a second to the last plus a second.
 """
 
 from __future__ import annotations
@@ -9,20 +10,19 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from livedrummer.cli.common import (
     Subparsers,
     add_command,
     add_kit_option,
     add_map_option,
     add_motion_options,
+    sticking_of,
 )
 from livedrummer.errors import LivedrummerError
 
 
 def register(sub: Subparsers) -> None:
-    p = add_command(sub, "export", run, "export the drummer's motion as BVH")
+    p = add_command(sub, "export", run)
     p.add_argument("file", help="Standard MIDI File")
     p.add_argument("-o", "--output", required=True, help="output .bvh path")
     p.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
@@ -32,9 +32,11 @@ def register(sub: Subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from livedrummer.body.bvh import bvh_text
     from livedrummer.body.expression import load_expression
-    from livedrummer.body.perform import named_sticking, perform
+    from livedrummer.body.perform import perform
     from livedrummer.body.rig import build_rig
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.kitfile import load_kit
@@ -44,7 +46,8 @@ def run(args: argparse.Namespace) -> int:
     if not 1.0 <= args.fps <= 1000.0:
         raise LivedrummerError(f"--fps must be between 1 and 1000 (got {args.fps})")
     note_map = load_note_map(args.map)
-    rig = build_rig(load_kit(args.kit))
+    kit = load_kit(args.kit)
+    rig = build_rig(kit)
     performance = read_midi_file(args.file, note_map)
     expression = load_expression(args.preset) if args.preset else None
     done = perform(
@@ -53,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
         note_map,
         expression,
         StrokeParams(model=args.strokes),
-        sticking=named_sticking(args.sticking),
+        sticking=sticking_of(args, performance, kit),
     )
     t = performance.onsets["time_s"]
     start = max(0.0, float(t.min()) - 1.0) if t.size else 0.0

@@ -2,7 +2,7 @@
 
 ``keys new NAME`` writes ``NAME.key_secret`` (our key pair, mode 0600: never share it) and
 ``NAME.key`` (the public key: give it to the other site, which puts it in its ``--allow``
-folder) into ``$LIVEDRUMMER_HOME/keys`` or ``--dir``; it never overwrites a key. ``keys
+folder) into ``$LIVEDRUMMER_HOME/keys`` or ``--keys-dir``; it never overwrites a key. ``keys
 list`` shows the public keys in that folder. The file format is described in
 :mod:`livedrummer.keys`.
 
@@ -19,7 +19,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from livedrummer.cli.common import Subparsers, add_command
+from livedrummer.cli.common import Subparsers, add_command, add_renamed
 from livedrummer.errors import KeyFileError, LivedrummerError
 from livedrummer.keys import (
     PUBLIC_SUFFIX,
@@ -35,15 +35,17 @@ if TYPE_CHECKING:
 
 
 def register(sub: Subparsers) -> None:
-    p = add_command(sub, "keys", _usage, "make and list CURVE key pairs for remote streams")
+    p = add_command(sub, "keys", _usage)
     actions = p.add_subparsers(dest="keys_command", metavar="ACTION", required=True)
     new = actions.add_parser("new", help="write NAME.key_secret and NAME.key")
     new.add_argument("name", help="key name (letters, digits, _ . -)")
-    new.add_argument("--dir", type=Path, help="key folder (default $LIVEDRUMMER_HOME/keys)")
     new.set_defaults(func=run_new)
     lst = actions.add_parser("list", help="list the public keys in the key folder")
-    lst.add_argument("--dir", type=Path, help="key folder (default $LIVEDRUMMER_HOME/keys)")
     lst.set_defaults(func=run_list)
+    for action in (new, lst):  # --dir: its former spelling
+        add_renamed(action, "--dir", action.add_argument(
+            "--keys-dir", type=Path, metavar="DIR",
+            help="key folder (default $LIVEDRUMMER_HOME/keys)"))  # fmt: skip
 
 
 def _usage(args: argparse.Namespace) -> int:  # unreachable: ACTION is required
@@ -58,7 +60,7 @@ def run_new(args: argparse.Namespace) -> int:
     import zmq
 
     name = check_name(args.name)
-    folder = key_dir(args.dir)
+    folder = key_dir(args.keys_dir)
     public_path = folder / f"{name}{PUBLIC_SUFFIX}"
     secret_path = folder / f"{name}{SECRET_SUFFIX}"
     for path in (public_path, secret_path):
@@ -85,7 +87,7 @@ def _write(path: Path, text: str, mode: int) -> None:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    folder = key_dir(args.dir)
+    folder = key_dir(args.keys_dir)
     files = sorted(folder.glob(f"*{PUBLIC_SUFFIX}")) if folder.is_dir() else []
     if not files:
         print(f"no keys in {folder} (make one with 'livedrummer keys new NAME')")
@@ -106,13 +108,16 @@ def add_curve_options(parser: argparse.ArgumentParser, *, server: bool, client: 
     """Add the CURVE options: ``server`` for commands that bind, ``client`` for connecting."""
     g = parser.add_argument_group("security (CURVE; see 'livedrummer keys')")
     g.add_argument("--curve-secret", type=Path, metavar="FILE",
-                   help="our NAME.key_secret: encrypt and authenticate remote streams")  # fmt: skip
+                   help="our NAME.key_secret: encrypt and authenticate remote streams "
+                   "(default: none, plain text)")  # fmt: skip
     if client:
         g.add_argument("--server-key", type=Path, metavar="FILE",
-                       help="the public .key of the service we connect to")  # fmt: skip
+                       help="the public .key of the service we connect to "
+                       "(default: none, plain text)")  # fmt: skip
     if server:
         g.add_argument("--allow", type=Path, metavar="DIR",
-                       help="only clients with a public .key file in DIR may connect")  # fmt: skip
+                       help="only clients with a public .key file in DIR may connect "
+                       "(default: any client)")  # fmt: skip
         g.add_argument("--insecure", action="store_true",
                        help="allow binding a non-loopback address without CURVE")  # fmt: skip
 

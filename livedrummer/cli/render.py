@@ -2,13 +2,14 @@
 
 Off-screen (EGL; Mesa llvmpipe where there is no GPU), so it works over SSH and in CI. Without
 FILE it renders the bundled demo groove with the Roland map. The drummer is the body model
-(:mod:`livedrummer.body`) with the optimal limb assignment unless ``--sticking`` says otherwise;
-``--sticking``, ``--strokes`` and ``--preset`` mean what they mean for ``livedrummer check``
-(the x264 speed preset is ``--x264-preset``). The progress bar goes to stderr and only when
-stderr is a terminal; the summary line goes to stdout. ``--overlay score,joints`` adds SMED's
-scrolling score and the joint-angle graph as strips at the bottom of the frame.
-``--soundfont FILE.sf2`` plays the drum track with that General MIDI SoundFont's kit
-(FluidSynth, :mod:`livedrummer.audio.soundfont`) instead of the built-in one.
+(:mod:`livedrummer.body`) playing the limbs :func:`livedrummer.sticking.stick_performance`
+gives, as ``livedrummer sticking`` prints them; ``--sticking``, ``--score``, ``--strokes`` and
+``--preset`` mean what they mean for ``livedrummer check`` (the x264 speed preset is
+``--x264-preset``). ``--frames-dir DIR`` writes PNG frames instead of the video. The progress
+bar goes to stderr and only when stderr is a terminal; the summary line goes to stdout.
+``--overlay score,joints`` adds SMED's scrolling score and the joint-angle graph as strips at
+the bottom of the frame. ``--soundfont FILE.sf2`` plays the drum track with that General MIDI
+SoundFont's kit (FluidSynth, :mod:`livedrummer.audio.soundfont`) instead of the built-in one.
 """
 
 from __future__ import annotations
@@ -27,15 +28,17 @@ from livedrummer.cli.common import (
     add_command,
     add_kit_option,
     add_motion_options,
+    add_renamed,
     demo_groove,
+    sticking_of,
 )
 from livedrummer.errors import LivedrummerError
-from livedrummer.performance import Performance
 from livedrummer.render.camera import CAMERA_NAMES
 
 if TYPE_CHECKING:
     from livedrummer.kit import Kit
     from livedrummer.notemap import NoteMap
+    from livedrummer.performance import Performance
     from livedrummer.render.body_scene import BodyScene
 
 
@@ -44,23 +47,27 @@ class RenderOptionError(LivedrummerError):
 
 
 def register(sub: Subparsers) -> None:
-    p = add_command(sub, "render", run, "render a MIDI file to a video (MP4 with sound) or PNGs")
+    p = add_command(sub, "render", run)
     p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
-    p.add_argument("-o", "--output", type=Path, help="video file (default: FILE's name .mp4)")
-    p.add_argument("--frames", type=Path, metavar="DIR", help="write PNG frames to DIR instead")
-    p.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT, even (default 1280x720)")
-    p.add_argument("--fps", type=int, default=30, help="frames per second (default 30)")
+    p.add_argument("-o", "--output", type=Path,
+                   help="video file (default: FILE's name, .mp4)")  # fmt: skip
+    add_renamed(p, "--frames", p.add_argument(
+        "--frames-dir", type=Path, metavar="DIR",
+        help="write PNG frames to DIR instead of a video (default: a video)"))  # fmt: skip
+    p.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT, even")
+    p.add_argument("--fps", type=int, default=30, help="frames per second")
     p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="viewpoint")
     add_kit_option(p)
     p.add_argument("--map", help="note map (default general-midi; roland-td for the demo)")
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
     p.add_argument("--aa", type=int, default=0, metavar="N", help="multisample N (slow on CPU)")
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
-    p.add_argument("--x264-preset", default="veryfast", help="x264 speed (default veryfast)")
+    p.add_argument("--x264-preset", default="veryfast", help="x264 speed")
     p.add_argument("--overlay", default="", metavar="LIST",
-                   help="bottom strips: score, joints or score,joints")  # fmt: skip
+                   help="bottom strips: score, joints or score,joints (default: none)")  # fmt: skip
     p.add_argument("--soundfont", type=Path, metavar="SF2",
-                   help="drum sounds from this General MIDI SoundFont (FluidSynth)")  # fmt: skip
+                   help="drum sounds from this General MIDI SoundFont via FluidSynth "
+                   "(default: the built-in kit)")  # fmt: skip
     add_motion_options(p)
 
 
@@ -68,12 +75,11 @@ def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, not
                ) -> BodyScene:  # fmt: skip
     """The performance animated on ``kit`` with the motion options of ``args``."""
     from livedrummer.body.expression import load_expression
-    from livedrummer.body.perform import named_sticking
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.render.body_scene import BodyScene
 
     expression = load_expression(args.preset) if args.preset else None
-    return BodyScene.perform(performance, kit, note_map, named_sticking(args.sticking),
+    return BodyScene.perform(performance, kit, note_map, sticking_of(args, performance, kit),
                              expression, StrokeParams(model=args.strokes))  # fmt: skip
 
 
@@ -152,16 +158,16 @@ def run(args: argparse.Namespace) -> int:
     kit = load_kit(args.kit)
     body = body_scene(args, performance, kit, note_map)
     out = args.output
-    if out is None and args.frames is None:
+    if out is None and args.frames_dir is None:
         out = Path(source.stem + ".mp4")
     settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset)
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
-        performance, body, out=out, frames_dir=args.frames, settings=settings,
+        performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar, overlays=overlays,
         soundfont=args.soundfont,
     )  # fmt: skip
-    where = ", ".join(str(p) for p in (out, args.frames) if p is not None)
+    where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
         f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s, "
         f"{size[0]}x{size[1]} @ {args.fps} fps, camera {args.camera}, kit {kit.name}, "

@@ -5,19 +5,21 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from livedrummer.cli.common import Subparsers, add_command
+from livedrummer.cli.common import Subparsers, add_command, add_renamed
 
 
 def register(sub: Subparsers) -> None:
-    p = add_command(sub, "sessions", _usage, "list journaled live sessions or export one to MIDI")
-    p.add_argument("--dir", type=Path, help="sessions folder (default $LIVEDRUMMER_HOME/sessions)")
+    p = add_command(sub, "sessions", _usage)
+    add_renamed(p, "--dir", p.add_argument(
+        "--sessions-dir", type=Path, metavar="DIR",
+        help="journal folder, as for input (default $LIVEDRUMMER_HOME/sessions)"))  # fmt: skip
     actions = p.add_subparsers(dest="action", metavar="ACTION")
     ls = actions.add_parser("list", help="one line per session")
     ls.set_defaults(func=run_list)
     ex = actions.add_parser("export", help="write a session as a Standard MIDI File")
     ex.add_argument("session", help="session id, unique id prefix, or journal path")
     ex.add_argument("-o", "--output", type=Path, required=True, help="output .mid file")
-    ex.add_argument("--tempo", type=float, default=120.0, help="file tempo in bpm (default 120)")
+    ex.add_argument("--tempo", type=float, default=120.0, help="file tempo in bpm")
     ex.set_defaults(func=run_export)
 
 
@@ -29,9 +31,9 @@ def _usage(args: argparse.Namespace) -> int:
 def run_list(args: argparse.Namespace) -> int:
     from services.journal import list_sessions, sessions_dir
 
-    infos = list_sessions(args.dir)
+    infos = list_sessions(args.sessions_dir)
     if not infos:
-        print(f"no sessions in {args.dir or sessions_dir()}")
+        print(f"no sessions in {args.sessions_dir or sessions_dir()}")
         return 0
     for i in infos:
         state = "closed" if i.clean else "open/crashed"
@@ -48,7 +50,7 @@ def run_list(args: argparse.Namespace) -> int:
 def run_export(args: argparse.Namespace) -> int:
     from services.journal import export_session, find_session
 
-    path = find_session(args.session, args.dir)
+    path = find_session(args.session, args.sessions_dir)
     journal = export_session(path, args.output, bpm=args.tempo)
     print(f"{args.output}: {journal.onsets.size} onsets, {journal.controls.size} controls")
     if journal.stop_reason:

@@ -6,7 +6,7 @@ stopped on Ctrl-C / SIGTERM or after ``--seconds``. ``--demo`` plays the bundled
 into the pipeline as if from a kit (looping). With a screen (``DISPLAY`` or
 ``WAYLAND_DISPLAY``) the display opens a window (``--fullscreen --monitor N`` for a
 projector; camera keys 1..8, Q quits the window and the rig). With no screen, or with
-``--headless``, it renders off screen into ``--out`` (default ``out/live``): numbered PNG
+``--headless``, it renders off screen into ``--frames-dir`` (default ``out/live``): numbered PNG
 frames plus ``frames.jsonl``; ``--video FILE`` records those frames on show time into an MP4
 and, when the rig stops, adds the drum track: the journaled onsets (the session's journal, a
 temporary one for ``--demo``) mixed with the built-in kit (or ``--soundfont FILE.sf2``'s) at
@@ -43,6 +43,7 @@ from livedrummer.cli.common import (
     add_api_option,
     add_command,
     add_kit_option,
+    add_renamed,
     demo_groove,
     has_screen,
 )
@@ -64,11 +65,16 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--map", help="note map (default roland-td)")
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
-    p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L")
-    p.add_argument("--delay-ms", type=float, default=30.0, metavar="D")
-    p.add_argument("--seconds", type=float, metavar="S", help="stop everything after S seconds")
+    p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L",
+                   help="limb decisions wait L ms for later notes")  # fmt: skip
+    p.add_argument("--delay-ms", type=float, default=30.0, metavar="D",
+                   help="show the drummer D ms behind the sound, D >= L")  # fmt: skip
+    p.add_argument("--seconds", type=float, metavar="S",
+                   help="stop everything after S seconds (default: when stopped)")  # fmt: skip
     p.add_argument("--headless", action="store_true", help="render off screen even with a screen")
-    p.add_argument("--out", type=Path, default=Path("out/live"), help="headless frames folder")
+    add_renamed(p, "--out", p.add_argument(
+        "--frames-dir", type=Path, default=Path("out/live"), metavar="DIR",
+        help="headless frames folder"))  # fmt: skip
     p.add_argument("--fps", type=float, default=30.0, help="display frames per second")
     p.add_argument("--port-base", type=int, default=5710,
                    help="TCP ports PORT..PORT+11 on --bind (default 5710)")  # fmt: skip
@@ -77,9 +83,11 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--no-png", action="store_true", help="frames.jsonl only, no PNG frames")
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
     p.add_argument("--video", type=Path, metavar="FILE",
-                   help="headless: record the show and its drum track (MP4)")  # fmt: skip
+                   help="headless: record the show and its drum track as MP4 "
+                   "(default: none)")  # fmt: skip
     p.add_argument("--soundfont", type=Path, metavar="SF2",
-                   help="--video: drum track from this General MIDI SoundFont")  # fmt: skip
+                   help="--video: drum track from this General MIDI SoundFont "
+                   "(default: the built-in kit)")  # fmt: skip
     p.add_argument("--size", default="640x360", help="headless frame size (default 640x360)")
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
     p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
@@ -154,7 +162,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
         display_argv += ["--fullscreen"] if args.fullscreen else []
     else:
-        display_argv += ["--headless", "--out", str(args.out)]
+        display_argv += ["--headless", "--frames-dir", str(args.frames_dir)]
         display_argv += ["--no-png"] if args.no_png or args.video is not None else []
         display_argv += ["--video", str(args.video)] if args.video is not None else []
     return [
@@ -200,7 +208,7 @@ def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
     try:
         sup.start()
-        where = "in a window" if windowed(args) else f"frames in {args.out}/"
+        where = "in a window" if windowed(args) else f"frames in {args.frames_dir}/"
         print(f"up: input, synth and display running; {where}", flush=True)
         deadline = None if args.seconds is None else time.monotonic() + args.seconds
         while not stopping:
@@ -215,7 +223,7 @@ def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
         for s, handler in old.items():
             signal.signal(s, handler)
     restarts = sum(sup.restarts.values())
-    where = "" if windowed(args) else f"; frames in {args.out}/"
+    where = "" if windowed(args) else f"; frames in {args.frames_dir}/"
     print(f"up: stopped ({restarts} restarts){where}", file=sys.stderr)
     return 0
 

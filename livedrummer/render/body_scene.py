@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.body.expression import Expression
-from livedrummer.body.perform import Performed, StickingFn, named_sticking, perform
+from livedrummer.body.perform import Performed, perform
 from livedrummer.body.rig import build_rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import JOINTS, PARENTS, J
@@ -49,6 +49,7 @@ from livedrummer.scene import (
     Skeleton,
     Tone,
 )
+from livedrummer.sticking.result import Sticking
 from livedrummer.vocabulary import PieceKind
 
 #: A 16" stick held a third of the way up: the part behind the grip fulcrum (m).
@@ -145,13 +146,14 @@ class BodyScene:
         performance: Performance,
         kit: Kit,
         note_map: NoteMap,
-        sticking: StickingFn | None = None,
+        sticking: Sticking | None = None,
         expression: Expression | None = None,
         strokes: StrokeParams | None = None,
     ) -> BodyScene:
-        """Fit the body to ``kit`` and animate ``performance`` (optimal sticking by default)."""
+        """Fit the body to ``kit`` and animate ``performance`` with ``sticking`` (by default
+        :func:`~livedrummer.sticking.strategy.stick_performance`'s: optimal on its grid)."""
         return cls(kit, perform(performance, build_rig(kit), note_map, expression, strokes,
-                                sticking=sticking or named_sticking("optimal")))  # fmt: skip
+                                sticking=sticking))  # fmt: skip
 
     def poses(self, times: np.ndarray) -> np.ndarray:
         """The body's pose records at ``times`` (seconds, float64)."""

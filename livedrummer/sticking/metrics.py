@@ -19,6 +19,10 @@ hi-hat over the left on the snare, or on a crash just beyond the hi-hat. Anythin
 hand on the high tom while the left plays the floor tom) counts. Because
 everything is measured from piece positions and the kit's handedness, a mirrored kit is judged
 by the mirrored rule.
+
+:func:`hard_notes` says, note by note and in words, which strokes are too fast for one hand or
+made with the arms crossed, as SMED showed the parts of a score too hard to play; the sticking
+sheet, ``sticking --json`` and ``check --json`` report it.
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ import numpy as np
 
 from livedrummer.kit import Kit
 from livedrummer.sticking.prepare import chords
-from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED, Sticking
+from livedrummer.sticking.result import LIMB_CODE, LIMBS, NOT_PLAYED, Sticking
 from livedrummer.vocabulary import Limb
 
 STANCE_WINDOW_S = 0.5
@@ -55,7 +59,14 @@ def crossing_depth(kit: Kit) -> tuple[np.ndarray, np.ndarray]:
 
 def too_fast(sticking: Sticking, kit: Kit) -> np.ndarray:
     """Per onset: a hand stroke too soon after the same hand's previous one (see above)."""
-    out = np.zeros(sticking.limb.size, dtype=bool)
+    return _too_fast(sticking, kit)[0]
+
+
+def _too_fast(sticking: Sticking, kit: Kit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(too fast, seconds since the same hand's last stroke, seconds it needs) per onset."""
+    n = sticking.limb.size
+    out = np.zeros(n, dtype=bool)
+    since, needs = np.full(n, np.nan), np.full(n, np.nan)
     gap = np.array([p.min_time_gap_s for p in kit.pieces])
     t = sticking.onsets["time_s"]
     for hand in (_RH, _LH):
@@ -69,12 +80,20 @@ def too_fast(sticking: Sticking, kit: Kit) -> np.ndarray:
         double = same & (dt >= DOUBLE_STROKE_FACTOR * g) & (dt < g)
         repeated = double & np.concatenate(([False], double[:-1]))
         out[idx[1:]] = ((dt < g) & ~double) | repeated
-    return out
+        since[idx[1:]] = dt
+        needs[idx[1:]] = np.where(same & ~repeated, DOUBLE_STROKE_FACTOR * g, g)
+    return out, since, needs
 
 
 def crossings(sticking: Sticking, kit: Kit) -> np.ndarray:
     """Per onset: a hand stroke made with the arms unconventionally crossed (see above)."""
+    return _crossings(sticking, kit)[0]
+
+
+def _crossings(sticking: Sticking, kit: Kit) -> tuple[np.ndarray, np.ndarray]:
+    """(crossed, the other hand's piece at that stroke or -1) per onset."""
     out = np.zeros(sticking.limb.size, dtype=bool)
+    other_piece = np.full(sticking.limb.size, -1, dtype=np.int64)
     t = sticking.onsets["time_s"]
     depth, conventional = crossing_depth(kit)
     bad = (depth > 0) & ~conventional
@@ -95,6 +114,35 @@ def crossings(sticking: Sticking, kit: Kit) -> np.ndarray:
         mp, op = sticking.piece[mine], sticking.piece[theirs][jj]
         r, lft = (mp, op) if hand == _RH else (op, mp)
         out[mine] = ok & bad[r, lft]
+        other_piece[mine] = np.where(ok, op, -1)
+    return out, other_piece
+
+
+def hard_notes(sticking: Sticking, kit: Kit) -> dict[int, str]:
+    """Onset index -> why it is hard to play, for every stroke too fast or with arms crossed.
+
+    For example ``too fast for one hand: 40.2 ms after its last stroke, needs 60 ms`` or
+    ``arms crossed: RH on tom1 left of LH on hihat``; both, joined by ``; ``, when both hold.
+    """
+    fast, since, needs = _too_fast(sticking, kit)
+    crossed, other = _crossings(sticking, kit)
+    out: dict[int, str] = {}
+    for i in np.flatnonzero(fast | crossed).tolist():
+        why = []
+        if fast[i]:
+            why.append(
+                f"too fast for one hand: {since[i] * 1000:.1f} ms after its last stroke, "
+                f"needs {needs[i] * 1000:.3g} ms"
+            )
+        if crossed[i]:
+            mine, theirs = LIMBS[int(sticking.limb[i])], LIMBS[1 - int(sticking.limb[i])]
+            here = kit.pieces[int(sticking.piece[i])].name
+            there = kit.pieces[int(other[i])].name
+            right, left = ((mine, here), (theirs, there)) if mine is Limb.RH else (
+                (theirs, there), (mine, here))  # fmt: skip
+            why.append(f"arms crossed: {right[0].value} on {right[1]} left of "
+                       f"{left[0].value} on {left[1]}")  # fmt: skip
+        out[i] = "; ".join(why)
     return out
 
 

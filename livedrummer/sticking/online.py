@@ -12,8 +12,9 @@ and are committed at once.
 Time only advances with the stream: :meth:`process` treats the new onset's time as "now". A
 live caller whose stream may pause should also call :meth:`advance` with its clock, so that no
 decision waits longer than the lookahead. A hand note arriving within the chord window of an
-already committed note joins its chord with the other hand; when both hands are committed, a
-hi-hat goes to the pedal and anything else is left out (with the reason). Committed steps of the
+already committed note joins its chord with the other hand (unless both would be on one hi-hat:
+then the newcomer is left out); when both hands are committed, a hi-hat goes to the pedal and
+anything else is left out (with the reason). Committed steps of the
 recursion are dropped, so its state stays a few steps long however long the show. The onsets
 themselves are kept (``onsets()``, a few dozen bytes each) unless ``keep_onsets=False``: then
 the notes no pending step needs are dropped whenever the arrays fill (their reasons with
@@ -262,8 +263,14 @@ class OnlineSticker:
             else:
                 r.reasons[i] = "left out: both hands were already committed at this instant"
             return [self._decision(i)]
-        # one hand committed: the newcomer takes the other
         first = step.played[0]
+        p = int(r.piece[i])
+        if int(r.piece[first]) == p and self.kit.pieces[p].kind is PieceKind.HIHAT:
+            # one hand on a hi-hat at a time (see prepare.reduce_chord)
+            r.hand[i] = False
+            r.reasons[i] = "left out: one hi-hat stroke at a time, and this one came later"
+            return [self._decision(i)]
+        # one hand committed: the newcomer takes the other
         forced = 0 if int(r.limb[first]) == _RH else 1
         self._trellis.restore(step.before)
         step.played = (first, i)

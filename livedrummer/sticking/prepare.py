@@ -114,17 +114,25 @@ def chords(times: np.ndarray, window_s: float = CHORD_WINDOW_S) -> list[np.ndarr
 
 
 def reduce_chord(members: list[int], routed: Routed, kit: Kit) -> tuple[list[int], dict[int, str]]:
-    """Keep at most two hand notes of one chord, the way a drummer would.
+    """Keep at most two hand notes of one chord, and one hand on each hi-hat, as a drummer would.
 
-    A hi-hat stroke moves to the pedal (its onset's zone becomes ``pedal``, its limb the hi-hat
-    foot); if more than two remain, the quietest notes are left out. Returns the notes the hands
+    Two hands cannot strike one hi-hat at one instant (Kragtwijk et al. §4.2: only one hi-hat
+    event at a time), so of several strokes on the same hi-hat the loudest stays (the first of
+    equals) and the others are left out. Then, while more than two notes remain, a hi-hat
+    stroke moves to the pedal (its onset's zone becomes ``pedal``, its limb the hi-hat foot);
+    if more than two still remain, the quietest notes are left out. Returns the notes the hands
     still play and the reasons for every changed note. ``routed`` is updated in place.
     """
     keep = list(members)
     reasons: dict[int, str] = {}
+    on = routed.onsets
+    if len(keep) > 1:
+        for i in _second_hihat_strokes(keep, routed, kit):
+            keep.remove(i)
+            routed.hand[i] = False
+            reasons[i] = "left out: one hi-hat stroke at a time, and this the quieter"
     if len(keep) <= 2:
         return keep, reasons
-    on = routed.onsets
     for i in list(keep):
         if len(keep) > 2 and to_pedal(routed, i, kit):
             keep.remove(i)
@@ -135,6 +143,21 @@ def reduce_chord(members: list[int], routed: Routed, kit: Kit) -> tuple[list[int
         routed.hand[quietest] = False
         reasons[quietest] = "left out: more than two hand notes at once, and this the quietest"
     return keep, reasons
+
+
+def _second_hihat_strokes(members: list[int], routed: Routed, kit: Kit) -> list[int]:
+    """Strokes of a chord on a hi-hat that another, louder stroke of it already plays."""
+    on_hat: dict[int, list[int]] = {}
+    for i in members:
+        p = int(routed.piece[i])
+        if kit.pieces[p].kind is PieceKind.HIHAT:
+            on_hat.setdefault(p, []).append(i)
+    out: list[int] = []
+    for strokes in on_hat.values():
+        if len(strokes) > 1:
+            loudest = max(strokes, key=lambda j: (int(routed.onsets["velocity"][j]), -j))
+            out += [j for j in strokes if j != loudest]
+    return out
 
 
 def to_pedal(routed: Routed, i: int, kit: Kit) -> bool:

@@ -5,7 +5,9 @@ is one grid position (``2``, ``2e``, ``2&``, ``2a`` for sixteenths within 0.09 b
 and ``2l`` for the triplet's "trip" and "let"; any other position shows its beat fraction, such
 as ``2.40``), listing every note there as ``piece LIMB`` with the limb as a teacher writes it
 (``R``, ``L``, ``RF``, ``LF``); a note nobody plays shows ``--`` and its reason is listed after
-the bar.
+the bar. A stroke too hard to play (too fast for one hand, or with the arms crossed; see
+:func:`~.metrics.hard_notes`) carries a ``!`` after its limb and is explained after the bar, as
+SMED showed the parts of a score too hard to play; a last line counts them.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from livedrummer.kit import Kit
+from livedrummer.sticking.metrics import hard_notes
 from livedrummer.sticking.prepare import beat_position
 from livedrummer.sticking.result import LIMBS, NOT_PLAYED, Sticking
 from livedrummer.vocabulary import Limb
@@ -45,6 +48,7 @@ def render_sheet(
         beat_s = np.array([0.0, 0.5])
         bar, beat_in_bar = np.zeros(2, np.int32), np.arange(2, dtype=np.int16)
     pos = beat_position(on["time_s"], beat_s)
+    hard = hard_notes(sticking, kit)
     lines: list[str] = []
     current_bar = -1
     notes_for_bar: list[str] = []
@@ -75,9 +79,13 @@ def render_sheet(
         piece = kit.pieces[p].name if p >= 0 else f"note{int(on['note'][i])}"
         code = int(sticking.limb[i])
         limb = _SHORT[LIMBS[code]] if code != NOT_PLAYED else "--"
-        row.append(f"{piece} {limb}")
+        row.append(f"{piece} {limb}{'!' if i in hard else ''}")
         if i in sticking.reasons:
             notes_for_bar.append(f"    * {label} {piece}: {sticking.reasons[i]}")
+        if i in hard:
+            notes_for_bar.append(f"    ! {label} {piece} {limb}: {hard[i]}")
     flush_row()
     lines.extend(notes_for_bar)
+    if hard:
+        lines.append(f"too hard to play (!): {len(hard)} of {on.size} notes")
     return "\n".join(lines) + "\n"
