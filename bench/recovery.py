@@ -2,13 +2,15 @@
 
 Figures (medians of ``--kills`` / ``--replugs`` runs; no assertions):
 
-* **restart-to-ready per process** after ``kill -9``: from the supervisor seeing the death to
-  the new process's ready line, as the supervisor logs it (``NAME ready again S s after it
-  died``), in a real ``livedrummer up --serial PTY`` session fed notes at 20/s
-  (:class:`bench._faultrig.Rig`). It includes the restart back-off, printed beside it (0.1 s
-  for a crash after a healthy run, doubling while a service keeps dying within 10 s of its
-  start, as it does from one round to the next here); the start-up alone, figure minus
-  back-off, is printed too.
+* **kill to working again per process** after ``kill -9``, in a real ``livedrummer up
+  --serial PTY`` session fed notes at 20/s (:class:`bench._faultrig.Rig`), at rest and with
+  ``--hogs`` CPU-bound processes running: from the kill to the input daemon's first note on
+  the bus, to the new display's first frame drawn with a pose, to the first frame drawing a
+  pose of the new synth. Beside it the supervisor's own figure, from the death (its pidfd)
+  to the new process's ready line (``NAME ready again S s after it died``; a service is
+  ready when it does its job), which includes the restart back-off, printed too (0.1 s for
+  a crash after a healthy run, doubling while a service keeps dying within 10 s of its
+  start, as it does from one round to the next here), and the start-up alone.
 * **display stale-pose time** when the synth is killed: from the last frame drawn with a
   pose newer than the previous frame's to the first frame drawing a pose from the restarted
   synth (render times in the display's ``frames.jsonl``).
@@ -19,7 +21,7 @@ Figures (medians of ``--kills`` / ``--replugs`` runs; no assertions):
   under the same name (a ``jackd -d dummy -S`` server is started for the run; skipped when
   jackd is not installed).
 
-``livedrummer bench recovery [--kills N] [--replugs N]``.
+``livedrummer bench recovery [--kills N] [--replugs N] [--hogs 0,1x]``.
 """
 
 from __future__ import annotations
@@ -46,6 +48,8 @@ from services.input.base import Source
 from services.input.daemon import DaemonConfig, InputDaemon
 
 PROBE_EVERY_S = 0.005
+#: Pose messages a killed synth had sent arrive within this; a restart takes far longer.
+IN_FLIGHT_S = 0.05
 
 
 @contextmanager
@@ -177,33 +181,59 @@ def _jackd() -> Iterator[str | None]:
 
 
 def kills(
-    tmp: Path, rounds: int
-) -> tuple[dict[str, list[float]], dict[str, list[float]], list[float]]:
-    """Kill input, synth, display in turn, ``rounds`` times: recovery and back-off per service,
+    tmp: Path, rounds: int, hogs: int = 0
+) -> tuple[dict[str, list[float]], dict[str, list[float]], dict[str, list[float]], list[float]]:
+    """Kill input, synth, display in turn, ``rounds`` times, with ``hogs`` CPU-bound processes
+    running: per service the time from the kill to the pipeline working again (see
+    :func:`_working_again`), the supervisor's own death-to-ready figure and its back-off;
     and the display's stale-pose time per synth kill."""
     import random
+    import subprocess
+    import sys
 
     from bench._faultrig import Rig
 
+    back: dict[str, list[float]] = {"input": [], "synth": [], "display": []}
     ready: dict[str, list[float]] = {"input": [], "synth": [], "display": []}
     backoff: dict[str, list[float]] = {"input": [], "synth": [], "display": []}
     stale: list[float] = []
+    hog = "while True: pass"
     with Rig(tmp, random.Random().randrange(20_000, 40_000, 20)) as rig:
         rig.start()
         rig.pump(lambda: len(rig.bus) >= 20, 20)
-        for _ in range(rounds):
-            for name in ("input", "synth", "display"):
-                rec = rig.kill(name)
-                ready[name].append(rec.ready_after_s)
-                line = next(t for _, t in reversed(rig.lines) if f"{name} exited with" in t)
-                backoff[name].append(float(line.rsplit(" in ", 1)[1].split()[0]))
-                if name == "synth":
+        procs = [subprocess.Popen([sys.executable, "-c", hog]) for _ in range(hogs)]
+        try:
+            for _ in range(rounds):
+                for name in ("input", "synth", "display"):
+                    rec = rig.kill(name)
+                    ready[name].append(rec.ready_after_s)
+                    line = next(t for _, t in reversed(rig.lines) if f"{name} exited with" in t)
+                    backoff[name].append(float(line.rsplit(" in ", 1)[1].split()[0]))
                     rig.pump(lambda: False, 2.0)
-                    stale.append(_stale_s(rig.frames(), rec.killed_at))
-                else:
-                    rig.pump(lambda: False, 2.0)
+                    back[name].append(_working_again(rig, name, rec.killed_at))
+                    if name == "synth":
+                        stale.append(_stale_s(rig.frames(), rec.killed_at))
+        finally:
+            for h in procs:
+                h.kill()
+                h.wait()
         rig.stop()
-    return ready, backoff, stale
+    return back, ready, backoff, stale
+
+
+def _working_again(rig: Any, name: str, killed_at: float) -> float:
+    """Seconds from the kill to the replacement doing its job: the input daemon's first note
+    on the bus (its stamp), the display's first frame drawn with a pose (done), the first
+    frame drawn after the new synth's first pose message reached the rig."""
+    if name == "input":
+        return min((t for _, t in rig.bus if t > killed_at), default=float("inf")) - killed_at
+    frames = [f for f in rig.frames() if f["render_s"] > killed_at]
+    if name == "display":
+        done = (f["done_s"] for f in frames if f["pose_s"] is not None)
+    else:  # the first pose message after the old synth's last ones in flight, then drawn
+        first = min((t for t, _, _ in rig.poses if t > killed_at + IN_FLIGHT_S), default=None)
+        done = (f["done_s"] for f in frames if first is not None and f["render_s"] >= first)
+    return next(done, float("inf")) - killed_at
 
 
 def _stale_s(frames: list[dict[str, Any]], killed_at: float) -> float:
@@ -226,10 +256,30 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench recovery", description=__doc__)
     parser.add_argument("--kills", type=int, default=3, help="kill rounds (default 3)")
     parser.add_argument("--replugs", type=int, default=5, help="replugs per device (default 5)")
+    parser.add_argument("--hogs", default="0,1x",
+                        help="kill rounds at rest and loaded: hog processes, a count or Nx "
+                        "cores (default 0,1x)")  # fmt: skip
     args = parser.parse_args(argv)
+    cores = os.cpu_count() or 1
+    levels = [int(h[:-1]) * cores if h.endswith("x") else int(h) for h in args.hogs.split(",")]
     with tempfile.TemporaryDirectory() as tmp_text:
         tmp = Path(tmp_text)
-        ready, backoff, stale = kills(tmp / "up", args.kills)
+        for hogs in levels:
+            back, ready, backoff, stale = kills(tmp / f"up{hogs}", args.kills, hogs)
+            print(f"kill -9 with {hogs} CPU hogs (median of {args.kills}; back-off included; s):")
+            print(f"  {'':<8} {'kill -> working':>16} {'supervisor: death -> ready':>27}"
+                  f" {'start-up':>9}")  # fmt: skip
+            for name, values in back.items():
+                startup = statistics.median(
+                    v - b for v, b in zip(ready[name], backoff[name], strict=True)
+                )
+                print(f"  {name:<8} {statistics.median(values):>16.2f} "
+                      f"{statistics.median(ready[name]):>27.2f} {startup:>9.2f}  (all: "
+                      f"{', '.join(f'{v:.2f}' for v in values)}; back-off "
+                      f"{', '.join(f'{v:.1f}' for v in backoff[name])})")  # fmt: skip
+            each = ", ".join(f"{v:.2f}" for v in stale)
+            print(f"  display stale-pose time while the synth restarts: median "
+                  f"{statistics.median(stale):.2f} s (all: {each})")  # fmt: skip
         (tmp / "serial").mkdir()
         serial = serial_replug(tmp / "serial", args.replugs)
         with _jackd() as server:
@@ -237,15 +287,6 @@ def main(argv: list[str]) -> int:
             if server is not None:
                 (tmp / "jack").mkdir()
                 jack = jack_replug(tmp / "jack", args.replugs)
-    print(f"restart to ready after kill -9 (median of {args.kills}; back-off included):")
-    for name, values in ready.items():
-        startup = statistics.median(v - b for v, b in zip(values, backoff[name], strict=True))
-        print(f"  {name:<8} {statistics.median(values):.2f} s, start-up {startup:.2f} s  "
-              f"(all: {', '.join(f'{v:.2f}' for v in values)}; back-off "
-              f"{', '.join(f'{v:.1f}' for v in backoff[name])} s)")  # fmt: skip
-    each = ", ".join(f"{v:.2f}" for v in stale)
-    print(f"display stale-pose time while the synth restarts: median "
-          f"{statistics.median(stale):.2f} s (all: {each})")  # fmt: skip
     print(
         f"serial replug -> first note on the bus: median {serial * 1000:.0f} ms of {args.replugs}"
     )
