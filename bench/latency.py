@@ -201,7 +201,18 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
     pose_lat = (contact_at - sent_a)[~np.isnan(contact_at)]
     after_onset = (contact_at - stamps[:n])[~np.isnan(contact_at)]
     after_bus = (contact_at - got_t[:n])[~np.isnan(contact_at)]
-    late = int(np.sum(contact_at - stamps[:n] > d))
+    late_mask = contact_at - stamps[:n] > d
+    late = int(np.sum(late_mask))
+    # Where the late ones are: how far past D, and in which quarter of the run (queueing
+    # shows as lateness growing towards the end of a burst; a stray slow answer does not).
+    over = (contact_at - stamps[:n] - d)[late_mask] * 1000.0
+    quarter = np.minimum((4 * np.arange(n) // max(n, 1)), 3)[late_mask]
+    late_where = (
+        f"late by {np.percentile(over, 50):.1f} ms p50, {over.max():.1f} max; per quarter of "
+        f"the run {np.bincount(quarter, minlength=4).tolist()}"
+        if late
+        else "none late"
+    )
     frames = [json.loads(x) for x in (frames_dir / "frames.jsonl").read_text().splitlines()]
     drawn = [(f["pose_s"], f["done_s"]) for f in frames if f["pose_s"] is not None]
     frame_lat, frame_onset = [], []
@@ -217,7 +228,8 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
         "frame_onset": np.asarray(frame_onset),
         "after_onset": after_onset, "after_bus": after_bus, "late": late,
         "in_daemon": np.array(sent_by_daemon[:n]) - stamps[:n],
-        "no_contact": missing_pose, "synth": (tmp / "synth.err").read_text().strip()[-260:],
+        "no_contact": missing_pose, "late_where": late_where,
+        "synth": (tmp / "synth.err").read_text().strip()[-260:],
     }  # fmt: skip
 
 
@@ -286,7 +298,8 @@ def main(argv: list[str]) -> int:
                 fast = float(np.mean(ab <= 0.001)) if ab.size else 0.0
                 print(f"         pose within 1 ms of the onset on the bus: {fast:.0%} of "
                       f"contacts; frame - onset {_pct(r['frame_onset'])}; in the input daemon "
-                      f"(stamp -> sent) {_pct(r['in_daemon'])}; {r['synth']}",
+                      f"(stamp -> sent) {_pct(r['in_daemon'])}; {r['late_where']}; "
+                      f"{r['synth']}",
                       flush=True)  # fmt: skip
     finally:
         jack.close()
