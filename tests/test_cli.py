@@ -88,9 +88,9 @@ def test_demo_plays_the_groove_live_and_records_it_without_a_screen(tmp_path: Pa
     assert out.stat().st_size > 10_000
 
 
-def test_demo_file_renders_the_bundled_groove_offline(tmp_path: Path) -> None:
+def test_demo_offline_renders_the_bundled_groove(tmp_path: Path) -> None:
     out = tmp_path / "demo.mp4"
-    proc = run("demo", "--file", "--seconds", "3", "-o", str(out), DISPLAY="",
+    proc = run("demo", "--offline", "--seconds", "3", "-o", str(out), DISPLAY="",
                WAYLAND_DISPLAY="")  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     assert "gmd-drummer1-funk-80.mid" in proc.stdout

@@ -152,7 +152,7 @@ def test_jack_port_removed_and_recreated_reconnects(jack_server: str, tmp_path: 
 def test_up_over_curve_renders_and_refuses_a_stranger(gl_ok: None, tmp_path: Path) -> None:
     keys = tmp_path / "keys"
     for name in ("rig", "friend", "stranger"):
-        assert main(["keys", "new", name, "--dir", str(keys)]) == 0
+        assert main(["keys", "new", name, "--keys-dir", str(keys)]) == 0
     allow = tmp_path / "allow"
     allow.mkdir()
     for name in ("rig", "friend"):
@@ -205,7 +205,7 @@ def test_up_over_curve_renders_and_refuses_a_stranger(gl_ok: None, tmp_path: Pat
 def test_up_refuses_an_allow_folder_without_its_own_key(tmp_path: Path) -> None:
     keys = tmp_path / "keys"
     for name in ("rig", "friend"):
-        assert main(["keys", "new", name, "--dir", str(keys)]) == 0
+        assert main(["keys", "new", name, "--keys-dir", str(keys)]) == 0
     allow = tmp_path / "allow"
     allow.mkdir()
     (allow / "friend.key").write_bytes((keys / "friend.key").read_bytes())

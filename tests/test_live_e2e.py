@@ -95,7 +95,7 @@ def test_a_groove_played_on_a_jack_port_reaches_the_display(
         assert answer.service == "synth" and answer.pose == fmt  # the display's own format
         frames_dir = tmp_path / "frames"
         disp = spawn(["display", "--live", "--headless", "--sub", syn_eps["pub"], "--fps",
-                      str(FPS), "--size", "320x180", "--out", str(frames_dir)],
+                      str(FPS), "--size", "320x180", "--frames-dir", str(frames_dir)],
                      tmp_path, "display")  # fmt: skip
         procs.append(disp)
         first_line(disp, tmp_path, "display")

@@ -26,7 +26,7 @@ def launch(tmp: Path, *extra: str) -> subprocess.Popen[str]:
     base = random.Random().randrange(20_000, 40_000, 20)
     return subprocess.Popen(
         [sys.executable, "-m", "livedrummer", "up", "--demo", "--port-base", str(base),
-         "--out", str(tmp / "frames"), *extra],
+         "--frames-dir", str(tmp / "frames"), *extra],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
     )  # fmt: skip
 
@@ -91,7 +91,7 @@ def test_up_records_the_show_with_its_drum_track_on_show_time(gl_ok: None, tmp_p
     base = random.Random().randrange(20_000, 40_000, 20)
     proc = subprocess.Popen(
         [sys.executable, "-m", "livedrummer", "up", "--demo", "--port-base", str(base),
-         "--out", str(tmp_path / "frames"), "--seconds", "6", "--video", str(video),
+         "--frames-dir", str(tmp_path / "frames"), "--seconds", "6", "--video", str(video),
          "--size", "320x180", "--fps", "25"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
     )  # fmt: skip

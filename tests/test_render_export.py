@@ -179,7 +179,7 @@ def test_video_colours_match_the_rendered_frames(groove: Path, tmp_path: Path, s
             "--camera", "front", "--crf", "16"]  # fmt: skip
     out = tmp_path / "out.mp4"
     assert main([*argv, "-o", str(out)]) == 0
-    assert main([*argv, "--frames", str(tmp_path / "frames")]) == 0
+    assert main([*argv, "--frames-dir", str(tmp_path / "frames")]) == 0
     pngs = sorted((tmp_path / "frames").glob("*.png"))
     with av.open(str(out)) as c:
         decoded = list(c.decode(video=0))

@@ -366,7 +366,7 @@ def test_render_command_draws_the_overlays(gl_ok: None, groove: Path, tmp_path: 
                                            capsys) -> None:  # fmt: skip
     def frame(argv: list[str], name: str) -> np.ndarray:
         out = tmp_path / name
-        code = main(["render", str(groove), "--frames", str(out), "--size", "160x90", "--fps",
+        code = main(["render", str(groove), "--frames-dir", str(out), "--size", "160x90", "--fps",
                      "10", "--tail", "0", "--camera", "front", *argv])  # fmt: skip
         assert code == 0
         with av.open(str(sorted(out.glob("*.png"))[8])) as c:
@@ -380,7 +380,7 @@ def test_render_command_draws_the_overlays(gl_ok: None, groove: Path, tmp_path: 
     assert np.abs(both[60:] - plain[60:]).sum(axis=2).mean() > 10
     col = both[-8:, now_column(160)]  # the now-line, in the graph below its legend: red
     assert ((col[:, 0] > 200) & (col[:, 1] < 90)).mean() > 0.8
-    code = main(["render", str(groove), "--frames", str(tmp_path / "x"), "--overlay", "graph"])
+    code = main(["render", str(groove), "--frames-dir", str(tmp_path / "x"), "--overlay", "graph"])
     assert code == 2
     assert "'graph'" in capsys.readouterr().err
 
@@ -397,7 +397,7 @@ def test_window_plays_with_overlays_under_xvfb(groove: Path) -> None:
         ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", sys.executable, "-c",
          "import sys; from livedrummer.cli import main; sys.exit(main())", "-v", "display",
          str(groove), "--size", "640x360", "--aa", "0", "--overlay", "score,joints",
-         "--quit-after", "1.5"],
+         "--seconds", "1.5"],
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert run.returncode == 0, run.stderr

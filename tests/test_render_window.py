@@ -25,7 +25,7 @@ REPO = Path(__file__).resolve().parent.parent
 
 def test_no_display_is_a_one_line_error() -> None:
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    run = subprocess.run([*LIVEDRUMMER, "display", "--quit-after", "1"], env=env, cwd=REPO,
+    run = subprocess.run([*LIVEDRUMMER, "display", "--seconds", "1"], env=env, cwd=REPO,
                          capture_output=True, text=True, timeout=60)  # fmt: skip
     assert run.returncode == 2
     assert run.stderr.strip().count("\n") == 0
@@ -36,7 +36,7 @@ def test_no_display_is_a_one_line_error() -> None:
 def test_window_plays_under_xvfb() -> None:
     run = subprocess.run(
         ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", *LIVEDRUMMER, "-v", "display",
-         "--size", "640x360", "--aa", "0", "--camera", "front", "--quit-after", "1.5"],
+         "--size", "640x360", "--aa", "0", "--camera", "front", "--seconds", "1.5"],
         cwd=REPO, capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert run.returncode == 0, run.stderr
@@ -49,7 +49,7 @@ def test_live_display_draws_in_a_window_under_xvfb() -> None:
     # no synth is running: the live window still draws the kit, frame after frame
     run = subprocess.run(
         ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", *LIVEDRUMMER, "display", "--live",
-         "--sub", "tcp://127.0.0.1:1", "--size", "320x180", "--aa", "0", "--frames", "12",
+         "--sub", "tcp://127.0.0.1:1", "--size", "320x180", "--aa", "0", "--max-frames", "12",
          "--fps", "30"],
         cwd=REPO, capture_output=True, text=True, timeout=120,
     )  # fmt: skip

@@ -50,8 +50,8 @@ def ctx() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
 
 
 def make_keys(folder: Path, name: str) -> Path:
-    """``livedrummer keys new NAME --dir folder``; returns the secret file."""
-    assert main(["keys", "new", name, "--dir", str(folder)]) == 0
+    """``livedrummer keys new NAME --keys-dir folder``; returns the secret file."""
+    assert main(["keys", "new", name, "--keys-dir", str(folder)]) == 0
     return folder / f"{name}.key_secret"
 
 
@@ -241,10 +241,10 @@ def test_keys_new_round_trips_and_pyzmq_reads_them(
     assert parse_key_file(text, "x") == pair
     assert pair.public.decode() in capsys.readouterr().out
     # never overwritten, and listed
-    assert main(["keys", "new", "alice", "--dir", str(tmp_path)]) == 2
+    assert main(["keys", "new", "alice", "--keys-dir", str(tmp_path)]) == 2
     assert "already exists" in capsys.readouterr().err
     assert load_secret(secret_path) == pair
-    assert main(["keys", "list", "--dir", str(tmp_path)]) == 0
+    assert main(["keys", "list", "--keys-dir", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "alice" in out and pair.public.decode() in out and "+ secret" in out
 

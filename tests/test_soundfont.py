@@ -242,7 +242,7 @@ def test_a_bad_soundfont_is_one_line_naming_the_file(
 
 def test_up_refuses_a_bad_soundfont_before_the_show(tmp_path: Path) -> None:
     missing = tmp_path / "nope.sf2"
-    done = _cli("up", "--demo", "--headless", "--seconds", "30", "--out", str(tmp_path / "live"),
+    done = _cli("up", "--demo", "--headless", "--seconds", "30", "--frames-dir", str(tmp_path / "live"),
                 "--video", str(tmp_path / "show.mp4"), "--soundfont", str(missing))  # fmt: skip
     assert done.returncode == 2
     lines = done.stderr.splitlines()

@@ -1,4 +1,4 @@
-"""A minimal PNG writer for RGB frames (``--frames DIR``), with zlib from the standard library.
+"""A minimal PNG writer for RGB frames (``--frames-dir DIR``), with zlib from the standard library.
 
 PNG is chunked: a signature, IHDR (size, 8-bit RGB), one zlib stream of filtered rows (filter
 type 0 on every row: the encoder does no prediction, which keeps it fast and a little larger)
