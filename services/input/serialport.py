@@ -12,6 +12,16 @@ never the same-instant duplicates the shared decoder drops from files. A chunk s
 this spacing would reach back past the previous read's time is spaced closer, so stamps
 always increase.
 
+What bounds a serial stamp. A tty gives no kernel timestamp per byte, so the stamp is taken
+in the daemon's own thread right after ``read`` returns: no callback, no queue, no other
+thread's lock in between (the main thread is the only one that reads). Its error is what
+held the bytes back before that read: the USB bridge (FTDI chips hold up to their latency
+timer, 16 ms by default: set ``/sys/bus/usb-serial/devices/ttyUSB0/latency_timer`` to 1;
+CDC-ACM boards deliver once per 1 ms USB frame), a real UART's receive FIFO (up to its
+trigger level, then a timeout of about four characters: ~1.3 ms at 31,250 baud), and the
+daemon's wait for the CPU, which ``input --realtime PRIO`` removes. The read takes what the
+driver holds, so the read size adds nothing beyond the chunking above.
+
 A device that vanishes (cable pulled: pyserial raises, or reads EOF) becomes a
 :class:`MidiInputError`; the daemon reopens the path until it exists again. Garbage bytes
 the parser skipped are counted in the problems report.
