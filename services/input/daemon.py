@@ -2,8 +2,9 @@
 
 Threads and sockets. The main thread owns the source and the XPUB socket: it reads the source
 (blocking at most ``read_timeout_s``), publishes each batch and journals it, so a serial or
-file event is never queued between arrival and publication (an rtmidi callback adds one
-``SimpleQueue`` hop). XPUB instead of PUB so the daemon *sees* subscriptions arrive: with
+file event is never queued between arrival and publication (MIDI ports are drained from
+rtmidi's own queue by this thread, each message stamped with the driver's time: see
+:mod:`services.input.midiport`). XPUB instead of PUB so the daemon *sees* subscriptions arrive: with
 ``wait_subscribers`` it opens its source only after that many subscriptions arrived (a SUB
 socket subscribed to k topics counts k), which is how a launcher or a test gets every event
 from the first one without sleeping. A second
@@ -28,8 +29,8 @@ The daemon keeps running through all of them.
 Load and shedding. The daemon holds no queue of its own on the serial and file paths: the main
 thread reads what the device delivered, journals it and publishes it, so a flood backs up in
 the device (a tty's bounded kernel buffer; a real UART at 31,250 baud cannot flood at all)
-and never in our memory. The rtmidi path has one bounded queue (see
-:mod:`services.input.midiport`: shed beyond it, counted, a GAP published). Publication never
+and never in our memory. The rtmidi path has one bounded queue, rtmidi's own (see
+:mod:`services.input.midiport`: 65,536 messages, drained every 0.5 ms). Publication never
 blocks: past the high-water mark (``services.net.DEFAULT_HWM`` messages per subscriber)
 ZeroMQ drops messages for that slow subscriber only, which it sees as a sequence gap; every
 event was journaled before it was offered to ZeroMQ, so the journal stays complete.
