@@ -44,6 +44,9 @@ def test_sheet_and_animation_agree_note_for_note_on_20_gmd_files(
     checked = cli_json(capsys, "check", *map(str, files), "--map", "roland-td", "--json",
                        "--fps", "10")  # fmt: skip
     assert [f["file"] for f in checked["per_file"]] == [str(p) for p in files]
+    notes = [r for f in checked["per_file"] for r in f["notes"]]
+    assert checked["too_fast"] == sum(r["too_fast"] for r in notes) > 0
+    assert checked["crossed"] == sum(r["crossed"] for r in notes)
     kit, note_map = load_kit("rock5"), load_note_map("roland-td")
     without_grid = 0
     for path, animated in zip(files, checked["per_file"], strict=True):

@@ -3,8 +3,10 @@
 Animates each file on the kit and measures contact error at every onset, the deepest stick-tip
 penetration and joint-limit violations (see :mod:`livedrummer.body.check`). Several files or
 folders are checked one by one and summarised together (max over files; p99 and mean over all
-onsets). Limbs come from :func:`livedrummer.sticking.stick_performance` (``--sticking``, and
-``--score`` for one file), as for ``livedrummer sticking``.
+onsets), with the number of strokes too fast for one hand or made with the arms crossed
+(:mod:`livedrummer.sticking.metrics`). Limbs come from
+:func:`livedrummer.sticking.stick_performance` (``--sticking``, and ``--score`` for one file),
+as for ``livedrummer sticking``.
 
 ``--json`` prints the summary and, per file, every note as the animation played it: time,
 note, piece, limb, whether it is too fast for one hand or made with the arms crossed (and how,
@@ -72,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.kitfile import load_kit
     from livedrummer.midifile import read_midi_file
     from livedrummer.notemap import load_note_map
+    from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
     rig = build_rig(kit)
@@ -88,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
     by_limit: dict[str, int] = {}
     worst_contact: tuple[float, str] = (0.0, "")
     per_file: list[dict[str, Any]] = []
+    hard = {"too_fast": 0, "crossed": 0}
     for path in files:
         performance = read_midi_file(path, note_map)
         done = perform(performance, rig, note_map, expression, strokes,
@@ -99,6 +103,8 @@ def run(args: argparse.Namespace) -> int:
             per_file.append({"file": str(path), "sticking": done.sticking.strategy, "notes": notes})
         for key in totals:
             totals[key] += getattr(r, key)
+        hard["too_fast"] += int(too_fast(done.sticking, kit).sum())
+        hard["crossed"] += int(crossings(done.sticking, kit).sum())
         for k, v in r.violations_by_limit.items():
             by_limit[k] = by_limit.get(k, 0) + v
         if r.penetration_m * 1000 > worst["penetration_mm"]:
@@ -112,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
         "kit": kit.name,
         "map": note_map.name,
         **totals,
+        **hard,
         "contact_error_mm": {
             "max": round(float(e.max()), 6) if e.size else 0.0,
             "p99": round(float(np.percentile(e, 99)), 6) if e.size else 0.0,
@@ -132,6 +139,8 @@ def run(args: argparse.Namespace) -> int:
         c = summary["contact_error_mm"]
         print(f"{len(files)} file(s), kit {kit.name}, map {note_map.name}")
         print(f"  notes checked      {summary['notes']}  (not played: {summary['not_played']})")
+        print(f"  too hard to play   {hard['too_fast']} too fast for one hand, "
+              f"{hard['crossed']} with the arms crossed")  # fmt: skip
         print(f"  contact error mm   max {c['max']:.4f}  p99 {c['p99']:.4f}  mean {c['mean']:.4f}"
               f"  within 5 mm {c['within_5mm'] * 100:.3f} %")  # fmt: skip
         print(
