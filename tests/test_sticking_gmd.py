@@ -1,7 +1,8 @@
 """Whole-corpus check on a sample of the Groove MIDI Dataset (skipped where it is absent).
 
 Every 12th file (about 100 files, 37k notes, a few seconds): optimal has no more crossings and
-fewer too-fast strokes than every seed, and leaves nothing out unless three hands were needed.
+fewer too-fast strokes than every seed, and leaves nothing out unless three hands were needed
+or two hands would have struck one hi-hat at once (Kragtwijk et al. §4.2).
 """
 
 from __future__ import annotations
@@ -32,7 +33,8 @@ def test_optimal_beats_the_seeds_on_real_performances() -> None:
             fast += int(metrics.too_fast(result, kit).sum())
             if name == "optimal":
                 for i in metrics.dropped(result).nonzero()[0].tolist():
-                    assert "more than two hand notes" in result.reasons[i]
+                    why = result.reasons[i]
+                    assert "more than two hand notes" in why or "one hi-hat stroke" in why
         score[name] = (cross, fast)
     for name in STRATEGIES:
         if name != "optimal":
