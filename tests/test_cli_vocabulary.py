@@ -140,3 +140,13 @@ def test_help_and_kits_load_no_numpy_and_no_services(argv: list[str]) -> None:
                           text=True, timeout=60)  # fmt: skip
     assert "HEAVY []" in proc.stderr, proc.stderr
     assert ("kits:" if argv == ["kits"] else "COMMAND") in proc.stdout
+
+
+def test_display_live_stops_after_seconds_as_up_does(tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "livedrummer", "display", "--live", "--headless", "--no-render",
+         "--sub", "tcp://127.0.0.1:1", "--seconds", "1", "--frames-dir", str(tmp_path)],
+        cwd=REPO, capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "display: " in proc.stderr and (tmp_path / "frames.jsonl").exists()

@@ -9,8 +9,8 @@ machine with no screen use ``livedrummer render``. The limbs are those of
 sticking`` prints them.
 
 Options share their names with the other commands: ``--seconds`` (as in ``up`` and ``demo``)
-closes the window, ``--frames-dir`` (as in ``render`` and ``up``) is where ``--live
---headless`` writes its frames, ``--max-frames`` stops it after so many.
+stops the show (the file window or ``--live``), ``--frames-dir`` (as in ``render`` and ``up``)
+is where ``--live --headless`` writes its frames, ``--max-frames`` stops it after so many.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--aa", type=int, default=4, metavar="N", help="multisample N (default 4)")
     add_renamed(p, "--quit-after", p.add_argument(
         "--seconds", type=float, metavar="S",
-        help="close the window after S seconds (default: when you close it)"))  # fmt: skip
+        help="stop after S seconds (default: when closed or stopped)"))  # fmt: skip
     p.add_argument("--overlay", default="", metavar="LIST",
                    help="strips shown first: score, joints or both; keys o, g "
                    "(default: none)")  # fmt: skip
@@ -166,6 +166,12 @@ def run_live(args: argparse.Namespace) -> int:
 
     signal.signal(signal.SIGTERM, on_signal)
     signal.signal(signal.SIGINT, on_signal)
+    if args.seconds is not None:
+        if not args.seconds > 0:
+            raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
+        timer = threading.Timer(args.seconds, stop.set)
+        timer.daemon = True
+        timer.start()
     try:
         display.start()
         print(json.dumps({"service": "display", "sub": args.sub}), flush=True)
