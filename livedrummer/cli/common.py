@@ -2,7 +2,7 @@
 
 One vocabulary: an option that means the same thing in several subcommands is defined once here
 (``--kit``, ``--map``, ``--sticking``, ``--score``, ...) or at least spelled the same; a former
-spelling stays accepted, hidden from ``--help``, through :func:`add_renamed`, which warns once.
+spelling stays accepted, hidden from ``--help``, through :func:`add_renamed`, with a warning.
 Every option's help states its default: :class:`Parser` appends ``(default X)`` to any help that
 does not say it already, so the stated default cannot drift from the real one; an option whose
 default is ``None`` says in its own words what happens without it.
