@@ -14,11 +14,13 @@ from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import PARENTS, J
 from livedrummer.body.strike import to_local
 from livedrummer.cli.common import DEMO_MAP, demo_groove
+from livedrummer.events import CONTROL_DTYPE, ControlKind
 from livedrummer.kitfile import load_kit
 from livedrummer.live.curves import blend_rows
 from livedrummer.live.ledger import SampleLedger
 from livedrummer.live.synth import LiveSynth, SynthParams
 from livedrummer.live.track import PoseTrack
+from livedrummer.live.window import NoteWindow, WindowParams
 from livedrummer.midifile import read_midi_file
 from livedrummer.notemap import load_note_map
 from livedrummer.performance import Performance
@@ -193,3 +195,34 @@ def test_a_choke_stops_the_cymbal_live_as_it_does_offline(rig: Rig, write_midi: 
     assert np.abs(live[ringing] - ref[ringing]).max() < 1e-4
     assert np.abs(ref[after]).max() == 0.0, "offline, the choke stops the crash"
     assert np.abs(live[after] - ref[after]).max() < 1e-4, "live, the choke stops it too"
+
+
+def test_the_window_stays_bounded_under_a_flood_and_a_moving_pedal(
+    rig: Rig, groove: Performance
+) -> None:
+    wp = WindowParams(0.03, True, 1.0, 0.025, 4.0, 4.0, max_notes=128, keep_s=0.03)
+    window = NoteWindow(rig, wp)
+    rate, n = 1000.0, 4000  # four seconds of a flood, then ten of the pedal alone
+    rows = np.concatenate([groove.onsets] * (n // groove.onsets.size + 1))[:n].copy()
+    rows["time_s"] = START + np.arange(n) / rate
+    most = 0
+    for k in range(0, n, 10):
+        now = float(rows["time_s"][k + 9])
+        window.add(rows[k : k + 10])
+        window.advance(now)
+        window.prune(now - wp.lookahead_s)
+        most = max(most, len(window._notes))
+    assert most <= wp.max_notes + 10 + rate * wp.lookahead_s, most
+    # decided notes far behind the horizon left; none left that a re-send could reach
+    content = window.content(now - wp.lookahead_s)
+    assert content.contacts_s[0] < now - wp.lookahead_s - wp.keep_s
+    pedal = np.zeros((), CONTROL_DTYPE)
+    pedal["kind"], pedal["number"] = ControlKind.HIHAT_PEDAL, 4
+    for k in range(2000):  # 200 pedal events a second, no notes
+        now += 0.005
+        pedal["time_s"], pedal["value"] = now, k % 128
+        window.control(pedal)
+        window.advance(now)
+        window.prune(now - wp.lookahead_s)
+    assert len(window._notes) == 0
+    assert len(window._controls) <= 1.5 * wp.window_s / 0.005 + 1, len(window._controls)

@@ -103,6 +103,7 @@ class SynthParams:
     epoch_s: float = 4.0  # the torso's beat keys are rebuilt at least this often
     provisional: bool = True  # publish up to now with pending notes' guessed hands; resend
     control_every_s: float = 0.1  # pedal (CC4) changes alone re-animate at most this often
+    max_notes: int = 128  # the window's most notes (a flood's re-animations stay cheap)
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.lookahead_s <= self.delay_s:
@@ -112,6 +113,8 @@ class SynthParams:
             )
         if not self.rate_hz > 0 or not self.window_s > 0:
             raise ValueError(f"rate {self.rate_hz} and window {self.window_s} must be > 0")
+        if self.max_notes < 8:
+            raise ValueError(f"max_notes {self.max_notes} must be >= 8")
 
 
 @dataclass(frozen=True)
@@ -142,7 +145,8 @@ class LiveSynth:
         self.cc_open = cc_open
         self.dtype = pose_dtype(len(rig.kit.pieces))
         ahead = p.provisional or p.delay_s > p.lookahead_s
-        wp = WindowParams(p.lookahead_s, ahead, p.window_s, p.guard_s, p.idle_period_s, p.epoch_s)
+        wp = WindowParams(p.lookahead_s, ahead, p.window_s, p.guard_s, p.idle_period_s, p.epoch_s,
+                          p.max_notes, p.delay_s)  # fmt: skip
         self.window = NoteWindow(rig, wp, note_map)
         self.curves = CurveSet(rig, p.blend_s, strokes)
         self.ledger = SampleLedger(self.dtype)

@@ -20,9 +20,14 @@ when the horizon reaches it.
 Limits: notes and controls leave the window half a window at a time, once they are
 ``window_s`` behind the committed horizon (a departure alone would otherwise cost a
 re-animation per note), so it holds at most 1.5 ``window_s`` of notes: its size follows the
-playing rate, never the length of the show. A cymbal whose hit has left the window stops
-swinging (its wobble, ``eta`` 0.08 per second, is then under a tenth of its start). Chokes
-are resolved to pieces through the note map given (none: chokes are ignored).
+playing rate, never the length of the show. A flood (hundreds of notes a second) would make
+every re-animation cost in proportion, so past ``max_notes`` the oldest decided notes leave
+at once, down to half of it, as long as they lie more than ``keep_s`` (D, the furthest a
+re-send reaches back) behind the committed horizon: at flood rates the curves then cover
+less than ``window_s``, and a stroke's approach may change behind what is re-sent. A
+cymbal whose hit has left the window stops swinging (its wobble, ``eta`` 0.08 per second, is
+then under a tenth of its start). Chokes are resolved to pieces through the note map given
+(none: chokes are ignored).
 """
 
 from __future__ import annotations
@@ -52,6 +57,8 @@ class WindowParams:
     guard_s: float
     idle_period_s: float
     epoch_s: float
+    max_notes: int  # at most this many notes (flood guard: see the module docstring)
+    keep_s: float  # notes this close behind the committed horizon never leave early (D)
 
 
 @dataclass
@@ -194,12 +201,19 @@ class NoteWindow:
 
     def prune(self, horizon: float) -> None:
         """Notes and controls ``window_s`` behind the committed ``horizon`` leave, half a
-        window at a time (undecided notes stay)."""
-        w = self.params.window_s
+        window at a time; past ``max_notes``, the oldest notes (undecided notes stay)."""
+        p = self.params
+        w = p.window_s
         notes = self._notes
         if notes and notes[0].time_s < horizon - 1.5 * w:
             k = 0
             while k < len(notes) and notes[k].time_s < horizon - w and notes[k].decided:
+                k += 1
+            del notes[:k]
+            self._first += k
+        if len(notes) > p.max_notes:
+            k, over = 0, len(notes) - p.max_notes // 2
+            while k < over and notes[k].decided and notes[k].time_s < horizon - p.keep_s:
                 k += 1
             del notes[:k]
             self._first += k
