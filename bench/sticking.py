@@ -25,7 +25,7 @@ from livedrummer.performance import Performance
 from livedrummer.sticking import metrics
 from livedrummer.sticking.online import OnlineSticker, stick_online
 from livedrummer.sticking.result import Sticking
-from livedrummer.sticking.strategy import STRATEGIES, assign
+from livedrummer.sticking.strategy import STRATEGIES, assign, stick_performance
 from livedrummer.sticking.tab import read_tab
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -70,7 +70,7 @@ def gmd_table(perfs: list[Performance], kit: Kit) -> None:
         elapsed = 0.0
         for p in perfs:
             t0 = time.perf_counter()
-            result = assign(p.onsets, kit, name, beat_s=p.grid.beat_s)
+            result = stick_performance(p, kit, name)
             elapsed += time.perf_counter() - t0
             c, f, d = counts(result, kit)
             cross, fast, drop = cross + c, fast + f, drop + d
