@@ -259,7 +259,8 @@ def main(argv: list[str]) -> int:
                         help="also play the first S s of the demo groove as performed")  # fmt: skip
     parser.add_argument("--delay-ms", type=float, nargs="+", default=[30.0], metavar="D",
                         help="visual delay(s), measured in turn (default 30)")  # fmt: skip
-    parser.add_argument("--lookahead-ms", type=float, default=30.0)
+    parser.add_argument("--lookahead-ms", type=float, default=None, metavar="L",
+                        help="the sticking's lookahead (default: min(30, D))")  # fmt: skip
     parser.add_argument("--realtime", type=int, default=0, metavar="PRIO",
                         help="input daemon at SCHED_FIFO PRIO (if permitted)")  # fmt: skip
     parser.add_argument("--no-render", action="store_true",
@@ -279,15 +280,16 @@ def main(argv: list[str]) -> int:
             if args.groove > 0:
                 runs.append(("groove", groove_schedule(args.groove)))
             for delay_ms, (label, schedule) in ((d, run) for d in args.delay_ms for run in runs):
+                lookahead_ms = args.lookahead_ms or min(30.0, delay_ms)
                 if label == runs[0][0]:
-                    print(f"D = {delay_ms:g} ms, L = {args.lookahead_ms:g} ms; ms from note-on "
+                    print(f"D = {delay_ms:g} ms, L = {lookahead_ms:g} ms; ms from note-on "
                           f"sent, p50 p99; frame rendered within D + one frame at p99: "
                           f"<= {delay_ms + 1000 / 60:.1f} ms")  # fmt: skip
                     print(f"{'notes/s':>8} {'sent':>5} {'bus':>5} {'no-pose':>7} {'late':>5} | "
                           f"{'JACK loop':>15} | {'onset on bus':>15} | {'pose at display':>15} | "
                           f"{'frame rendered':>15} | {'pose - onset':>15} | "
                           f"{'pose - bus':>15}")  # fmt: skip
-                r = run_rate(jack, label, schedule, delay_ms, args.lookahead_ms,
+                r = run_rate(jack, label, schedule, delay_ms, lookahead_ms,
                              Path(tmp), synth_args, input_args,
                              ["--no-render"] if args.no_render else [])  # fmt: skip
                 print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "

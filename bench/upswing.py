@@ -73,8 +73,11 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--delay-ms", type=float, nargs="+", default=[30.0], metavar="D",
                         help="visual delay(s), measured in turn (default 30)")  # fmt: skip
-    parser.add_argument("--lookahead-ms", type=float, default=30.0)
+    parser.add_argument("--lookahead-ms", type=float, default=None, metavar="L",
+                        help="the sticking's lookahead (default: min(30, D))")  # fmt: skip
     parser.add_argument("--tick-hz", type=float, default=120.0)
+    parser.add_argument("--prediction", choices=("both", "on", "off"), default="both",
+                        help="measure with the hand predictor, without, or both (default)")  # fmt: skip
     args = parser.parse_args(argv)
     files = sorted(GROOVE.rglob("*.mid"))
     if not files:
@@ -83,16 +86,19 @@ def main(argv: list[str]) -> int:
     beats = [f for f in files if "_beat_" in f.name]
     chosen = random.Random(args.seed).sample(beats, min(args.files, len(beats)))
     rig = build_rig(load_kit("rock5"))
-    print(f"{len(chosen)} GMD beats, first {args.seconds:g} s each; L = {args.lookahead_ms:g} "
-          f"ms; upswing visible = live stick >= 1/2 offline height {PREP_S * 1000:g} ms before "
+    print(f"{len(chosen)} GMD beats, first {args.seconds:g} s each; L = min(30 ms, D) unless "
+          f"given; upswing visible = live stick >= 1/2 offline height {PREP_S * 1000:g} ms before "
           f"contact")  # fmt: skip
-    for delay_ms, predict in ((d, p) for d in args.delay_ms for p in (False, True)):
-        params = SynthParams(args.lookahead_ms / 1000, delay_ms / 1000, predict=predict)
+    modes = {"both": (False, True), "on": (True,), "off": (False,)}[args.prediction]
+    for delay_ms, predict in ((d, p) for d in args.delay_ms for p in modes):
+        lookahead_ms = args.lookahead_ms or min(30.0, delay_ms)
+        params = SynthParams(lookahead_ms / 1000, delay_ms / 1000, predict=predict)
         total = Upswing(0, 0)
         for path in chosen:
             u = measure(rig, path, args.seconds, params, args.tick_hz)
             total = Upswing(total.notes + u.notes, total.visible + u.visible)
-        print(f"D = {delay_ms:g} ms, prediction {'on ' if predict else 'off'}: "
+        print(f"D = {delay_ms:g} ms, L = {lookahead_ms:g} ms, prediction "
+              f"{'on ' if predict else 'off'}: "
               f"{total.visible}/{total.notes} notes "
               f"= {100 * total.fraction:.1f} %", flush=True)  # fmt: skip
     return 0
