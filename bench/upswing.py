@@ -77,7 +77,7 @@ def main(argv: list[str]) -> int:
                         help="the sticking's lookahead (default: min(30, D))")  # fmt: skip
     parser.add_argument("--tick-hz", type=float, default=120.0)
     parser.add_argument("--prediction", choices=("both", "on", "off"), default="both",
-                        help="measure with the hand predictor, without, or both (default)")  # fmt: skip
+                        help="with the hand predictor, without, or both (default)")  # fmt: skip
     args = parser.parse_args(argv)
     files = sorted(GROOVE.rglob("*.mid"))
     if not files:
