@@ -20,9 +20,10 @@ place:
 
 All times here are performance times (show time minus D); the ledger never samples curves
 itself. Limits: the memory held is bounded by ``keep_s`` plus one chunk of samples at the
-synth's rate and the quick contacts of the last ``keep_s``, however long the show; a quick
-contact more than ``keep_s`` behind the committed horizon is dropped even if the curves never
-took it (a hit the curves left out is then only shown by its own batch).
+synth's rate and the quick contacts of the last ``keep_s`` (twice that while nothing is
+published), however long the show; a quick contact more than ``keep_s`` behind the committed
+horizon is dropped even if the curves never took it (a hit the curves left out is then only
+shown by its own batch).
 """
 
 from __future__ import annotations
@@ -121,9 +122,13 @@ class SampleLedger:
         time given twice (a chord completed) the last one wins."""
         if times.size == 0:
             return
+        newest = float(times.max())
+        if self._struck and min(self._struck) < newest - 2 * self.keep_s:
+            # also while nothing is published (a re-animation answering a flood)
+            self._struck = {t: r for t, r in self._struck.items() if t >= newest - 2 * self.keep_s}
         self._struck.update(zip(times.tolist(), rows, strict=True))
         self._quick_lo = min(self._quick_lo, float(times.min()))
-        self._quick_hi = max(self._quick_hi, float(times.max()))
+        self._quick_hi = max(self._quick_hi, newest)
 
     def take_quick(self) -> tuple[np.ndarray, np.ndarray]:
         """The quick contacts added since the last call as one ascending range: from the end

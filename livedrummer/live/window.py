@@ -119,10 +119,14 @@ class NoteWindow:
             self._notes.append(note)
             notes.append(note)
             self._apply(self.sticker.process(rec))
+        if recs.size:  # also while no poses are asked for (a re-animation answering a flood)
+            self.prune(float(recs["time_s"].max()) - self.params.lookahead_s)
         return notes
 
     def control(self, row: np.ndarray | np.void) -> None:
-        self._controls.append(np.array(row, dtype=CONTROL_DTYPE))
+        rec = np.array(row, dtype=CONTROL_DTYPE)
+        self._controls.append(rec)
+        self._prune_controls(float(rec["time_s"]) - self.params.lookahead_s)
 
     def advance(self, now_s: float) -> None:
         """Commit what the sticking decides by clock time ``now_s``."""
@@ -201,7 +205,8 @@ class NoteWindow:
 
     def prune(self, horizon: float) -> None:
         """Notes and controls ``window_s`` behind the committed ``horizon`` leave, half a
-        window at a time; past ``max_notes``, the oldest notes (undecided notes stay)."""
+        window at a time; past ``max_notes``, the oldest notes (undecided notes stay). Also
+        done as notes and controls arrive, with their own time less ``L`` as the horizon."""
         p = self.params
         w = p.window_s
         notes = self._notes
@@ -217,6 +222,10 @@ class NoteWindow:
                 k += 1
             del notes[:k]
             self._first += k
+        self._prune_controls(horizon)
+
+    def _prune_controls(self, horizon: float) -> None:
+        w = self.params.window_s
         ctl = self._controls
         if ctl and float(ctl[0]["time_s"]) < horizon - 1.5 * w:
             self._controls = [c for c in ctl if float(c["time_s"]) >= horizon - w]
