@@ -120,7 +120,11 @@ def test_only_the_named_command_is_built() -> None:
     sub = next(a for a in build_parser(["kits"])._actions
                if isinstance(a, argparse._SubParsersAction))  # fmt: skip
     assert sub.choices["kits"].get_default("func") is not None
-    assert sub.choices["render"].get_default("func") is None  # a stub for --help
+    assert list(sub.choices) == ["kits"]  # nothing else is built
+    stubs = next(a for a in build_parser(["--help"])._actions
+                 if isinstance(a, argparse._SubParsersAction))  # fmt: skip
+    assert list(stubs.choices) == list(COMMANDS)
+    assert stubs.choices["render"].get_default("func") is None  # a stub, listed by --help
 
 
 @pytest.mark.parametrize("argv", [["--help"], ["kits"]])

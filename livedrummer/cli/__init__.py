@@ -56,7 +56,7 @@ def command_named(argv: Sequence[str]) -> str | None:
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
-    """The parser; given ``argv``, only the subcommand it names is fully built (see above)."""
+    """The parser; given ``argv``, only the subcommand it names is built (see above)."""
     from livedrummer.cli.common import Parser
 
     parser = Parser(
@@ -70,7 +70,7 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     for name, summary in COMMANDS.items():
         if argv is None or name == wanted:
             importlib.import_module(f"livedrummer.cli.{name}").register(sub)
-        else:
+        elif wanted is None:  # the list for --help or for an error: no other module needed
             sub.add_parser(name, help=summary, description=summary)
     return parser
 
