@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import av
@@ -17,7 +19,13 @@ from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind, Onset
 from livedrummer.kitfile import load_kit
 from livedrummer.notemap import load_note_map
 from services.display.context import DisplayError
-from services.display.record import LiveRecorder, Timing, mux_audio, timing_path
+from services.display.record import (
+    LiveRecorder,
+    Timing,
+    mux_audio,
+    recording_track,
+    timing_path,
+)
 from services.display.surface import HeadlessSurface
 from services.display.video import VideoSettings, VideoWriter
 from services.journal import JournalWriter
@@ -47,6 +55,7 @@ def test_frames_keep_show_time_and_the_drum_track_lines_up(tmp_path: Path) -> No
         surface.close()
     assert timing == Timing.load(video) == Timing(show0, FPS, 16)
     assert (rec.repeated, rec.skipped) == (3, 1)
+    assert b"moof" in video.read_bytes()  # fragmented: no index growing in memory for hours
 
     sr = 48_000
     track = np.zeros((int(16 / FPS * sr), 2), np.float32)
@@ -115,3 +124,51 @@ def test_up_videos_drum_track_stops_a_crash_the_journal_says_was_grabbed(
     before, after = rms(0.45, 0.70), rms(0.80, 1.05)  # the grab at 0.75, its fade to 0.755
     assert before > 0.005  # the crash rings up to the grab (it would for seconds) ...
     assert after < 0.02 * before, (before, after)  # ... and is silent after it
+
+
+def test_a_fragmented_recording_killed_mid_show_still_plays(tmp_path: Path) -> None:
+    # 900 frames of faint noise (x264 puts a keyframe every 250, so three fragments are made
+    # and the first two are on the disk), the encoder thread's queue drained, then SIGKILL: no
+    # close, no index written at the end (a plain MP4 would not open at all)
+    video = tmp_path / "killed.mp4"
+    script = f"""
+import os, signal, time
+import numpy as np
+from services.display.video import VideoSettings, VideoWriter
+w = VideoWriter({str(video)!r}, VideoSettings(size={SIZE!r}, fps={FPS}, fragmented=True))
+rng = np.random.default_rng(3)
+noise = [rng.integers(100, 116, ({SIZE[1] * 3 // 2}, {SIZE[0]}), np.uint8) for _ in range(5)]
+for i in range(900):
+    w.write(noise[i % 5])
+while w._queue.qsize():  # the test's only look inside: wait for the encoder to take them all
+    time.sleep(0.01)
+time.sleep(0.3)
+os.kill(os.getpid(), signal.SIGKILL)
+"""
+    done = subprocess.run([sys.executable, "-c", script], cwd=Path(__file__).parent.parent,
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert done.returncode == -9, done.stderr[-2000:]
+    frames = 0
+    with av.open(str(video)) as c:
+        try:
+            for _ in c.decode(c.streams.video[0]):
+                frames += 1
+        except av.error.InvalidDataError:  # the fragment the kill cut short, as a player sees
+            pass
+    assert frames >= 250, frames  # every fragment that reached the disk plays
+
+
+def test_a_recordings_track_is_mixed_on_disk_not_in_memory() -> None:
+    from livedrummer.audio.mix import mix_onsets
+
+    spec = load_note_map("general-midi").lookup(38)
+    assert spec is not None
+    hits = np.array([Onset(t, 38, 100, 9, spec.instrument, spec.zone, spec.hihat,
+                           math.nan).to_record() for t in (10.1, 10.6)], ONSET_DTYPE)  # fmt: skip
+    kit = load_kit("rock5")
+    track = recording_track(hits, np.zeros(0, CONTROL_DTYPE), Timing(10.0, FPS, 2 * FPS),
+                            delay_s=0.03, kit=kit, note_map=load_note_map("general-midi"))  # fmt: skip
+    assert isinstance(track, np.memmap)  # page cache, written out under pressure
+    shifted = hits.copy()
+    shifted["time_s"] += 0.03 - 10.0
+    np.testing.assert_array_equal(track, mix_onsets(shifted, 2.0, kit))

@@ -10,7 +10,9 @@ sounding: it plays on to the choke and fades out over :data:`GRAB_FADE_S` (5 ms,
 the sound stops where the picture's cymbal stops swinging (:func:`choke_cut_s` is the rule,
 shared with the SoundFont path). Pieces are panned by their x position in the kit (drummer's
 perspective: hi-hat left), equal-power. The result is scaled down as a whole if it would clip
-(no compressor, so relative levels stay true). Limits: one Python step per onset (a 2-minute
+(no compressor, so relative levels stay true; :func:`fit_headroom` works through the track in
+steps, and the caller may pass the buffer, a disk-backed one for an hour-long show, so no
+temporary the size of the track is made). Limits: one Python step per onset (a 2-minute
 groove mixes in well under a second); no effects; a grab is an instant stop of the ringing,
 not a hand's gradual damping, and a release (aftertouch 0) does nothing.
 """
@@ -28,6 +30,7 @@ from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
 CUT_FADE_S = 0.01  # a hi-hat stroke cut by the next one, or a sound cut by the track's end
 GRAB_FADE_S = 0.005  # a choked cymbal: from the grab to silence
 HEADROOM = 0.9
+STEP = 1 << 20  # samples per step through a whole track (bounded temporaries)
 
 
 def voice_for(instrument: str, zone: Zone, hihat: HiHat, kit: Kit | None = None) -> str:
@@ -95,11 +98,13 @@ def mix_onsets(
     kit: Kit | None = None,
     sr: int = SAMPLE_RATE,
     chokes: Sequence[np.ndarray] | None = None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Stereo float32 (N, 2), N = round(duration_s * sr), with every onset's sound; a grab in
-    ``chokes`` (per piece of ``kit``, see :func:`choke_cut_s`) stops its piece's sound."""
+    ``chokes`` (per piece of ``kit``, see :func:`choke_cut_s`) stops its piece's sound. ``out``:
+    the zeroed buffer to mix into and return (see :func:`track_buffer`), else a new one."""
     n = round(duration_s * sr)
-    out = np.zeros((n, 2), np.float32)
+    out = track_buffer(n, out)
     hat = INSTRUMENTS.index("hihat")
     hat_times = onsets["time_s"][onsets["instrument"] == hat]
     cuts = choke_cut_s(onsets, kit, chokes)
@@ -132,7 +137,24 @@ def mix_onsets(
         left, right = pans[instrument]
         out[start : start + length, 0] += piece * left
         out[start : start + length, 1] += piece * right
-    peak = float(np.abs(out).max()) if n else 0.0
-    if peak > HEADROOM:
-        out *= HEADROOM / peak
+    fit_headroom(out)
     return out
+
+
+def track_buffer(n: int, out: np.ndarray | None = None) -> np.ndarray:
+    """``out`` checked to be a C-contiguous (n, 2) float32 buffer, or a new one of zeros."""
+    if out is None:
+        return np.zeros((n, 2), np.float32)
+    if out.shape != (n, 2) or out.dtype != np.float32 or not out.flags.c_contiguous:
+        raise ValueError(f"track buffer {out.shape} {out.dtype}: want C-contiguous ({n}, 2) "
+                         "float32")  # fmt: skip
+    return out
+
+
+def fit_headroom(out: np.ndarray) -> None:
+    """Scale ``out`` down in place, as a whole, if its peak is above :data:`HEADROOM`."""
+    peak = max((float(np.abs(out[i : i + STEP]).max()) for i in range(0, len(out), STEP)),
+               default=0.0)  # fmt: skip
+    if peak > HEADROOM:
+        for i in range(0, len(out), STEP):
+            out[i : i + STEP] *= HEADROOM / peak

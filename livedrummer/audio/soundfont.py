@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from livedrummer.audio.mix import GRAB_FADE_S, HEADROOM, choke_cut_s
+from livedrummer.audio.mix import GRAB_FADE_S, STEP, choke_cut_s, fit_headroom, track_buffer
 from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.errors import LivedrummerError
 from livedrummer.kit import Kit
@@ -229,11 +229,13 @@ def render_soundfont(
     sr: int = SAMPLE_RATE,
     kit: Kit | None = None,
     chokes: Sequence[np.ndarray] | None = None,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
     """Stereo float32 (N, 2), N = round(duration_s * sr): every onset played by ``path``; a
-    grab in ``chokes`` (per piece of ``kit``) stops its piece's strokes (module docstring)."""
+    grab in ``chokes`` (per piece of ``kit``) stops its piece's strokes (module docstring).
+    ``out``: the zeroed buffer to render into and return, as for :func:`mix_onsets`."""
     n = round(duration_s * sr)
-    out = np.zeros((n, 2), np.float32)
+    out = track_buffer(n, out)
     notes = gm_notes(onsets)
     cuts = choke_cut_s(onsets, kit, chokes)
     free = ~np.isfinite(cuts)
@@ -244,9 +246,7 @@ def render_soundfont(
         synth.delete()
     if not free.all():
         _add_choked(out, onsets, notes, cuts, path, sr)
-    peak = float(np.abs(out).max()) if n else 0.0
-    if peak > HEADROOM:
-        out *= HEADROOM / peak
+    fit_headroom(out)
     return out
 
 
@@ -267,27 +267,40 @@ def _play(synth: Any, write: Any, out: np.ndarray, events: list[tuple[int, int, 
 
 def _add_choked(out: np.ndarray, onsets: np.ndarray, notes: np.ndarray, cuts: np.ndarray,
                 path: Path, sr: int) -> None:  # fmt: skip
-    """Each group of strokes one grab stops, rendered alone to the grab and faded into ``out``."""
+    """Each group of strokes one grab stops, rendered alone to the grab and faded into ``out``
+    (through a scratch buffer of at most :data:`~livedrummer.audio.mix.STEP` samples: a group
+    may span the whole show)."""
     n = out.shape[0]
-    fade = max(1, round(GRAB_FADE_S * sr))
-    flush = np.zeros((round(FLUSH_S * sr), 2), np.float32)
+    fade = max(2, round(GRAB_FADE_S * sr))
+    scratch = np.zeros((max(round(FLUSH_S * sr), STEP), 2), np.float32)
     synth, write, _sfid = _open(path, sr)
     try:
         for cut_s in np.unique(cuts[np.isfinite(cuts)]).tolist():
             group = cuts == cut_s
             events = _events(onsets[group], notes[group], n, sr)
-            stop = min(n, round(cut_s * sr) + fade)
+            grab = round(cut_s * sr)
+            stop = min(n, grab + fade)
             if not events or events[0][0] >= stop:
                 continue
-            first, grab = events[0][0], round(cut_s * sr)
             synth.all_sounds_off(DRUM_CHANNEL)  # the last group's voices; then its reverb
-            _render(write, synth.synth, flush, 0, flush.shape[0])  # and chorus die away
-            part = np.zeros((stop - first, 2), np.float32)
-            _play(synth, write, part, [(at - first, v, k) for at, v, k in events if at < stop], 0)
-            begin = max(grab, first)  # a grab on the stroke's own sample: before its block
-            ramp = np.linspace(1.0, 0.0, fade, dtype=np.float32)[begin - grab : stop - grab]
-            part[begin - first :] *= ramp[:, None]
-            out[first:stop] += part
+            _render(write, synth.synth, scratch, 0, round(FLUSH_S * sr))  # and chorus die away
+            pos = events[0][0]
+            for at, velocity, note in [*(e for e in events if e[0] < stop), (stop, 0, -1)]:
+                while pos < at:
+                    k = min(STEP, at - pos)
+                    _render(write, synth.synth, scratch, 0, k)
+                    part = scratch[:k]
+                    if pos + k > grab:  # from the grab on: 1 down to 0 over ``fade`` samples
+                        gain = 1.0 - (np.arange(pos, pos + k) - grab) / (fade - 1)
+                        part = part * np.clip(gain, 0.0, 1.0).astype(np.float32)[:, None]
+                    out[pos : pos + k] += part
+                    pos += k
+                if note < 0:
+                    break
+                if velocity:
+                    synth.noteon(DRUM_CHANNEL, note, velocity)
+                else:
+                    synth.noteoff(DRUM_CHANNEL, note)
     finally:
         synth.delete()
 

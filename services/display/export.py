@@ -9,7 +9,9 @@ the PNG writer. The video gets each frame as I420, converted to YUV on the GPU, 
 width is a multiple of 8 (other widths: RGBA, converted on the encoder thread); the PNGs get
 RGB. The drummer and the kit's motion come from a
 :class:`~livedrummer.render.body_scene.BodyScene` (the body model), sampled in chunks of frames
-as the render goes, so memory stays bounded however long the file.
+as the render goes, and the drum track is mixed on disk
+(:func:`~services.display.record.spooled_track`), so memory stays bounded however long the
+file.
 
 The frame count is ``ceil((performance.duration_s + tail_s) * fps)`` and the audio track is
 exactly that many frames long, so video and audio durations agree to the sample.
@@ -38,6 +40,7 @@ from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
 from services.display.context import DisplayError, headless_context
 from services.display.png import write_png
+from services.display.record import spooled_track
 from services.display.renderer import Renderer, i420_ok
 from services.display.video import VideoSettings, VideoWriter
 
@@ -93,12 +96,13 @@ def export(
             raise DisplayError(f"cannot make frames folder {frames_dir}: {exc.strerror}") from None
     writer: VideoWriter | None = None
     if out is not None:
+        track = spooled_track(round(n / fps * settings.sample_rate))
         if soundfont is not None:  # before the writer: a bad file leaves no empty video
             audio = render_soundfont(performance.onsets, n / fps, soundfont, settings.sample_rate,
-                                     kit, body.performed.chokes)  # fmt: skip
+                                     kit, body.performed.chokes, track)  # fmt: skip
         else:
             audio = mix_onsets(performance.onsets, n / fps, kit, settings.sample_rate,
-                               body.performed.chokes)  # fmt: skip
+                               body.performed.chokes, track)  # fmt: skip
         writer = VideoWriter(out, settings)
         writer.write_audio(audio)
     ctx = None

@@ -15,8 +15,13 @@ video's time, cymbal chokes from the journaled controls stopping the sound as th
 cymbal, the built-in kit or a SoundFont) and calls :func:`mux_audio`, which copies the video
 packets into a new file beside an AAC track (no re-encoding of the picture).
 
+Memory stays bounded however long the show: the recorder keeps one image (the last, for
+repeats) and the video is fragmented MP4 (:mod:`~services.display.video`), whose muxer keeps no
+per-frame index.
+
 Limits: the sidecar is written when the recorder closes (a killed display leaves a playable
-video, since the writer closes in a ``finally``, but no sidecar if it dies with SIGKILL).
+video, since the writer closes in a ``finally`` and a fragmented file plays up to its last
+fragment even after SIGKILL, but no sidecar if it dies with SIGKILL).
 """
 
 from __future__ import annotations
@@ -24,7 +29,8 @@ from __future__ import annotations
 import json
 import logging
 import os
-from dataclasses import dataclass
+import tempfile
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -65,7 +71,7 @@ class LiveRecorder:
     def __init__(self, path: Path, settings: VideoSettings) -> None:
         self.path = Path(path)
         self.settings = settings
-        self._writer = VideoWriter(self.path, settings)
+        self._writer = VideoWriter(self.path, replace(settings, fragmented=True))
         self._yuv = i420_ok(settings.size)
         self._show0: float | None = None
         self._last: np.ndarray | None = None
@@ -115,7 +121,10 @@ def recording_track(
     """The drum track of a recording, (frames / fps * sample_rate, 2) float32: ``onsets`` and
     ``controls`` (stamped on the shared clock) sounded at ``time + delay_s`` on the video's
     time, each grab in ``controls`` stopping its cymbal (the notes read through ``note_map``
-    onto ``kit``'s pieces, as the body does), with ``soundfont``'s kit when given."""
+    onto ``kit``'s pieces, as the body does), with ``soundfont``'s kit when given.
+
+    The track is mixed into :func:`spooled_track`, not into the process's memory: a show's
+    track is 1.4 GB an hour."""
     from livedrummer.audio.mix import mix_onsets
     from livedrummer.body.sample import kit_choke_times
 
@@ -126,11 +135,22 @@ def recording_track(
     ctl["time_s"] += shift
     chokes = kit_choke_times(ctl, note_map, kit)
     duration = timing.frames / timing.fps
+    out = spooled_track(round(duration * sample_rate))
     if soundfont is not None:
         from livedrummer.audio.soundfont import render_soundfont
 
-        return render_soundfont(on, duration, soundfont, sample_rate, kit, chokes)
-    return mix_onsets(on, duration, kit, sample_rate, chokes)
+        return render_soundfont(on, duration, soundfont, sample_rate, kit, chokes, out)
+    return mix_onsets(on, duration, kit, sample_rate, chokes, out)
+
+
+def spooled_track(samples: int) -> np.ndarray:
+    """Zeros, (samples, 2) float32, in an unlinked temporary file mapped into memory: its pages
+    are the kernel's page cache, written out to disk under memory pressure, not memory the
+    process holds; the file's space is freed with the array."""
+    if samples == 0:
+        return np.zeros((0, 2), np.float32)
+    with tempfile.TemporaryFile(prefix="livedrummer-track-") as f:
+        return np.memmap(f, np.float32, "w+", shape=(samples, 2))  # the map outlives the fd
 
 
 def mux_audio(video: Path, stereo: np.ndarray, sample_rate: int = 48_000) -> None:

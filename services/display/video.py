@@ -9,6 +9,12 @@ range) already converted on the GPU (:meth:`Renderer.read_i420`), so this thread
 the planes into FFmpeg's and runs x264; bottom-up RGBA is still accepted and converted here with
 swscale to the same colours. The stream's colour metadata says BT.709 limited range either way.
 
+A recording of unknown length (the live display's) is written as fragmented MP4
+(``VideoSettings.fragmented``): the muxer writes each keyframe's group of frames out as a
+fragment and keeps no per-frame index in memory, where a plain MP4 holds its whole index until
+it closes (measured: 69 bytes a frame, 7 MB an hour at 30 fps), and a writer killed mid-show
+leaves a file that plays up to its last fragment.
+
 Limits: even width and height (4:2:0 chroma); constant frame rate; one stereo audio track;
 AAC pads its last frame, so a decoder may return up to 1024 samples (21 ms) more than was
 written.
@@ -40,15 +46,16 @@ class VideoSettings:
     crf: int = 20
     preset: str = "veryfast"
     sample_rate: int = 48_000
+    fragmented: bool = False  # fragmented MP4: no in-memory index (see the module docstring)
 
 
 def encode_audio(container: Any, stream: Any, stereo: np.ndarray, sample_rate: int) -> None:
-    """Encode a whole (N, 2) float track into ``stream`` of ``container`` and mux it."""
+    """Encode a whole (N, 2) float track into ``stream`` of ``container`` and mux it, one AAC
+    frame at a time (no planar copy of the whole track: it may be an hour on disk)."""
     import av
 
-    planar = np.ascontiguousarray(np.asarray(stereo, np.float32).T)
-    for start in range(0, planar.shape[1], AUDIO_FRAME):
-        chunk = np.ascontiguousarray(planar[:, start : start + AUDIO_FRAME])
+    for start in range(0, len(stereo), AUDIO_FRAME):
+        chunk = np.ascontiguousarray(np.asarray(stereo[start : start + AUDIO_FRAME], np.float32).T)
         frame = av.AudioFrame.from_ndarray(chunk, format="fltp", layout="stereo")
         frame.sample_rate = sample_rate
         frame.pts = start
@@ -67,7 +74,10 @@ class _Encoder:
 
         w, h = settings.size
         self.settings = settings
-        self.container: Any = av.open(path, mode="w")
+        frag = {"movflags": "frag_keyframe+empty_moov+default_base_moof"}
+        self.container: Any = av.open(
+            path, mode="w", container_options=frag if settings.fragmented else {}
+        )
         stream = self.container.add_stream("libx264", rate=settings.fps)
         stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
         stream.options = {
