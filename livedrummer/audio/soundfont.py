@@ -24,7 +24,9 @@ groove with TimGM6mb); between two groups the second synth's voices are turned o
 :data:`FLUSH_S` of silence is rendered and dropped, so one group's reverb does not sound in the
 next (a system reset, in FluidSynth 2.3, left the voices playing). A group spans every stroke
 of its piece since the previous grab, so a choked piece is rendered twice: a 165 s GMD groove
-with 8 grabs took 5.3 s instead of 2.7 s.
+with 8 grabs took 4.5-5.3 s instead of 2.7-3.6 s (runs on a busy two-core machine). A group is
+rendered through a scratch buffer of :data:`~livedrummer.audio.mix.STEP` samples, so memory
+does not grow with its length.
 
 Which note sounds (:func:`gm_notes`): the onset's own note when General MIDI means the same
 instrument, zone and hi-hat articulation by it (so a GM file keeps its 35-vs-36 kicks,
