@@ -232,7 +232,7 @@ def guard_sticks(rig: Rig, local: np.ndarray, wq: np.ndarray, wp: np.ndarray) ->
         chosen[left] = GUARD_ANGLES_RAD[-1]
         turn = quat.from_axis_angle(axis, chosen)
         wq[bad, st_j] = quat.mul(turn, wq[bad, st_j])
-        local[bad, st_j] = quat.mul(quat.conj(wq[bad, wr_j]), wq[bad, st_j])
+        local[bad, st_j] = to_local(wq[bad, wr_j], wq[bad, st_j])[0]
         wq[bad, tip_j] = wq[bad, st_j]
         wp[bad, tip_j] = fulcrum + quat.rotate(turn, v)
 

@@ -34,5 +34,5 @@ def to_local(world_q: np.ndarray) -> np.ndarray:
     """Local rotations from world rotations (inverse of the rotation half of :func:`forward`)."""
     local = world_q.copy()
     for j in range(1, N_JOINTS):
-        local[..., j, :] = quat.mul(quat.conj(world_q[..., PARENTS[j], :]), world_q[..., j, :])
+        local[..., j, :] = quat.relative(world_q[..., PARENTS[j], :], world_q[..., j, :])
     return local

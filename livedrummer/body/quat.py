@@ -67,6 +67,13 @@ def conj(q: Array) -> Array:
     return out
 
 
+def relative(parent: Array, q: Array) -> Array:
+    """World rotation ``q`` in the frame of world rotation ``parent`` (world to local):
+    ``mul(parent, relative(parent, q)) == q``. The one world-to-local step of the body
+    (:func:`~livedrummer.body.fk.to_local`, :func:`~livedrummer.body.strike.to_local`)."""
+    return mul(conj(parent), q)
+
+
 def rotate(q: Array, v: Array) -> Array:
     """Rotate vectors ``v`` (..., 3) by unit quaternions ``q`` (..., 4)."""
     w = q[..., :1]

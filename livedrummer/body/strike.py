@@ -9,9 +9,9 @@ written once:
 
 * :func:`solve_strike` looks up the zone's target (point, normal, stick pitch; a hi-hat's
   point raised by its openness) and solves the arm onto it (:func:`~livedrummer.body.ik.solve_arm`);
-* :func:`to_local` is the one world-to-local rotation helper: each rotation of a chain
-  relative to the one before it (the first relative to its parent's world rotation, or to
-  the root frame);
+* :func:`to_local` turns a chain of world rotations into local ones: each rotation relative
+  to the one before it (the first relative to its parent's world rotation, or to the root
+  frame), by :func:`~livedrummer.body.quat.relative`, the body's one world-to-local step;
 * :func:`strike_poses` applies both to pose records, and sets the struck piece's channels as
   at a hit (full glow at the velocity; a cymbal's wobble, a beater or a footboard at zero).
 
@@ -40,7 +40,7 @@ def to_local(parent_q: np.ndarray | None, *chain: np.ndarray) -> list[np.ndarray
     out: list[np.ndarray] = []
     prev = parent_q
     for q in chain:
-        out.append(q if prev is None else quat.mul(quat.conj(prev), q))
+        out.append(q if prev is None else quat.relative(prev, q))
         prev = q
     return out
 
