@@ -11,9 +11,11 @@ quick contacts and the re-animations do their usual work, only faster.
 
 Rate: as fast as the synth takes them. The sender paces itself (``--rate``, notes/s, the
 start) and watches the synth's pose stream: each batch of quick contacts shows the onset it
-answers at onset + D, so ``now - (newest show time - D)`` is how far the synth is behind. When
-that lag passes ``--max-lag-ms`` (1 s) within a second the rate drops by a fifth; when it
-stays under a quarter of it the rate rises by a twentieth (up to ``--max-rate``). The
+answers at onset + D, so ``now - (newest show time - D)`` is how far the synth is behind; its
+least value within a second is the synth's backlog (a re-animation's step may hold answers
+back for a moment without the synth falling behind). When the backlog passes
+``--max-lag-ms`` (1 s) the rate drops by a fifth; when it stays under a quarter of it the
+rate rises by a twentieth (up to ``--max-rate``). The
 sender's queue is unbounded (SNDHWM 0), so nothing is dropped on the way: the synth's own
 count of onsets and of messages lost upstream (its exit summary) is printed beside what was
 sent (the synth counts from the first message it heard: a probe sent before its SUB socket
@@ -123,6 +125,7 @@ def main(argv: list[str]) -> int:
                     help="synth lag allowed before the rate drops (1000)")  # fmt: skip
     ap.add_argument("--verbose", action="store_true", help="the rate and lag every second")
     args = ap.parse_args(argv)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # the synth is stopped on the way
     checkpoints = sorted({c for c in CHECKPOINTS if c < args.onsets} | {args.onsets})
     clock = MonotonicClock()
     fmt = p.PoseFormat.from_dtype(pose_dtype(len(load_kit("rock5").pieces)))
@@ -136,115 +139,121 @@ def main(argv: list[str]) -> int:
     feed = Feed()
     with tempfile.TemporaryDirectory(prefix="ld-synthmem-") as tmp:
         synth = Synth(sub_ep, Path(tmp))
-        poses = ctx.socket(zmq.SUB)
-        poses.setsockopt(zmq.LINGER, 0)
-        poses.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.POSE))
-        poses.connect(synth.endpoints["pub"])
-        newest = [-np.inf]  # newest show time published (a tick: now + D; quick: onset + D)
-        lit = [False]  # a hit came back (the synth's SUB is connected)
+        try:
+            poses = ctx.socket(zmq.SUB)
+            poses.setsockopt(zmq.LINGER, 0)
+            poses.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.POSE))
+            poses.connect(synth.endpoints["pub"])
+            newest = [-np.inf]  # newest show time published (a tick: now + D; quick: onset + D)
+            lit = [False]  # a hit came back (the synth's SUB is connected)
 
-        def drain() -> None:
-            while True:
-                try:
-                    frames = poses.recv_multipart(zmq.NOBLOCK)
-                except zmq.Again:
-                    return
-                msg = p.decode(frames, fmt)
-                feed.pose_messages += 1
-                if isinstance(msg.body, p.Pose) and msg.body.rows.size:
-                    rows = msg.body.rows
-                    show = msg.body.time_s + float(rows["time_s"][-1])
-                    newest[0] = max(newest[0], show)
-                    lit[0] = lit[0] or bool(rows["glow"].max() > 0)
+            def drain() -> None:
+                while True:
+                    try:
+                        frames = poses.recv_multipart(zmq.NOBLOCK)
+                    except zmq.Again:
+                        return
+                    msg = p.decode(frames, fmt)
+                    feed.pose_messages += 1
+                    if isinstance(msg.body, p.Pose) and msg.body.rows.size:
+                        rows = msg.body.rows
+                        show = msg.body.time_s + float(rows["time_s"][-1])
+                        newest[0] = max(newest[0], show)
+                        lit[0] = lit[0] or bool(rows["glow"].max() > 0)
 
-        def send(kind: p.Kind, rows: np.ndarray) -> None:
-            msg = p.Message(kind, rows, 0, feed.seq, clock.now(), p.Stream.EVENTS)
-            pub.send_multipart(p.encode(msg), copy=False)
-            feed.seq += 1
+            def send(kind: p.Kind, rows: np.ndarray) -> None:
+                msg = p.Message(kind, rows, 0, feed.seq, clock.now(), p.Stream.EVENTS)
+                pub.send_multipart(p.encode(msg), copy=False)
+                feed.seq += 1
 
-        last_sent = [-np.inf]  # the newest onset's stamp
+            last_sent = [-np.inf]  # the newest onset's stamp
 
-        def onset(k: int) -> None:
-            row = notes[k % notes.size : k % notes.size + 1].copy()
-            row["time_s"] = last_sent[0] = clock.now()
-            send(p.Kind.ONSET, row)
+            def onset(k: int) -> None:
+                row = notes[k % notes.size : k % notes.size + 1].copy()
+                row["time_s"] = last_sent[0] = clock.now()
+                send(p.Kind.ONSET, row)
 
-        def control(kind: ControlKind, number: int, value: int) -> None:
-            row = np.zeros(1, CONTROL_DTYPE)
-            row["time_s"], row["kind"], row["channel"] = clock.now(), kind, 9
-            row["number"], row["value"] = number, value
-            send(p.Kind.CONTROL, row)
-            feed.controls += 1
+            def control(kind: ControlKind, number: int, value: int) -> None:
+                row = np.zeros(1, CONTROL_DTYPE)
+                row["time_s"], row["kind"], row["channel"] = clock.now(), kind, 9
+                row["number"], row["value"] = number, value
+                send(p.Kind.CONTROL, row)
+                feed.controls += 1
 
-        # the synth's SUB connects asynchronously: probe until a hit comes back lit
-        deadline = clock.now() + 30
-        while not lit[0] and clock.now() < deadline:
-            onset(feed.sent)
-            feed.sent += 1
-            for _ in range(10):
-                time.sleep(0.01)
-                drain()
-        if not lit[0]:
-            print("synth_memory: the synth never answered a hit", file=sys.stderr)
-            synth.stop()
-            return 1
-        pid = synth.proc.pid
-        rss_start = rss_kb(pid)
-        rate = args.rate
-        t_sec = clock.now()
-        lag_sec = 0.0
-        start = clock.now()
-        next_send = start
-        paused = 0.0
-        for cp in checkpoints:
-            while feed.sent < cp:
-                now = clock.now()
-                if now >= next_send:
-                    k = feed.sent
-                    onset(k)
-                    feed.sent += 1
-                    if k % 10 == 0:
-                        control(ControlKind.HIHAT_PEDAL, 4, (k // 10) % 128)
-                    if k % 2000 == 1000:
-                        control(ControlKind.CHOKE, CRASH_NOTE, 127)
-                    if k % 2000 == 1200:
-                        control(ControlKind.CHOKE, CRASH_NOTE, 0)
-                    next_send = max(next_send + 1.0 / rate, now - 0.01)
-                drain()
-                now = clock.now()
-                lag_sec = max(lag_sec, now - (newest[0] - DELAY_S))
-                if now - t_sec >= 1.0:
-                    feed.lags_s.append(lag_sec)
-                    feed.rates.append(rate)
-                    if args.verbose:
-                        print(f"    {feed.sent:>7,} sent, rate {rate:,.0f}/s, synth behind by "
-                              f"up to {lag_sec * 1000:,.0f} ms", flush=True)  # fmt: skip
-                    if lag_sec > args.max_lag_ms / 1000:
-                        rate = max(MIN_RATE, rate * 0.8)
-                    elif lag_sec < args.max_lag_ms / 4000:
-                        rate = min(args.max_rate, rate * 1.05)
-                    t_sec, lag_sec = now, 0.0
-                wait = next_send - clock.now()
-                if wait > 0.0005:
-                    poses.poll(max(0, int(wait * 1000)))
-            pause_at = clock.now()  # until the synth has caught up (at most 30 s), then 0.2 s
-            while clock.now() - pause_at < 30 and newest[0] - DELAY_S < last_sent[0]:
-                poses.poll(20)
-                drain()
-            caught_up = clock.now()
-            while clock.now() - caught_up < 0.2:
-                poses.poll(20)
-                drain()
-            feed.rss_kb[cp] = rss_kb(pid)
-            paused += clock.now() - pause_at
-            next_send = clock.now()
-            t_sec, lag_sec = clock.now(), 0.0
-            print(f"  {cp:>7,} onsets sent: synth RSS {feed.rss_kb[cp] / 1024:7.1f} MiB "
-                  f"(rate now {rate:,.0f}/s, {clock.now() - start:6.1f} s)",
-                  flush=True)  # fmt: skip
-        feed.send_s = clock.now() - start - paused
-        hwm = rss_kb(pid, "VmHWM")
-        err = synth.stop()
+            # the synth's SUB connects asynchronously: probe until a hit comes back lit
+            deadline = clock.now() + 30
+            while not lit[0] and clock.now() < deadline:
+                onset(feed.sent)
+                feed.sent += 1
+                for _ in range(10):
+                    time.sleep(0.01)
+                    drain()
+            if not lit[0]:
+                print("synth_memory: the synth never answered a hit", file=sys.stderr)
+                synth.stop()
+                return 1
+            pid = synth.proc.pid
+            rss_start = rss_kb(pid)
+            rate = args.rate
+            t_sec = clock.now()
+            lag_sec = np.inf
+            start = clock.now()
+            next_send = start
+            paused = 0.0
+            for cp in checkpoints:
+                while feed.sent < cp:
+                    now = clock.now()
+                    if now >= next_send:
+                        k = feed.sent
+                        onset(k)
+                        feed.sent += 1
+                        if k % 10 == 0:
+                            control(ControlKind.HIHAT_PEDAL, 4, (k // 10) % 128)
+                        if k % 2000 == 1000:
+                            control(ControlKind.CHOKE, CRASH_NOTE, 127)
+                        if k % 2000 == 1200:
+                            control(ControlKind.CHOKE, CRASH_NOTE, 0)
+                        next_send = max(next_send + 1.0 / rate, now - 0.01)
+                    drain()
+                    now = clock.now()
+                    # the least lag within a second: the synth's backlog (a re-animation's step
+                    # may hold back its answers for a moment without it falling behind)
+                    lag_sec = min(lag_sec, now - (newest[0] - DELAY_S))
+                    if now - t_sec >= 1.0:
+                        feed.lags_s.append(lag_sec)
+                        feed.rates.append(rate)
+                        if args.verbose:
+                            print(f"    {feed.sent:>7,} sent, rate {rate:,.0f}/s, synth behind by "
+                                  f"at least {lag_sec * 1000:,.0f} ms", flush=True)  # fmt: skip
+                        if lag_sec > args.max_lag_ms / 1000:
+                            rate = max(MIN_RATE, rate * 0.8)
+                        elif lag_sec < args.max_lag_ms / 4000:
+                            rate = min(args.max_rate, rate * 1.05)
+                        t_sec, lag_sec = now, np.inf
+                    wait = next_send - clock.now()
+                    if wait > 0.0005:
+                        poses.poll(max(0, int(wait * 1000)))
+                pause_at = clock.now()  # until the synth has caught up (at most 30 s), then 0.2 s
+                while clock.now() - pause_at < 30 and newest[0] - DELAY_S < last_sent[0]:
+                    poses.poll(20)
+                    drain()
+                caught_up = clock.now()
+                while clock.now() - caught_up < 0.2:
+                    poses.poll(20)
+                    drain()
+                feed.rss_kb[cp] = rss_kb(pid)
+                paused += clock.now() - pause_at
+                next_send = clock.now()
+                t_sec, lag_sec = clock.now(), np.inf
+                print(f"  {cp:>7,} onsets sent: synth RSS {feed.rss_kb[cp] / 1024:7.1f} MiB "
+                      f"(rate now {rate:,.0f}/s, {clock.now() - start:6.1f} s)",
+                      flush=True)  # fmt: skip
+            feed.send_s = clock.now() - start - paused
+            hwm = rss_kb(pid, "VmHWM")
+            err = synth.stop()
+        finally:
+            if synth.proc.poll() is None:
+                synth.proc.kill()
         poses.close(0)
     pub.close(0)
     ctx.term()
@@ -254,8 +263,8 @@ def main(argv: list[str]) -> int:
           f"{feed.send_s:.1f} s ({feed.sent / feed.send_s:,.0f} onsets/s on average; the rate "
           f"asked for ended at {feed.rates[-1] if feed.rates else args.rate:,.0f}/s)")  # fmt: skip
     if lags.size:
-        print(f"  synth behind the sender, per second: p50 {np.percentile(lags, 50):.0f} ms, "
-              f"max {lags.max():.0f} ms")  # fmt: skip
+        print(f"  synth's backlog (least lag within each second): p50 "
+              f"{np.percentile(lags, 50):.0f} ms, max {lags.max():.0f} ms")  # fmt: skip
     print(f"  the synth says: {summary}")
     print(f"  RSS at start {rss_start / 1024:.1f} MiB, peak {hwm / 1024:.1f} MiB")
     first = 50_000 if 50_000 in feed.rss_kb else checkpoints[0]
