@@ -125,7 +125,7 @@ class Rig:
         env.pop("WAYLAND_DISPLAY", None)
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "livedrummer", "up", "--serial", self.tty,
-             "--port-base", str(self.port_base), "--out", str(self.frames_dir), "--no-png",
+             "--port-base", str(self.port_base), "--frames-dir", str(self.frames_dir), "--no-png",
              "--fps", str(self.fps), *self.extra],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
         )  # fmt: skip

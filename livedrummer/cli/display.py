@@ -155,7 +155,7 @@ def run_live(args: argparse.Namespace) -> int:
         size=parse_size(args.size), camera=args.camera,
         display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
         png=not args.no_png, security=security_from_args(args), window=window,
-        video=args.video, render_ahead=not args.no_render_ahead,
+        video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     display = LiveDisplay(load_kit(args.kit), config, clock, ctx)
@@ -166,12 +166,8 @@ def run_live(args: argparse.Namespace) -> int:
 
     signal.signal(signal.SIGTERM, on_signal)
     signal.signal(signal.SIGINT, on_signal)
-    if args.seconds is not None:
-        if not args.seconds > 0:
-            raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
-        timer = threading.Timer(args.seconds, stop.set)
-        timer.daemon = True
-        timer.start()
+    if args.seconds is not None and not args.seconds > 0:  # counted from the first pose drawn
+        raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
     try:
         display.start()
         print(json.dumps({"service": "display", "sub": args.sub}), flush=True)

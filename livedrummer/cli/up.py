@@ -52,6 +52,7 @@ from livedrummer.cli.keys import add_curve_options
 if TYPE_CHECKING:
     from services.supervisor import Supervisor
 
+RECORD_GRACE_S = 60.0  # how long past --seconds a set-length recording may take to finish
 SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscribe_protocol)
 
 
@@ -127,6 +128,12 @@ def windowed(args: argparse.Namespace) -> bool:
     return has_screen() and not args.headless and args.video is None
 
 
+def recorded(args: argparse.Namespace) -> bool:
+    """A recording of a set length: the display itself stops ``--seconds`` after its first
+    frame with the drummer, so the video holds the whole show and no more."""
+    return args.video is not None and args.seconds is not None
+
+
 def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # type: ignore[type-arg]
     from services.supervisor import ServiceSpec
 
@@ -165,10 +172,11 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         display_argv += ["--headless", "--frames-dir", str(args.frames_dir)]
         display_argv += ["--no-png"] if args.no_png or args.video is not None else []
         display_argv += ["--video", str(args.video)] if args.video is not None else []
+        display_argv += ["--seconds", str(args.seconds)] if recorded(args) else []
     return [
         ServiceSpec("input", input_argv),
         ServiceSpec("synth", synth_argv),
-        ServiceSpec("display", display_argv, ends_rig=windowed(args)),
+        ServiceSpec("display", display_argv, ends_rig=windowed(args) or recorded(args)),
     ]
 
 
@@ -210,14 +218,17 @@ def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
         sup.start()
         where = "in a window" if windowed(args) else f"frames in {args.frames_dir}/"
         print(f"up: input, synth and display running; {where}", flush=True)
-        deadline = None if args.seconds is None else time.monotonic() + args.seconds
+        # A set-length recording ends when the display has recorded it (a minute's grace
+        # for a display that never gets a pose); otherwise --seconds ends the rig itself.
+        grace = RECORD_GRACE_S if recorded(args) else 0.0
+        deadline = None if args.seconds is None else time.monotonic() + args.seconds + grace
         while not stopping:
             left = 0.5 if deadline is None else min(0.5, deadline - time.monotonic())
             if left <= 0:
                 break
             sup.run_once(left)
-            if windowed(args) and sup.quit_by_user("display"):
-                break  # the window was closed: the show is over
+            if (windowed(args) or recorded(args)) and sup.quit_by_user("display"):
+                break  # the window was closed, or the recording is complete: the show is over
     finally:
         sup.stop()
         for s, handler in old.items():

@@ -28,7 +28,8 @@ loop ends and in ``summary()``), and the next one is read.
 Limits: the pose format is taken from the kit given to the display (the synth's READY also
 carries it; a mismatch is refused by hash, frame by frame); one performer. Frames go to a
 :mod:`~services.display.surface`: a window (``config.window``; the stage) or off screen, where
-they can also be written as PNGs (``--out``) and recorded into a video on show time
+they can also be written as PNGs (``--frames-dir``) and recorded into a video on show time,
+from the first frame that draws the drummer
 (``config.video``, :mod:`~services.display.record`). A remote display sets
 ``config.security`` (our key pair and the synth's public key) to subscribe over CURVE.
 """
@@ -37,6 +38,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -126,6 +128,7 @@ class LiveConfig:
     sub: str = DEFAULT_SUB
     fps: float = 60.0
     frames: int | None = None  # stop after this many frames (headless runs)
+    seconds: float | None = None  # stop this long after the first frame that drew a pose
     out: Path | None = None  # PNG folder (and frames.jsonl)
     size: tuple[int, int] = (640, 360)
     camera: str = "stage"
@@ -201,11 +204,14 @@ class LiveDisplay:
             period = 1.0 / cfg.fps
             ahead = RenderAhead()
             next_frame = self.clock.now()
+            end = math.inf  # set by the first frame with a pose when cfg.seconds is given
             while not stop.is_set() and (cfg.frames is None or self.stats.frames < cfg.frames):
                 wait_ms = max(0, int((next_frame - self.clock.now()) * 1000))
                 if self._sub.poll(wait_ms):
                     self._drain()
                 now = self.clock.now()
+                if now >= end:
+                    break
                 if now < next_frame:
                     continue
                 self._drain()
@@ -227,8 +233,12 @@ class LiveDisplay:
                         surface.draw(frame_from_pose(row, show, self.kit), now)
                 elif surface is not None:
                     surface.draw(None, now)
-                if recorder is not None and surface is not None:
-                    recorder.add(surface.renderer, show)
+                if (
+                    recorder is not None
+                    and surface is not None
+                    and (got is not None or recorder.frames)
+                ):
+                    recorder.add(surface.renderer, show)  # from the first frame with a pose
                 if isinstance(surface, HeadlessSurface) and cfg.out is not None and cfg.png:
                     from services.display.png import write_png
 
@@ -242,6 +252,8 @@ class LiveDisplay:
                     log_file.write(json.dumps(record) + "\n")
                 self.stats.frames += 1
                 next_frame = max(next_frame + period, now)
+                if got is not None and end == math.inf and cfg.seconds is not None:
+                    end = now + cfg.seconds
                 if on_ready is not None and got is not None:
                     on_ready()
                     on_ready = None
