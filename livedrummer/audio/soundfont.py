@@ -16,17 +16,23 @@ release, which for a crash lasts seconds, so the strokes a grab stops are render
 group of strokes ended by one grab goes through a second synth, from its first note-on to the
 grab plus :data:`~livedrummer.audio.mix.GRAB_FADE_S`, fades out over those last 5 ms and is
 added to the mix; all other strokes play through the main synth as before. FluidSynth mixes
-linearly, so the sum is the unchoked render with the choked strokes stopped. Limits: a choked
-stroke shares no voice stealing or exclusive class with the main synth's strokes, and the
-reverb's and chorus's modulation runs on each synth's own clock, so its wet sound differs a
-little from the same stroke's in one synth (before the grab, 1 % of the track's RMS on a GMD
-groove with TimGM6mb); between two groups the second synth's voices are turned off and
-:data:`FLUSH_S` of silence is rendered and dropped, so one group's reverb does not sound in the
-next (a system reset, in FluidSynth 2.3, left the voices playing). A group spans every stroke
-of its piece since the previous grab, so a choked piece is rendered twice: a 165 s GMD groove
-with 8 grabs took 4.5-5.3 s instead of 2.7-3.6 s (runs on a busy two-core machine). A group is
-rendered through a scratch buffer of :data:`~livedrummer.audio.mix.STEP` samples, so memory
-does not grow with its length.
+linearly, so the sum is the unchoked render with the choked strokes stopped. Every group is
+rendered in whole 64-sample blocks, so the second synth's blocks (where note-ons take effect)
+stay on the track's grid, and through a scratch buffer of
+:data:`~livedrummer.audio.mix.STEP` samples, so memory does not grow with a group's length.
+Between two groups the second synth's voices are turned off and :data:`FLUSH_S` of silence is
+rendered and dropped, so one group's reverb does not sound in the next (a system reset, in
+FluidSynth 2.3, left the voices playing).
+
+Limits of the choke render: a choked stroke shares no voice stealing or exclusive class with the
+main synth's strokes; the reverb's and chorus's modulation runs on each synth's own clock, so a
+choked stroke's wet sound is not the one it has in the main synth (TimGM6mb on a GMD groove:
+the difference is 1 % of the track's RMS over the groove, 11 % in the 0.3 s before a grab of a
+ringing crash; with reverb and chorus off the two renders agree to 6e-6 RMS); the first block
+of a voice the second synth used before differs from a fresh voice's by a few per cent of the
+stroke's peak. A group spans every stroke of its piece since the previous grab, so a choked
+piece is rendered twice: a 165 s GMD groove with 8 grabs took 4.5-5.3 s instead of 2.7-3.6 s
+(a busy two-core machine).
 
 Which note sounds (:func:`gm_notes`): the onset's own note when General MIDI means the same
 instrument, zone and hi-hat articulation by it (so a GM file keeps its 35-vs-36 kicks,
@@ -50,6 +56,7 @@ import contextlib
 import ctypes
 import io
 import logging
+import math
 import os
 import sys
 import tempfile
@@ -274,7 +281,10 @@ def _add_choked(out: np.ndarray, onsets: np.ndarray, notes: np.ndarray, cuts: np
     may span the whole show)."""
     n = out.shape[0]
     fade = max(2, round(GRAB_FADE_S * sr))
-    scratch = np.zeros((max(round(FLUSH_S * sr), STEP), 2), np.float32)
+    # whole 64-sample blocks rendered per group, so the synth's blocks stay on the track's grid
+    # (a note-on takes effect at the synth's next block boundary)
+    flush = BLOCK * math.ceil(FLUSH_S * sr / BLOCK)
+    scratch = np.zeros((max(flush, STEP), 2), np.float32)
     synth, write, _sfid = _open(path, sr)
     try:
         for cut_s in np.unique(cuts[np.isfinite(cuts)]).tolist():
@@ -285,17 +295,17 @@ def _add_choked(out: np.ndarray, onsets: np.ndarray, notes: np.ndarray, cuts: np
             if not events or events[0][0] >= stop:
                 continue
             synth.all_sounds_off(DRUM_CHANNEL)  # the last group's voices; then its reverb
-            _render(write, synth.synth, scratch, 0, round(FLUSH_S * sr))  # and chorus die away
-            pos = events[0][0]
-            for at, velocity, note in [*(e for e in events if e[0] < stop), (stop, 0, -1)]:
+            _render(write, synth.synth, scratch, 0, flush)  # and chorus die away
+            pos, end = events[0][0], BLOCK * math.ceil(stop / BLOCK)
+            for at, velocity, note in [*(e for e in events if e[0] < stop), (end, 0, -1)]:
                 while pos < at:
                     k = min(STEP, at - pos)
                     _render(write, synth.synth, scratch, 0, k)
-                    part = scratch[:k]
+                    part, m = scratch[:k], max(0, min(k, stop - pos))
                     if pos + k > grab:  # from the grab on: 1 down to 0 over ``fade`` samples
                         gain = 1.0 - (np.arange(pos, pos + k) - grab) / (fade - 1)
                         part = part * np.clip(gain, 0.0, 1.0).astype(np.float32)[:, None]
-                    out[pos : pos + k] += part
+                    out[pos : pos + m] += part[:m]
                     pos += k
                 if note < 0:
                     break
