@@ -42,12 +42,14 @@ def wait_running(proc: subprocess.Popen[str]) -> list[str]:
 
 
 def test_up_demo_runs_for_the_given_seconds_and_stops_cleanly(gl_ok: None, tmp_path: Path) -> None:
-    proc = launch(tmp_path, "--seconds", "3")
+    proc = launch(tmp_path, "--seconds", "3", "--png")
     out, _ = proc.communicate(timeout=90)
     assert proc.returncode == 0, out[-2000:]
     assert "up: stopped (0 restarts)" in out
     frames = list((tmp_path / "frames").glob("frame_*.png"))
-    assert len(frames) >= 10, out[-2000:]
+    assert len(frames) >= 10, out[-2000:]  # PNGs only when asked for (--png) ...
+    logged = (tmp_path / "frames" / "frames.jsonl").read_text().splitlines()
+    assert len(logged) == len(frames)
 
 
 def test_a_killed_synth_is_restarted_while_input_keeps_running(gl_ok: None, tmp_path: Path) -> None:
@@ -74,6 +76,9 @@ def test_a_killed_synth_is_restarted_while_input_keeps_running(gl_ok: None, tmp_
             proc.wait()
     assert proc.returncode == 0, out[-2000:]
     assert "up: stopped (1 restarts)" in out
+    # ... and not by default: a headless show logs its frames but fills no disk with images
+    assert (tmp_path / "frames" / "frames.jsonl").exists()
+    assert not list((tmp_path / "frames").glob("frame_*.png"))
 
 
 def test_up_records_the_show_with_its_drum_track_on_show_time(gl_ok: None, tmp_path: Path) -> None:

@@ -44,7 +44,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--aa", type=int, default=4, metavar="N", help="multisample N (default 4)")
     add_renamed(p, "--quit-after", p.add_argument(
         "--seconds", type=float, metavar="S",
-        help="stop after S seconds (default: when closed or stopped)"))  # fmt: skip
+        help="stop after S seconds; --live: S seconds after the first frame with the drummer "
+        "(default: when closed or stopped)"))  # fmt: skip
     p.add_argument("--overlay", default="", metavar="LIST",
                    help="strips shown first: score, joints or both; keys o, g "
                    "(default: none)")  # fmt: skip

@@ -81,7 +81,10 @@ def register(sub: Subparsers) -> None:
                    help="TCP ports PORT..PORT+11 on --bind (default 5710)")  # fmt: skip
     p.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
                    help="address the input and synth serve on (default 127.0.0.1)")  # fmt: skip
-    p.add_argument("--no-png", action="store_true", help="frames.jsonl only, no PNG frames")
+    p.add_argument("--png", action="store_true",
+                   help="headless: also write every frame as a PNG into --frames-dir (about 9 GB "
+                   "an hour at 640x360; default: frames.jsonl only)")  # fmt: skip
+    p.add_argument("--no-png", action="store_true", help=argparse.SUPPRESS)  # the old default
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
     p.add_argument("--video", type=Path, metavar="FILE",
                    help="headless: record the show and its drum track as MP4 "
@@ -170,7 +173,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         display_argv += ["--fullscreen"] if args.fullscreen else []
     else:
         display_argv += ["--headless", "--frames-dir", str(args.frames_dir)]
-        display_argv += ["--no-png"] if args.no_png or args.video is not None else []
+        display_argv += [] if args.png and args.video is None else ["--no-png"]
         display_argv += ["--video", str(args.video)] if args.video is not None else []
         display_argv += ["--seconds", str(args.seconds)] if recorded(args) else []
     return [

@@ -128,7 +128,8 @@ class LiveConfig:
     sub: str = DEFAULT_SUB
     fps: float = 60.0
     frames: int | None = None  # stop after this many frames (headless runs)
-    seconds: float | None = None  # stop this long after the first frame that drew a pose
+    # stop this long after the first frame that drew a pose (or after this long with none)
+    seconds: float | None = None
     out: Path | None = None  # PNG folder (and frames.jsonl)
     size: tuple[int, int] = (640, 360)
     camera: str = "stage"
@@ -204,7 +205,9 @@ class LiveDisplay:
             period = 1.0 / cfg.fps
             ahead = RenderAhead()
             next_frame = self.clock.now()
-            end = math.inf  # set by the first frame with a pose when cfg.seconds is given
+            # --seconds: from the start until the first pose is drawn, then from that frame
+            end = math.inf if cfg.seconds is None else self.clock.now() + cfg.seconds
+            drawn = False
             while not stop.is_set() and (cfg.frames is None or self.stats.frames < cfg.frames):
                 wait_ms = max(0, int((next_frame - self.clock.now()) * 1000))
                 if self._sub.poll(wait_ms):
@@ -252,8 +255,9 @@ class LiveDisplay:
                     log_file.write(json.dumps(record) + "\n")
                 self.stats.frames += 1
                 next_frame = max(next_frame + period, now)
-                if got is not None and end == math.inf and cfg.seconds is not None:
-                    end = now + cfg.seconds
+                if got is not None and not drawn:
+                    drawn = True
+                    end = end if cfg.seconds is None else now + cfg.seconds
                 if on_ready is not None and got is not None:
                     on_ready()
                     on_ready = None
