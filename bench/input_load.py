@@ -38,8 +38,9 @@ from typing import Any
 import numpy as np
 import zmq
 
+from bench._hogs import hog_levels, hogs
 from bench._jack import JackError, dummy_jack, jack_env
-from bench.input_latency import key
+from bench.input_latency import _fmt, key
 from livedrummer import protocol as p
 from livedrummer.clock import MonotonicClock
 
@@ -47,7 +48,6 @@ REPO = Path(__file__).resolve().parent.parent
 #: JACK modes by name: (synchronous -S, realtime -R).
 MODES = {"sync": (True, True), "async": (False, True), "sync-nort": (True, False),
          "async-nort": (False, False)}  # fmt: skip
-HOG = "import signal, sys\nsignal.signal(signal.SIGTERM, lambda *a: sys.exit(0))\nwhile True: pass"
 
 
 def build_reference(folder: Path) -> Path:
@@ -94,7 +94,7 @@ class Reference:
         self._thread.join(5)
 
 
-def one_run(mode: str, hogs: int, seconds: float, rate: float, code: Path,
+def one_run(mode: str, n_hogs: int, seconds: float, rate: float, code: Path,
             exe: Path, seed: int) -> dict[str, Any]:  # fmt: skip
     import rtmidi
 
@@ -123,7 +123,7 @@ def one_run(mode: str, hogs: int, seconds: float, rate: float, code: Path,
         sub.setsockopt(zmq.LINGER, 0)
         sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
         got: dict[tuple[int, int], float] = {}
-        hog_procs: list[subprocess.Popen[bytes]] = []
+        sent: list[tuple[int, int]] = []
         try:
             assert daemon.stdout is not None
             sub.connect(json.loads(daemon.stdout.readline())["pub"])
@@ -135,9 +135,6 @@ def one_run(mode: str, hogs: int, seconds: float, rate: float, code: Path,
             while sub.poll(300):
                 sub.recv_multipart()
             ref.events.clear()
-            hog_procs = [subprocess.Popen([sys.executable, "-c", HOG]) for _ in range(hogs)]
-            time.sleep(0.5)  # let the hogs spin up
-            sent: list[tuple[int, int]] = []
 
             def play() -> None:
                 t = clock.now()
@@ -149,20 +146,18 @@ def one_run(mode: str, hogs: int, seconds: float, rate: float, code: Path,
                     kit.send_message([0x99, *k])
                     sent.append(k)
 
-            player = threading.Thread(target=play)
-            player.start()
-            end = clock.now() + float(gaps.sum()) + 3.0
-            while clock.now() < end and (player.is_alive() or len(got) < len(sent)):
-                if sub.poll(100):
-                    msg = p.decode(sub.recv_multipart())
-                    for t, note, vel in msg.rows[["time_s", "note", "velocity"]].tolist():
-                        got[(int(note), int(vel))] = float(t)
-            player.join()
+            with hogs(n_hogs):
+                time.sleep(0.5)  # let the hogs spin up
+                player = threading.Thread(target=play)
+                player.start()
+                end = clock.now() + float(gaps.sum()) + 3.0
+                while clock.now() < end and (player.is_alive() or len(got) < len(sent)):
+                    if sub.poll(100):
+                        msg = p.decode(sub.recv_multipart())
+                        for t, note, vel in msg.rows[["time_s", "note", "velocity"]].tolist():
+                            got[(int(note), int(vel))] = float(t)
+                player.join()
         finally:
-            for h in hog_procs:
-                h.terminate()
-            for h in hog_procs:
-                h.wait(10)
             daemon.terminate()
             daemon.wait(10)
             sub.close(0)
@@ -180,13 +175,6 @@ def one_run(mode: str, hogs: int, seconds: float, rate: float, code: Path,
     }
 
 
-def _fmt(x: np.ndarray) -> str:
-    if not x.size:
-        return f"{'n/a':>22}"
-    p50, p99 = np.percentile(x, [50, 99])
-    return f"{p50:6.3f} / {p99:6.3f} / {x.max():6.2f}"
-
-
 def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench input_load")
     parser.add_argument("--runs", type=int, default=10, help="runs per row (default 10)")
@@ -200,7 +188,7 @@ def main(argv: list[str]) -> int:
                         help="checkout whose input daemon runs (default this one)")  # fmt: skip
     args = parser.parse_args(argv)
     cores = os.cpu_count() or 1
-    levels = [int(h[:-1]) * cores if h.endswith("x") else int(h) for h in args.hogs.split(",")]
+    levels = hog_levels(args.hogs)
     try:
         with tempfile.TemporaryDirectory() as tmp:
             exe = build_reference(Path(tmp))
@@ -216,11 +204,11 @@ def main(argv: list[str]) -> int:
                 f"{'stamp - reference':>22}"
             )
             for mode in args.modes.split(","):
-                for hogs in levels:
-                    rows = [one_run(mode, hogs, args.seconds, args.rate, args.code, exe, seed)
+                for n_hogs in levels:
+                    rows = [one_run(mode, n_hogs, args.seconds, args.rate, args.code, exe, seed)
                             for seed in range(args.runs)]  # fmt: skip
                     err = np.concatenate([r["err"] for r in rows])
-                    print(f"{mode:>10} {hogs:>4} {sum(r['sent'] for r in rows):>6} "
+                    print(f"{mode:>10} {n_hogs:>4} {sum(r['sent'] for r in rows):>6} "
                           f"{sum(r['lost'] for r in rows):>5} "
                           f"{sum(r['off_server'] for r in rows):>10}  {_fmt(err)}",
                           flush=True)  # fmt: skip

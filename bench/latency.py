@@ -110,8 +110,8 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
         procs.append(syn)
         syn_ep = _line(syn)["pub"]
         disp = _spawn(["display", "--live", "--headless", "--sub", syn_ep, "--size", "320x180",
-                       "--fps", "60", "--frames-dir", str(frames_dir), "--no-png", *display_args], home,
-                      tmp / "display.err")  # fmt: skip
+                       "--fps", "60", "--frames-dir", str(frames_dir), "--no-png",
+                       *display_args], home, tmp / "display.err")  # fmt: skip
         procs.append(disp)
         _line(disp)
         ev = ctx.socket(zmq.SUB)

@@ -40,6 +40,7 @@ from typing import Any
 
 import zmq
 
+from bench._hogs import hog_levels, hogs
 from livedrummer import protocol as p
 from livedrummer.clock import MonotonicClock
 from livedrummer.decode import MessageDecoder
@@ -181,15 +182,13 @@ def _jackd() -> Iterator[str | None]:
 
 
 def kills(
-    tmp: Path, rounds: int, hogs: int = 0
+    tmp: Path, rounds: int, n_hogs: int = 0
 ) -> tuple[dict[str, list[float]], dict[str, list[float]], dict[str, list[float]], list[float]]:
-    """Kill input, synth, display in turn, ``rounds`` times, with ``hogs`` CPU-bound processes
+    """Kill input, synth, display in turn, ``rounds`` times, with ``n_hogs`` CPU-bound processes
     running: per service the time from the kill to the pipeline working again (see
     :func:`_working_again`), the supervisor's own death-to-ready figure and its back-off;
     and the display's stale-pose time per synth kill."""
     import random
-    import subprocess
-    import sys
 
     from bench._faultrig import Rig
 
@@ -197,12 +196,10 @@ def kills(
     ready: dict[str, list[float]] = {"input": [], "synth": [], "display": []}
     backoff: dict[str, list[float]] = {"input": [], "synth": [], "display": []}
     stale: list[float] = []
-    hog = "while True: pass"
     with Rig(tmp, random.Random().randrange(20_000, 40_000, 20)) as rig:
         rig.start()
         rig.pump(lambda: len(rig.bus) >= 20, 20)
-        procs = [subprocess.Popen([sys.executable, "-c", hog]) for _ in range(hogs)]
-        try:
+        with hogs(n_hogs):
             for _ in range(rounds):
                 for name in ("input", "synth", "display"):
                     rec = rig.kill(name)
@@ -213,10 +210,6 @@ def kills(
                     back[name].append(_working_again(rig, name, rec.killed_at))
                     if name == "synth":
                         stale.append(_stale_s(rig.frames(), rec.killed_at))
-        finally:
-            for h in procs:
-                h.kill()
-                h.wait()
         rig.stop()
     return back, ready, backoff, stale
 
@@ -260,13 +253,12 @@ def main(argv: list[str]) -> int:
                         help="kill rounds at rest and loaded: hog processes, a count or Nx "
                         "cores (default 0,1x)")  # fmt: skip
     args = parser.parse_args(argv)
-    cores = os.cpu_count() or 1
-    levels = [int(h[:-1]) * cores if h.endswith("x") else int(h) for h in args.hogs.split(",")]
+    levels = hog_levels(args.hogs)
     with tempfile.TemporaryDirectory() as tmp_text:
         tmp = Path(tmp_text)
-        for hogs in levels:
-            back, ready, backoff, stale = kills(tmp / f"up{hogs}", args.kills, hogs)
-            print(f"kill -9 with {hogs} CPU hogs (median of {args.kills}; back-off included; s):")
+        for n_hogs in levels:
+            back, ready, backoff, stale = kills(tmp / f"up{n_hogs}", args.kills, n_hogs)
+            print(f"kill -9 with {n_hogs} CPU hogs (median of {args.kills}; back-off included; s):")
             print(f"  {'':<8} {'kill -> working':>16} {'supervisor: death -> ready':>27}"
                   f" {'start-up':>9}")  # fmt: skip
             for name, values in back.items():
