@@ -3,7 +3,7 @@
 A frame rendered at clock time ``c`` is seen when it is finished (off screen: written; in a
 window: presented), not at ``c``. The live display therefore draws the pose for
 ``c + audio latency + render latency``, where the render latency is measured on the frames
-it has just drawn: a high quantile (default 0.9) of the last ``window`` frames' start-to-done
+it has just drawn: a high quantile (default 0.99) of the last ``window`` frames' start-to-done
 times, so nine frames in ten are finished by the moment they show and the estimate follows a
 change of load, window size or machine within a second. Until the first frame is done the
 estimate is 0.
