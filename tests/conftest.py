@@ -10,6 +10,12 @@ import mido
 import pytest
 
 from bench._jack import JackError, dummy_jack, jack_env
+from livedrummer.body.rig import Rig, build_rig
+from livedrummer.cli.common import DEMO_MAP, demo_groove
+from livedrummer.kitfile import load_kit
+from livedrummer.midifile import read_midi_file
+from livedrummer.notemap import load_note_map
+from livedrummer.performance import Performance
 
 REPO = Path(__file__).resolve().parent.parent
 GROOVE = REPO.parent / "shared" / "data" / "groove"
@@ -92,3 +98,15 @@ def jack_default_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iter
     jackd's defaults runs it: the input daemon must lose nothing there either (it runs no
     Python in JACK's thread, see services.input.midiport)."""
     yield from _jack(monkeypatch, tmp_path, sync=False)
+
+
+@pytest.fixture(scope="session")
+def rig() -> Rig:
+    """The default kit's rig (built once: the live synth tests share it)."""
+    return build_rig(load_kit("rock5"))
+
+
+@pytest.fixture(scope="session")
+def groove() -> Performance:
+    """The bundled demo groove, read once."""
+    return read_midi_file(demo_groove(), load_note_map(DEMO_MAP))

@@ -5,17 +5,15 @@ from __future__ import annotations
 
 import mido
 import numpy as np
-import pytest
 
 from livedrummer.body import quat
 from livedrummer.body.perform import perform
-from livedrummer.body.rig import Rig, build_rig
+from livedrummer.body.rig import Rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import PARENTS, J
 from livedrummer.body.strike import to_local
-from livedrummer.cli.common import DEMO_MAP, demo_groove
+from livedrummer.cli.common import DEMO_MAP
 from livedrummer.events import CONTROL_DTYPE, ControlKind
-from livedrummer.kitfile import load_kit
 from livedrummer.live.curves import blend_rows
 from livedrummer.live.ledger import SampleLedger
 from livedrummer.live.synth import LiveSynth, SynthParams
@@ -29,16 +27,6 @@ from livedrummer.vocabulary import PieceKind
 from tests.conftest import MidiWriter
 
 START = 5000.0
-
-
-@pytest.fixture(scope="module")
-def rig() -> Rig:
-    return build_rig(load_kit("rock5"))
-
-
-@pytest.fixture(scope="module")
-def groove() -> Performance:
-    return read_midi_file(demo_groove(), load_note_map(DEMO_MAP))
 
 
 def test_to_local_inverts_the_chain_s_world_rotations() -> None:

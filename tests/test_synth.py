@@ -9,33 +9,19 @@ import pytest
 
 from bench._upswing import upswing_visible
 from livedrummer.body.animation import animate, hihat_openness
-from livedrummer.body.rig import Rig, build_rig
+from livedrummer.body.rig import Rig
 from livedrummer.body.skeleton import J
-from livedrummer.cli.common import DEMO_MAP, demo_groove
 from livedrummer.events import CONTROL_DTYPE, ControlKind
-from livedrummer.kitfile import load_kit
 from livedrummer.live.calibration import Calibration, CalibrationError
 from livedrummer.live.predict import HandPredictor
 from livedrummer.live.synth import LiveSynth, PoseBatch, SynthParams
 from livedrummer.live.track import PoseTrack
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
 from livedrummer.performance import Performance
 from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
 from livedrummer.sticking.online import stick_online
 
 TIPS = {0: J["r_tip"], 1: J["l_tip"]}
 START = 5000.0  # onsets live on the shared clock, far from 0
-
-
-@pytest.fixture(scope="module")
-def rig() -> Rig:
-    return build_rig(load_kit("rock5"))
-
-
-@pytest.fixture(scope="module")
-def groove() -> Performance:
-    return read_midi_file(demo_groove(), load_note_map(DEMO_MAP))
 
 
 def play(synth: LiveSynth, onsets: np.ndarray, tick_s: float, tail_s: float = 0.3) -> PoseBatch:
