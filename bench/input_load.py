@@ -8,7 +8,7 @@ input --midi kit:pads --api jack``) and a reference client written in C
 (``bench/jack_ref.c``, compiled for the run: needs cc and Debian's libjack-jackd2-dev)
 connected to the same kit port. The reference takes, in JACK's process thread, for each
 event: ``CLOCK_MONOTONIC`` (the shared clock) and the event's frame time converted by JACK
-(``jack_frames_to_time``; printed as a diagnostic, not compared: the dummy driver's frame
+(``jack_frames_to_time``; on the wire but not compared: the dummy driver's frame
 clock wanders by milliseconds against the system clock); it never waits for anything.
 
 Per note: *stamp error* = the daemon's stamp minus the reference's CLOCK_MONOTONIC stamp
@@ -74,9 +74,7 @@ class Reference:
         first = self.proc.stdout.readline().split()
         if not first or first[0] != "ready":
             raise JackError("the reference client did not start")
-        # JACK's clock minus CLOCK_MONOTONIC, in µs (0 where JACK uses the system clock).
-        self.jack_minus_mono_us = int(first[1]) - int(first[2])
-        self.events: list[tuple[float, float, tuple[int, int]]] = []
+        self.events: list[tuple[float, tuple[int, int]]] = []
         self._thread = threading.Thread(target=self._read, daemon=True)
         self._thread.start()
 
@@ -85,8 +83,7 @@ class Reference:
         for line in self.proc.stdout:
             f = line.split()
             if len(f) == 5 and int(f[2]) & 0xF0 == 0x90:
-                frame_s = (int(f[0]) - self.jack_minus_mono_us) * 1e-6
-                self.events.append((int(f[1]) * 1e-9, frame_s, (int(f[3]), int(f[4]))))
+                self.events.append((int(f[1]) * 1e-9, (int(f[3]), int(f[4]))))
 
     def close(self) -> None:
         self.proc.terminate()
@@ -165,13 +162,13 @@ def one_run(mode: str, n_hogs: int, seconds: float, rate: float, code: Path,
             ref.close()
             kit.close_port()
             kit.delete()
-    seen = {k: (mono, frame) for mono, frame, k in ref.events}
+    seen = {k: mono for mono, k in ref.events}
     both = [k for k in sent if k in got and k in seen]
     return {
         "sent": len(sent),
         "lost": sum(k in seen and k not in got for k in sent),
         "off_server": sum(k not in seen for k in sent),
-        "err": np.array([got[k] - seen[k][0] for k in both]) * 1e3,
+        "err": np.array([got[k] - seen[k] for k in both]) * 1e3,
     }
 
 
