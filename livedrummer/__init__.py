@@ -2,7 +2,7 @@
 
 The package is pure logic (kit model, events, limb assignment, kinematics, strokes, wire
 protocol) on numpy arrays and frozen dataclasses; processes, devices, sockets and windows live
-in the top-level ``services`` package and in :mod:`livedrummer.cli`.
+in the top-level ``services`` package and in :mod:`services.cli`.
 """
 
 __version__ = "0.1.0"

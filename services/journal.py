@@ -1,6 +1,6 @@
 """Writing session journals, finding them again, and exporting them as Standard MIDI Files.
 
-The record format is :mod:`livedrummer.journal`; this module does the file I/O around it.
+The record format is :mod:`livedrummer.timeline.journal`; this module does the file I/O around it.
 
 Flush and fsync policy. The file is opened unbuffered (``os.open`` with ``O_APPEND``) and
 every batch is *one* ``os.write`` of a complete record, so as soon as ``append_*`` returns the
@@ -34,10 +34,12 @@ from typing import Any
 import mido
 import numpy as np
 
-from livedrummer.clock import Clock
 from livedrummer.errors import JournalError
-from livedrummer.events import ControlKind
-from livedrummer.journal import (
+from livedrummer.protocol import Gap
+from livedrummer.resources import user_home
+from livedrummer.timeline.clock import Clock
+from livedrummer.timeline.events import ControlKind
+from livedrummer.timeline.journal import (
     SUFFIX,
     Journal,
     controls_record,
@@ -48,8 +50,6 @@ from livedrummer.journal import (
     onsets_record,
     read_journal,
 )
-from livedrummer.protocol import Gap
-from livedrummer.resources import user_home
 
 log = logging.getLogger(__name__)
 

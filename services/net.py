@@ -38,7 +38,6 @@ import zmq
 from zmq.auth.thread import ThreadAuthenticator
 
 from livedrummer.errors import KeyFileError, ProtocolError
-from livedrummer.keys import KeyPair, read_key_file
 from livedrummer.protocol import (
     MAGIC,
     MAX_PAYLOAD,
@@ -49,7 +48,9 @@ from livedrummer.protocol import (
     decode,
     encode,
 )
-from services.badmsg import BadMessages
+from livedrummer.protocol.keys import KeyPair, read_key_file
+
+from .badmsg import BadMessages
 
 DEFAULT_HWM = 100_000
 MAX_FRAME = 2 * MAX_PAYLOAD

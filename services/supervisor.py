@@ -37,7 +37,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from livedrummer.errors import LivedrummerError
-from services.notify import NOTIFY_FD_ENV
+
+from .notify import NOTIFY_FD_ENV
 
 log = logging.getLogger(__name__)
 

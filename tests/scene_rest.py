@@ -4,7 +4,7 @@ A stand-in for the body model (``livedrummer/body/``), which computes the real p
 ``livedrummer render``, ``display`` and the live synth (:mod:`livedrummer.render.body_scene`).
 Renderer tests use this pose and its 22-joint :data:`REST_SKELETON` when they want a drummer
 without animating a performance, so it lives with the tests, not in the installed package. It
-follows the :mod:`livedrummer.scene` contract exactly, so swapping it for the body is swapping
+follows the :mod:`livedrummer.render.scene` contract exactly, so swapping it for the body is swapping
 one ``SceneFrame`` source for another.
 
 The pose is placed from the kit, not typed in: the pelvis sits on the throne at
@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from livedrummer.kit import Kit, Piece
-from livedrummer.scene import SceneFrame, Skeleton, Tone, empty_channels
-from livedrummer.vocabulary import PieceKind
+from livedrummer.kit.model import Kit, Piece
+from livedrummer.kit.vocabulary import PieceKind
+from livedrummer.render.scene import SceneFrame, Skeleton, Tone, empty_channels
 
 STICK_LENGTH_M = 0.41
 GRIP_FROM_TIP_M = 0.30

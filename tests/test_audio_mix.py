@@ -11,11 +11,11 @@ import pytest
 from livedrummer.audio.mix import GRAB_FADE_S, choke_cut_s, mix_onsets, voice_for
 from livedrummer.audio.synth import LAYERS, SAMPLE_RATE, layer_for, voice_layers, voice_names
 from livedrummer.body.sample import kit_choke_times
-from livedrummer.events import ONSET_DTYPE
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
-from livedrummer.vocabulary import HIHATS, INSTRUMENT_CODE, ZONES, HiHat, Zone
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENT_CODE, ZONES, HiHat, Zone
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
+from livedrummer.timeline.events import ONSET_DTYPE
 
 KIT = load_kit("rock5")
 

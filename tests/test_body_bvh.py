@@ -15,9 +15,9 @@ from livedrummer.body.bvh import bvh_text
 from livedrummer.body.perform import perform
 from livedrummer.body.rig import build_rig
 from livedrummer.body.skeleton import JOINTS
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 
 REPO = Path(__file__).resolve().parent.parent
 DEMO = REPO / "kits" / "grooves" / "gmd-drummer1-funk-80.mid"
@@ -118,7 +118,7 @@ def test_independent_reader_matches_our_forward_kinematics() -> None:
 def test_export_cli_writes_a_bvh(tmp_path: Path) -> None:
     out = tmp_path / "drummer.bvh"
     script = Path(sys.executable).parent / "livedrummer"
-    command = [str(script)] if script.exists() else [sys.executable, "-m", "livedrummer"]
+    command = [str(script)] if script.exists() else [sys.executable, "-m", "services"]
     res = subprocess.run(
         [*command, "export", str(DEMO), "-o", str(out), "--map", "roland-td", "--fps", "24"],
         capture_output=True, text=True, check=False, timeout=120,

@@ -15,9 +15,9 @@ from livedrummer.body.channels import (
     vibration,
 )
 from livedrummer.body.targets import HIHAT_MAX_LIFT_M, zone_target
-from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind
-from livedrummer.kitfile import load_kit
-from livedrummer.vocabulary import Zone
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.vocabulary import Zone
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind
 
 V = VibrationParams(max_angle_rad=0.2, eta=0.05, beta=2 * np.pi * 4)
 

@@ -16,9 +16,9 @@ from livedrummer.body.perform import perform
 from livedrummer.body.rig import build_rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import ARM
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 
 REPO = Path(__file__).resolve().parent.parent
 DEMO = REPO / "kits" / "grooves" / "gmd-drummer1-funk-80.mid"
@@ -62,7 +62,7 @@ def test_poses_carry_kit_channels() -> None:
 
 
 def test_check_cli_json_fields() -> None:
-    command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "livedrummer"]
+    command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "services"]
     res = subprocess.run(
         [*command, "check", str(DEMO), "--map", "roland-td", "--kit", "rock5-left", "--json",
          "--fps", "60"],

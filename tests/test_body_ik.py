@@ -14,9 +14,9 @@ from livedrummer.body.rig import build_rig, neutral_world
 from livedrummer.body.skeleton import J, build_skeleton
 from livedrummer.body.targets import HIHAT_MAX_LIFT_M, target_table, zone_target
 from livedrummer.errors import UnreachableError
-from livedrummer.kit import Kit, Piece
-from livedrummer.kitfile import load_kit
-from livedrummer.vocabulary import ZONES, Limb, PieceKind, Zone
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.model import Kit, Piece
+from livedrummer.kit.vocabulary import ZONES, Limb, PieceKind, Zone
 
 
 def _surface_distance(piece: Piece, point: np.ndarray) -> float:

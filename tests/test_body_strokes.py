@@ -22,11 +22,11 @@ from livedrummer.body.strokes import (
     lagged_times,
     stroke_keys,
 )
-from livedrummer.events import ONSET_DTYPE
-from livedrummer.kit import Kit
-from livedrummer.kitfile import load_kit
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENT_CODE, ZONES, HiHat, Limb, Zone
 from livedrummer.sticking.result import LIMB_CODE, Sticking
-from livedrummer.vocabulary import HIHATS, INSTRUMENT_CODE, ZONES, HiHat, Limb, Zone
+from livedrummer.timeline.events import ONSET_DTYPE
 
 P = StrokeParams()
 

@@ -18,7 +18,7 @@ SCRIPT = Path(sys.executable).parent / "livedrummer"  # the installed console sc
 
 
 def run(*args: str, **env: str) -> subprocess.CompletedProcess[str]:
-    command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "livedrummer"]
+    command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "services"]
     return subprocess.run(
         [*command, *args], capture_output=True, text=True, timeout=120, env={**os.environ, **env}
     )

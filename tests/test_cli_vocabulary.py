@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from livedrummer.cli import COMMANDS, build_parser, command_named
-from livedrummer.cli.common import STICKING_STRATEGIES, help_with_default
+from services.cli import COMMANDS, build_parser, command_named
+from services.cli.common import STICKING_STRATEGIES, help_with_default
 from livedrummer.sticking import STRATEGIES
 
 REPO = Path(__file__).resolve().parent.parent
@@ -131,7 +131,7 @@ def test_only_the_named_command_is_built() -> None:
 def test_help_and_kits_load_no_numpy_and_no_services(argv: list[str]) -> None:
     code = (
         "import sys\n"
-        "from livedrummer.cli import main\n"
+        "from services.cli import main\n"
         "try:\n"
         f"    main({argv!r})\n"
         "except SystemExit:\n"
@@ -148,7 +148,7 @@ def test_help_and_kits_load_no_numpy_and_no_services(argv: list[str]) -> None:
 
 def test_display_live_stops_after_seconds_as_up_does(tmp_path: Path) -> None:
     proc = subprocess.run(
-        [sys.executable, "-m", "livedrummer", "display", "--live", "--headless", "--no-render",
+        [sys.executable, "-m", "services", "display", "--live", "--headless", "--no-render",
          "--sub", "tcp://127.0.0.1:1", "--seconds", "1", "--frames-dir", str(tmp_path)],
         cwd=REPO, capture_output=True, text=True, timeout=60,
     )  # fmt: skip

@@ -14,10 +14,10 @@ from pathlib import Path
 import mido
 import numpy as np
 
-from livedrummer.events import ControlKind
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
-from livedrummer.vocabulary import HIHATS, HiHat
+from livedrummer.kit.vocabulary import HIHATS, HiHat
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
+from livedrummer.timeline.events import ControlKind
 
 
 def independent_count(path: Path) -> tuple[Counter[int], int, int]:

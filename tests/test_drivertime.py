@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from livedrummer.drivertime import MAX_LAG_S, DeltaStamper
+from livedrummer.midi.drivertime import MAX_LAG_S, DeltaStamper
 
 
 def play(true_s: np.ndarray, read_s: np.ndarray) -> np.ndarray:

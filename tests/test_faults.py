@@ -1,7 +1,7 @@
 """Hardening: kill -9 each stage of a live session; unplug and replug devices; CURVE under ``up``.
 
 The session is the real launcher, ``livedrummer up --serial PTY``, fed numbered notes on a
-pseudo-terminal by :class:`bench._faultrig.Rig` (every note is a unique (note, velocity) pair,
+pseudo-terminal by :class:`services.bench._faultrig.Rig` (every note is a unique (note, velocity) pair,
 so an onset on the bus or in the journal names the note written). What "lost no onset" means
 here, precisely:
 
@@ -31,9 +31,9 @@ from pathlib import Path
 
 import zmq
 
-from bench._faultrig import INDEX, REPO, Rig
+from services.bench._faultrig import INDEX, REPO, Rig
 from livedrummer import protocol as p
-from livedrummer.cli import main
+from services.cli import main
 from services.journal import list_sessions, load_journal
 from services.net import Security, connect
 from services.supervisor import ServiceSpec, Supervisor
@@ -136,14 +136,14 @@ def test_kill_each_stage_in_turn_while_notes_flow(gl_ok: None, tmp_path: Path) -
 
 def test_serial_replug_reconnects_and_publishes_within_bounds(tmp_path: Path) -> None:
     """Close the pty (unplug), open a new one under the same path (replug): notes flow again."""
-    from bench.recovery import serial_replug
+    from services.bench.recovery import serial_replug
 
     took = serial_replug(tmp_path)
     assert took < 3.0, f"first note {took:.3f} s after the replug"
 
 
 def test_jack_port_removed_and_recreated_reconnects(jack_server: str, tmp_path: Path) -> None:
-    from bench.recovery import jack_replug
+    from services.bench.recovery import jack_replug
 
     took = jack_replug(tmp_path)
     assert took < 3.0, f"first note {took:.3f} s after the port came back"
@@ -210,7 +210,7 @@ def test_up_refuses_an_allow_folder_without_its_own_key(tmp_path: Path) -> None:
     allow.mkdir()
     (allow / "friend.key").write_bytes((keys / "friend.key").read_bytes())
     proc = subprocess.run(
-        [sys.executable, "-m", "livedrummer", "up", "--demo", "--seconds", "1",
+        [sys.executable, "-m", "services", "up", "--demo", "--seconds", "1",
          "--curve-secret", str(keys / "rig.key_secret"), "--allow", str(allow)],
         capture_output=True, text=True, timeout=60, cwd=REPO,
         env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")},

@@ -1,7 +1,7 @@
 """A flood of 10,000 notes/s through a real pseudo-terminal into the real input daemon.
 
 The daemon runs as a subprocess (``livedrummer input --serial PTY``) exactly as
-``bench/flood.py`` drives it (see its docstring for why a pty rather than JACK), for the
+``services/bench/flood.py`` drives it (see its docstring for why a pty rather than JACK), for the
 issue's whole 10 s (about 15 s of test). Asserted: the
 daemon survives and exits cleanly; every note written is in the journal; every note reached
 the subscriber, or the loss is visible (sequence gap or GAP message); its memory grows by less
@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from bench.flood import run_flood
+from services.bench.flood import run_flood
 
 RATE = 10_000.0
 SECONDS = 10.0  # the issue's flood, whole: 100,000 notes

@@ -1,6 +1,6 @@
 """Mutated Groove MIDI Dataset files: a named one-line error or a bounded, correct result.
 
-Variants come from :func:`bench._fuzz.mutations` (truncated, bit-flipped, random runs,
+Variants come from :func:`services.bench._fuzz.mutations` (truncated, bit-flipped, random runs,
 huge and long delta times, zero tempo, a track longer than the file, 65,535 declared tracks)
 for a seeded sample of the corpus, plus files built with absurd note counts. Each is read in
 process with a generous time bound ("never hangs", not a speed figure: those are in
@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench._fuzz import Variant, absurd_note_file, mutations
+from services.bench._fuzz import Variant, absurd_note_file, mutations
 from livedrummer.errors import MidiFileError
-from livedrummer.midifile import MAX_DURATION_S, MAX_FILE_BYTES, read_midi_bytes
-from livedrummer.notemap import load_note_map
-from livedrummer.performance import Performance
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import MAX_DURATION_S, MAX_FILE_BYTES, read_midi_bytes
+from livedrummer.timeline.performance import Performance
 
 REPO = Path(__file__).resolve().parent.parent
 TD = load_note_map("roland-td")

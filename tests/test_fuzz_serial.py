@@ -1,6 +1,6 @@
 """A megabyte of noise with valid messages in it: the parser, then the serial daemon on a pty.
 
-The stream comes from :func:`bench._fuzz.noisy_serial_stream` (see its docstring for why
+The stream comes from :func:`services.bench._fuzz.noisy_serial_stream` (see its docstring for why
 every inserted message must come out intact: each carries its own status byte, and the only
 bytes inside one are real-time bytes, which interrupt nothing). Garbage may add messages, so
 the inserted ones are checked as a subsequence of the output, with their offsets.
@@ -18,11 +18,11 @@ import pytest
 import zmq
 from test_input import ROLAND, Subscriber, assert_contiguous, pty_pair, start_daemon
 
-from bench._fuzz import REALTIME, Inserted, SerialStream, noisy_serial_stream
+from services.bench._fuzz import REALTIME, Inserted, SerialStream, noisy_serial_stream
 from livedrummer import protocol as p
-from livedrummer.clock import MonotonicClock
-from livedrummer.decode import MessageDecoder
-from livedrummer.midistream import MidiMessage, MidiStreamParser
+from livedrummer.midi.decode import MessageDecoder
+from livedrummer.midi.stream import MidiMessage, MidiStreamParser
+from livedrummer.timeline.clock import MonotonicClock
 from services.input.serialport import SerialSource
 
 SEED = 20240607

@@ -18,12 +18,12 @@ import pytest
 import zmq
 
 from livedrummer import protocol as p
-from livedrummer.clock import MonotonicClock, SteppedClock
-from livedrummer.decode import MessageDecoder
 from livedrummer.errors import MidiInputError, ProtocolError
-from livedrummer.events import Control, ControlKind, Onset
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.midi.decode import MessageDecoder
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
+from livedrummer.timeline.clock import MonotonicClock, SteppedClock
+from livedrummer.timeline.events import Control, ControlKind, Onset
 from services.input.base import RawMidi
 from services.input.daemon import DaemonConfig, InputDaemon
 from services.input.fileplayer import FileSource
@@ -433,7 +433,7 @@ def test_cli_file_player_end_to_end(tmp_path: Path, ctx: zmq.Context[zmq.Socket[
     onsets, controls = expected_events(path)
     home = tmp_path / "home"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "livedrummer", "input", "--file", str(path), "--map", "roland-td",
+        [sys.executable, "-m", "services", "input", "--file", str(path), "--map", "roland-td",
          "--pub", LOCAL, "--control", LOCAL, "--performer", "4", "--wait-subscribers", "1", "--exit-at-end"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO,
         env={**os.environ, "LIVEDRUMMER_HOME": str(home)},
@@ -467,12 +467,12 @@ def test_cli_file_player_end_to_end(tmp_path: Path, ctx: zmq.Context[zmq.Socket[
     assert journal.onsets.tobytes() == got.tobytes()
     # The session lists and exports through the CLI.
     env = {**os.environ, "LIVEDRUMMER_HOME": str(home)}
-    listed = subprocess.run([sys.executable, "-m", "livedrummer", "sessions", "list"], capture_output=True,
+    listed = subprocess.run([sys.executable, "-m", "services", "sessions", "list"], capture_output=True,
                             text=True, env=env, cwd=REPO, check=True).stdout  # fmt: skip
     session_id = sessions[0].stem
     assert session_id in listed and f"{onsets.size} onsets" in listed and "(closed)" in listed
     out = tmp_path / "out.mid"
-    subprocess.run([sys.executable, "-m", "livedrummer", "sessions", "export", session_id, "-o", str(out)],
+    subprocess.run([sys.executable, "-m", "services", "sessions", "export", session_id, "-o", str(out)],
                    env=env, cwd=REPO, check=True, capture_output=True)  # fmt: skip
     back = read_midi_file(out, ROLAND)
     assert back.onsets["note"].tolist() == onsets["note"].tolist()
@@ -488,7 +488,7 @@ def test_cli_input_errors_are_one_line(tmp_path: Path) -> None:
         (["--serial", "/dev/null", "--baud", "1234"], "--baud"),
     ]
     for args, needle in cases:
-        proc = subprocess.run([sys.executable, "-m", "livedrummer", "input", *args, "--no-journal"],
+        proc = subprocess.run([sys.executable, "-m", "services", "input", *args, "--no-journal"],
                               capture_output=True, text=True, cwd=REPO, timeout=60)  # fmt: skip
         assert proc.returncode == 2, proc.stderr
         lines = proc.stderr.strip().splitlines()
@@ -505,7 +505,7 @@ def test_cli_serial_daemon_journal_survives_stop_and_kill(
     master, name = pty_pair()
     home = tmp_path / "home"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "livedrummer", "input", "--serial", name, "--map", "roland-td",
+        [sys.executable, "-m", "services", "input", "--serial", name, "--map", "roland-td",
          "--pub", LOCAL, "--control", LOCAL, "--wait-subscribers", "1"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO,
         env={**os.environ, "LIVEDRUMMER_HOME": str(home)},
@@ -603,7 +603,7 @@ def test_cli_unwritable_journal_is_a_one_line_error(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
     proc = subprocess.run(
-        [sys.executable, "-m", "livedrummer", "input", "--file", str(short_groove(tmp_path / "g.mid", 5)),
+        [sys.executable, "-m", "services", "input", "--file", str(short_groove(tmp_path / "g.mid", 5)),
          "--map", "roland-td", "--pub", LOCAL, "--control", LOCAL, "--sessions-dir", str(blocker / "sessions")],
         capture_output=True, text=True, cwd=REPO, timeout=60,
     )  # fmt: skip

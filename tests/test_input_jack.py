@@ -18,9 +18,9 @@ import pytest
 import zmq
 
 from livedrummer import protocol as p
-from livedrummer.clock import MonotonicClock
-from livedrummer.decode import MessageDecoder
-from livedrummer.notemap import load_note_map
+from livedrummer.midi.decode import MessageDecoder
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.timeline.clock import MonotonicClock
 from services.input.daemon import DaemonConfig, InputDaemon
 from services.input.midiport import MidiPortSource, list_ports, list_ports_by_api
 
@@ -38,7 +38,7 @@ def test_daemon_receives_notes_from_a_jack_port_and_reconnects(
 ) -> None:
     kit = kit_port()
     assert "kit:pads" in list_ports("jack")
-    listed = subprocess.run([sys.executable, "-m", "livedrummer", "ports", "--api", "jack"],
+    listed = subprocess.run([sys.executable, "-m", "services", "ports", "--api", "jack"],
                             capture_output=True, text=True, timeout=60, check=True).stdout  # fmt: skip
     assert ": kit:pads  [jack]" in listed
     assert ("jack", "kit:pads") in list_ports_by_api("auto")  # ALSA absent or not: JACK found

@@ -13,14 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from livedrummer import journal as jr
-from livedrummer.cli.common import demo_groove
-from livedrummer.clock import SteppedClock
+from services.cli.common import demo_groove
 from livedrummer.errors import JournalError
-from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.protocol import Gap, GapReason
+from livedrummer.timeline import journal as jr
+from livedrummer.timeline.clock import SteppedClock
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
 from services.journal import (
     JournalWriter,
     export_session,
@@ -124,8 +124,8 @@ WRITER = textwrap.dedent(
     import sys
     import numpy as np
     from pathlib import Path
-    from livedrummer.clock import MonotonicClock
-    from livedrummer.events import ONSET_DTYPE
+    from livedrummer.timeline.clock import MonotonicClock
+    from livedrummer.timeline.events import ONSET_DTYPE
     from services.journal import JournalWriter
     w = JournalWriter.create({"performer": 0}, MonotonicClock(), Path(sys.argv[1]), "crash", 0.05)
     seq = 0

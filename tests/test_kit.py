@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from livedrummer.errors import KitError
-from livedrummer.kitfile import kit_names, load_kit
-from livedrummer.vocabulary import Limb, PieceKind, Zone
+from livedrummer.kit.loader import kit_names, load_kit
+from livedrummer.kit.vocabulary import Limb, PieceKind, Zone
 
 ROCK5 = Path(__file__).resolve().parent.parent / "kits" / "rock5.toml"
 

@@ -16,8 +16,8 @@ from livedrummer.body.rig import build_rig, neutral_world
 from livedrummer.body.secondary import SecondaryParams
 from livedrummer.body.skeleton import J, build_skeleton
 from livedrummer.errors import ConfigError, KitError, NoteMapError, UnreachableError
-from livedrummer.kitfile import load_kit
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.midi.notemap import load_note_map
 
 REPO = Path(__file__).resolve().parent.parent
 KIT = (REPO / "kits" / "rock5.toml").read_text()

@@ -25,11 +25,11 @@ import zmq
 
 from livedrummer import protocol as p
 from livedrummer.body.pose import pose_dtype
-from livedrummer.clock import MonotonicClock
-from livedrummer.kitfile import load_kit
+from livedrummer.kit.loader import load_kit
 from livedrummer.live.track import PoseTrack
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
+from livedrummer.timeline.clock import MonotonicClock
 
 rtmidi = pytest.importorskip("rtmidi")
 
@@ -44,7 +44,7 @@ def spawn(args: list[str], tmp: Path, name: str) -> subprocess.Popen[str]:
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
     return subprocess.Popen(
-        [sys.executable, "-m", "livedrummer", *args], stdout=subprocess.PIPE,
+        [sys.executable, "-m", "services", *args], stdout=subprocess.PIPE,
         stderr=(tmp / f"{name}.err").open("w"), text=True, env=env, cwd=REPO,
     )  # fmt: skip
 

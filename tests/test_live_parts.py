@@ -12,18 +12,18 @@ from livedrummer.body.rig import Rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import PARENTS, J
 from livedrummer.body.strike import to_local
-from livedrummer.cli.common import DEMO_MAP
-from livedrummer.events import CONTROL_DTYPE, ControlKind
+from services.cli.common import DEMO_MAP
+from livedrummer.kit.vocabulary import PieceKind
 from livedrummer.live.curves import blend_rows
 from livedrummer.live.ledger import SampleLedger
 from livedrummer.live.synth import LiveSynth, SynthParams
 from livedrummer.live.track import PoseTrack
 from livedrummer.live.window import NoteWindow, WindowParams
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
-from livedrummer.performance import Performance
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking.online import OnlineSticker
-from livedrummer.vocabulary import PieceKind
+from livedrummer.timeline.events import CONTROL_DTYPE, ControlKind
+from livedrummer.timeline.performance import Performance
 from tests.conftest import MidiWriter
 
 START = 5000.0

@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from bench._faultrig import children
+from services.bench._faultrig import children
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -25,7 +25,7 @@ def launch(tmp: Path, *extra: str) -> subprocess.Popen[str]:
     env.pop("WAYLAND_DISPLAY", None)
     base = random.Random().randrange(20_000, 40_000, 20)
     return subprocess.Popen(
-        [sys.executable, "-m", "livedrummer", "up", "--demo", "--port-base", str(base),
+        [sys.executable, "-m", "services", "up", "--demo", "--port-base", str(base),
          "--frames-dir", str(tmp / "frames"), *extra],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
     )  # fmt: skip
@@ -95,7 +95,7 @@ def test_up_records_the_show_with_its_drum_track_on_show_time(gl_ok: None, tmp_p
     env.pop("WAYLAND_DISPLAY", None)
     base = random.Random().randrange(20_000, 40_000, 20)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "livedrummer", "up", "--demo", "--port-base", str(base),
+        [sys.executable, "-m", "services", "up", "--demo", "--port-base", str(base),
          "--frames-dir", str(tmp_path / "frames"), "--seconds", "6", "--video", str(video),
          "--size", "320x180", "--fps", "25"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,

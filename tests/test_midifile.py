@@ -12,10 +12,10 @@ import pytest
 from conftest import MidiWriter
 
 from livedrummer.errors import MidiFileError
-from livedrummer.events import ControlKind
-from livedrummer.midifile import read_midi_bytes, read_midi_file
-from livedrummer.notemap import load_note_map
-from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_bytes, read_midi_file
+from livedrummer.timeline.events import ControlKind
 
 TD = load_note_map("roland-td")
 GM = load_note_map("general-midi")

@@ -1,4 +1,4 @@
-"""Tests for livedrummer.midistream (incremental MIDI 1.0 byte-stream parser)."""
+"""Tests for livedrummer.midi.stream (incremental MIDI 1.0 byte-stream parser)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from livedrummer.midistream import MidiMessage, MidiStreamParser, ParserStats
+from livedrummer.midi.stream import MidiMessage, MidiStreamParser, ParserStats
 
 M = MidiMessage
 

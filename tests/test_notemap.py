@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from livedrummer.errors import NoteMapError
-from livedrummer.notemap import load_note_map, note_map_names
-from livedrummer.vocabulary import HiHat, Zone
+from livedrummer.kit.vocabulary import HiHat, Zone
+from livedrummer.midi.notemap import load_note_map, note_map_names
 
 MAPS = Path(__file__).resolve().parent.parent / "kits" / "maps"
 

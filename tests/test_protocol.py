@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 
 from livedrummer import protocol as p
 from livedrummer.errors import LivedrummerError, ProtocolError
-from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind
-from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind
 
 POSE_DTYPE = np.dtype(
     [

@@ -8,7 +8,7 @@ import threading
 
 import pytest
 
-from livedrummer.clock import MonotonicClock, SteppedClock
+from livedrummer.timeline.clock import MonotonicClock, SteppedClock
 
 
 def test_monotonic_clock_is_shared_with_another_process() -> None:
@@ -18,7 +18,7 @@ def test_monotonic_clock_is_shared_with_another_process() -> None:
         [
             sys.executable,
             "-c",
-            "from livedrummer.clock import MonotonicClock; print(repr(MonotonicClock().now()))",
+            "from livedrummer.timeline.clock import MonotonicClock; print(repr(MonotonicClock().now()))",
         ],
         capture_output=True,
         text=True,

@@ -39,7 +39,7 @@ def test_root_gets_fifo() -> None:
 
 
 def test_a_priority_out_of_range_is_one_line() -> None:
-    run = subprocess.run([sys.executable, "-m", "livedrummer", "input", "--file", "x.mid",
+    run = subprocess.run([sys.executable, "-m", "services", "input", "--file", "x.mid",
                           "--realtime", "99"], cwd=REPO, capture_output=True, text=True,
                          timeout=60)  # fmt: skip
     assert run.returncode == 2

@@ -16,14 +16,14 @@ import numpy as np
 import pytest
 
 from livedrummer.body.skeleton import J
-from livedrummer.kit import Kit
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.model import Kit
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import Camera, kit_cameras
 from livedrummer.render.kitmesh import basis, build_kit_mesh
-from livedrummer.scene import CH_HIGHLIGHT, SceneFrame, empty_channels
+from livedrummer.render.scene import CH_HIGHLIGHT, SceneFrame, empty_channels
 from services.display.context import DisplayError, headless_context
 from services.display.renderer import Renderer
 

@@ -14,9 +14,9 @@ import mido
 import numpy as np
 import pytest
 
-from livedrummer.cli import main
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from services.cli import main
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 
 FPS = 30
 TAIL_S = 0.5

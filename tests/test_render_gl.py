@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from scene_rest import REST_SKELETON, rest_frame
 
-from livedrummer.kitfile import load_kit
+from livedrummer.kit.loader import load_kit
 from livedrummer.render.camera import Camera, kit_cameras
 from livedrummer.render.kitmesh import STAGE_RADIUS_M, basis, build_kit_mesh, empty_stage
-from livedrummer.scene import CH_HIGHLIGHT, SceneFrame, empty_channels
+from livedrummer.render.scene import CH_HIGHLIGHT, SceneFrame, empty_channels
 from services.display.context import DisplayError, headless_context
 from services.display.renderer import BACKGROUND, Renderer
 

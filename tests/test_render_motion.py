@@ -9,15 +9,15 @@ from hypothesis import strategies as st
 
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import JOINTS, PARENTS, J
-from livedrummer.kitfile import load_kit
+from livedrummer.kit.loader import load_kit
 from livedrummer.render.body_scene import (
     BODY_SKELETON,
     STICK_TAIL_M,
     scene_channels,
     stick_segments,
 )
+from livedrummer.render.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE, CH_WOBBLE_AZIMUTH
 from livedrummer.render.transport import KEYS, SPEEDS, Transport
-from livedrummer.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE, CH_WOBBLE_AZIMUTH
 
 KIT = load_kit("rock5")
 P = {p.name: i for i, p in enumerate(KIT.pieces)}

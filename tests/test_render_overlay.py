@@ -20,11 +20,11 @@ import pytest
 from livedrummer.body import quat
 from livedrummer.body.fk import forward
 from livedrummer.body.skeleton import ARM, N_JOINTS, J, build_skeleton
-from livedrummer.cli import main
-from livedrummer.events import ONSET_DTYPE
-from livedrummer.kit import Kit
-from livedrummer.kitfile import load_kit
-from livedrummer.notemap import load_note_map
+from services.cli import main
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import PieceKind
+from livedrummer.midi.notemap import load_note_map
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
@@ -55,7 +55,7 @@ from livedrummer.render.overlay_raster import (
 )
 from livedrummer.render.transport import KEYS
 from livedrummer.sticking.result import NOT_PLAYED, Sticking
-from livedrummer.vocabulary import PieceKind
+from livedrummer.timeline.events import ONSET_DTYPE
 from services.display.context import headless_context
 from services.display.renderer import Renderer
 from services.display.window import OVERLAY_KEYS
@@ -209,7 +209,7 @@ def test_angles_of_the_body_at_known_poses() -> None:
 
 
 def test_the_angle_model_samples_the_body(kit: Kit, groove: Path) -> None:
-    from livedrummer.midifile import read_midi_file
+    from livedrummer.midi.smf import read_midi_file
 
     nm = load_note_map("general-midi")
     body = BodyScene.perform(read_midi_file(groove, nm), kit, nm)
@@ -293,7 +293,7 @@ def test_fill_boxes_clips_and_later_boxes_cover_earlier() -> None:
 
 
 def test_strips_stack_at_the_bottom_score_above_graph(kit: Kit, groove: Path) -> None:
-    from livedrummer.midifile import read_midi_file
+    from livedrummer.midi.smf import read_midi_file
 
     nm = load_note_map("general-midi")
     body = BodyScene.perform(read_midi_file(groove, nm), kit, nm)
@@ -324,7 +324,7 @@ def groove(write_midi) -> Path:  # type: ignore[no-untyped-def]
 
 def test_the_overlay_is_blended_into_the_read_back_frame(gl_ok: None, kit: Kit, groove: Path
                                                          ) -> None:  # fmt: skip
-    from livedrummer.midifile import read_midi_file
+    from livedrummer.midi.smf import read_midi_file
 
     nm = load_note_map("general-midi")
     body = BodyScene.perform(read_midi_file(groove, nm), kit, nm)
@@ -395,7 +395,7 @@ def test_window_overlay_keys_are_free_and_name_each_overlay() -> None:
 def test_window_plays_with_overlays_under_xvfb(groove: Path) -> None:
     run = subprocess.run(
         ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", sys.executable, "-c",
-         "import sys; from livedrummer.cli import main; sys.exit(main())", "-v", "display",
+         "import sys; from services.cli import main; sys.exit(main())", "-v", "display",
          str(groove), "--size", "640x360", "--aa", "0", "--overlay", "score,joints",
          "--seconds", "1.5"],
         capture_output=True, text=True, timeout=120,

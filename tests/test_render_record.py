@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from sf2_writer import write_sf2
 
-from livedrummer.clock import MonotonicClock
-from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind, Onset
-from livedrummer.kitfile import load_kit
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.timeline.clock import MonotonicClock
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind, Onset
 from services.display.context import DisplayError
 from services.display.record import (
     LiveRecorder,
@@ -81,7 +81,7 @@ def test_a_bad_video_path_is_one_error(tmp_path: Path) -> None:
 def test_up_videos_drum_track_stops_a_crash_the_journal_says_was_grabbed(
     sound: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from livedrummer.cli.up import add_drum_track
+    from services.cli.up import add_drum_track
 
     soundfont = None
     if sound == "soundfont":

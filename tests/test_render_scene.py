@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scene_rest import REST_SKELETON, rest_frame
 
-from livedrummer.kitfile import load_kit
+from livedrummer.kit.loader import load_kit
 from livedrummer.render.camera import (
     CAMERA_NAMES,
     CameraError,
@@ -18,8 +18,7 @@ from livedrummer.render.camera import (
 )
 from livedrummer.render.geometry import all_meshes
 from livedrummer.render.kitmesh import MOTION_BEATER, MOTION_LIFT, build_kit_mesh
-from livedrummer.render.shaders import PROGRAMS, ShaderError, shader_source
-from livedrummer.scene import (
+from livedrummer.render.scene import (
     CH_HIGHLIGHT,
     CH_TRAVEL,
     CH_WOBBLE,
@@ -30,6 +29,7 @@ from livedrummer.scene import (
     Tone,
     empty_channels,
 )
+from livedrummer.render.shaders import PROGRAMS, ShaderError, shader_source
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ import pytest
 LIVEDRUMMER = [
     sys.executable,
     "-c",
-    "import sys; from livedrummer.cli import main; sys.exit(main())",
+    "import sys; from services.cli import main; sys.exit(main())",
 ]
 REPO = Path(__file__).resolve().parent.parent
 

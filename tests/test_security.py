@@ -26,12 +26,12 @@ import zmq
 import zmq.auth
 
 from livedrummer import protocol as p
-from livedrummer.cli import main
-from livedrummer.clock import MonotonicClock
+from services.cli import main
 from livedrummer.errors import KeyFileError, ProtocolError
-from livedrummer.events import Onset
-from livedrummer.keys import format_key_file, parse_key_file, read_key_file
-from livedrummer.vocabulary import HiHat, Zone
+from livedrummer.kit.vocabulary import HiHat, Zone
+from livedrummer.protocol.keys import format_key_file, parse_key_file, read_key_file
+from livedrummer.timeline.clock import MonotonicClock
+from livedrummer.timeline.events import Onset
 from services.input.base import Event, Source
 from services.input.daemon import DaemonConfig, InputDaemon
 from services.input.remote import RemoteSource
@@ -201,11 +201,11 @@ def test_non_loopback_bind_without_curve_is_refused(
 def test_cli_refuses_a_public_bind_in_one_line(tmp_path: Path) -> None:
     groove = REPO / "kits" / "grooves" / "gmd-drummer1-funk-80.mid"
     if not groove.exists():
-        from livedrummer.cli.common import demo_groove
+        from services.cli.common import demo_groove
 
         groove = demo_groove()
     proc = subprocess.run(
-        [sys.executable, "-m", "livedrummer", "input", "--file", str(groove), "--no-journal",
+        [sys.executable, "-m", "services", "input", "--file", str(groove), "--no-journal",
          "--pub", "tcp://0.0.0.0:*", "--control", LOCAL],
         capture_output=True, text=True, cwd=REPO, timeout=60,
         env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")},
@@ -368,7 +368,7 @@ def test_cli_remote_jam_over_curve(tmp_path: Path, ctx: zmq.Context[zmq.Socket[b
 
     def start(*args: str) -> dict[str, str]:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "livedrummer", "input", *args, *common],
+            [sys.executable, "-m", "services", "input", *args, *common],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO, env=env,
         )  # fmt: skip
         procs.append(proc)

@@ -23,10 +23,10 @@ from test_render_export import choked_crash, crash_rms_around_the_grab, read_bac
 
 from livedrummer.audio.mix import GRAB_FADE_S
 from livedrummer.audio.soundfont import check_soundfont, gm_note, render_soundfont
-from livedrummer.cli import main
-from livedrummer.events import ONSET_DTYPE, Onset
-from livedrummer.kitfile import load_kit
-from livedrummer.notemap import load_note_map
+from services.cli import main
+from livedrummer.kit.loader import load_kit
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.timeline.events import ONSET_DTYPE, Onset
 
 SR = 48_000
 REPO = Path(__file__).resolve().parent.parent
@@ -180,7 +180,7 @@ def tiny_mid(write_midi) -> Path:  # type: ignore[no-untyped-def]
 def test_render_cli_puts_the_soundfont_track_in_the_video(
     tiny_mid: Path, sf2: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from livedrummer.midifile import read_midi_file
+    from livedrummer.midi.smf import read_midi_file
     from services.display.context import DisplayError, headless_context
 
     try:
@@ -232,7 +232,7 @@ def test_render_cli_stops_a_choked_crash_in_the_soundfont_track(
 
 
 def _cli(*argv: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "livedrummer", *argv], capture_output=True,
+    return subprocess.run([sys.executable, "-m", "services", *argv], capture_output=True,
                           text=True, cwd=REPO, timeout=60)  # fmt: skip
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from test_sticking_helpers import DEMO
 
-from livedrummer.cli import main
+from services.cli import main
 
 
 def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:

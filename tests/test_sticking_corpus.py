@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from test_sticking_helpers import DEMO, TABS
 
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking import metrics
 from livedrummer.sticking.online import stick_online
 from livedrummer.sticking.optimal import optimal

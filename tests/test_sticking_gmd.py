@@ -10,9 +10,9 @@ from __future__ import annotations
 import pytest
 from test_sticking_helpers import GMD
 
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking import metrics
 from livedrummer.sticking.strategy import STRATEGIES, assign
 

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from livedrummer.events import ONSET_DTYPE
-from livedrummer.vocabulary import HIHATS, INSTRUMENT_CODE, ZONES, HiHat, Zone
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENT_CODE, ZONES, HiHat, Zone
+from livedrummer.timeline.events import ONSET_DTYPE
 
 DATA = Path(__file__).parent / "data" / "sticking"
 TABS = sorted(DATA.glob("*.tab"))

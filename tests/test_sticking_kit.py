@@ -10,15 +10,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_sticking_helpers import DEMO, TABS, onsets
 
-from livedrummer.kit import Kit
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import INSTRUMENTS, Limb
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking.prepare import CHORD_WINDOW_S
 from livedrummer.sticking.result import LIMB_CODE, LIMBS, NOT_PLAYED, Sticking
 from livedrummer.sticking.strategy import STRATEGIES, assign
 from livedrummer.sticking.tab import read_tab
-from livedrummer.vocabulary import INSTRUMENTS, Limb
 
 RH, LH, RF, LF = (LIMB_CODE[x] for x in (Limb.RH, Limb.LH, Limb.RF, Limb.LF))
 MIRROR = np.array([LH, RH, LF, RF], dtype=np.int8)

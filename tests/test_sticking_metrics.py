@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 from test_sticking_helpers import onsets
 
-from livedrummer.kit import Kit
-from livedrummer.kitfile import load_kit
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import Limb
 from livedrummer.sticking import metrics
 from livedrummer.sticking.prepare import piece_table
 from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED, Sticking
-from livedrummer.vocabulary import Limb
 
 RH, LH = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH]
 

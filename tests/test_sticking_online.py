@@ -8,13 +8,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_sticking_helpers import DEMO, onsets
 
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.vocabulary import Limb
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking.online import OnlineSticker, stick_online
 from livedrummer.sticking.optimal import optimal
 from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED
-from livedrummer.vocabulary import Limb
 
 RH, LH = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH]
 

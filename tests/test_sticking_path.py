@@ -14,15 +14,15 @@ from test_sticking_helpers import DEMO, onsets
 import livedrummer.sticking.strategy as strategy
 from livedrummer.body.perform import perform
 from livedrummer.body.rig import build_rig
-from livedrummer.cli import main
+from services.cli import main
 from livedrummer.errors import LivedrummerError
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.vocabulary import Limb, PieceKind
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking import assign, metrics, stick_online, stick_performance
 from livedrummer.sticking.prepare import chords, piece_table
 from livedrummer.sticking.result import LIMB_CODE, Sticking
-from livedrummer.vocabulary import Limb, PieceKind
 
 RH, LH = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH]
 

@@ -6,16 +6,16 @@ import numpy as np
 import pytest
 from test_sticking_helpers import DEMO, onsets
 
-from livedrummer.kitfile import load_kit
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import load_note_map
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.vocabulary import Limb
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking.prepare import UNANNOTATED
 from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED
 from livedrummer.sticking.score import read_score, write_score
 from livedrummer.sticking.sheet import render_sheet
 from livedrummer.sticking.strategy import STRATEGIES, assign
 from livedrummer.sticking.tab import ScoreError, parse_tab
-from livedrummer.vocabulary import Limb
 
 RH, LH, LF = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH], LIMB_CODE[Limb.LF]
 

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 from test_sticking_helpers import onsets
 
-from livedrummer.kitfile import load_kit
+from livedrummer.kit.loader import load_kit
+from livedrummer.kit.vocabulary import Limb
 from livedrummer.sticking import metrics
 from livedrummer.sticking.kragtwijk import kragtwijk_basic, kragtwijk_pair
 from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED
 from livedrummer.sticking.smed import smed
 from livedrummer.sticking.strategy import StrategyError, assign
-from livedrummer.vocabulary import Limb
 
 RH, LH = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH]
 

@@ -7,18 +7,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bench._upswing import upswing_visible
+from services.bench._upswing import upswing_visible
 from livedrummer.body.animation import animate, hihat_openness
 from livedrummer.body.rig import Rig
 from livedrummer.body.skeleton import J
-from livedrummer.events import CONTROL_DTYPE, ControlKind
 from livedrummer.live.calibration import Calibration, CalibrationError
 from livedrummer.live.predict import HandPredictor
 from livedrummer.live.synth import LiveSynth, PoseBatch, SynthParams
 from livedrummer.live.track import PoseTrack
-from livedrummer.performance import Performance
 from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
 from livedrummer.sticking.online import stick_online
+from livedrummer.timeline.events import CONTROL_DTYPE, ControlKind
+from livedrummer.timeline.performance import Performance
 
 TIPS = {0: J["r_tip"], 1: J["l_tip"]}
 START = 5000.0  # onsets live on the shared clock, far from 0

@@ -24,8 +24,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from livedrummer.audio.synth import SAMPLE_RATE, layer_for, voice_layers
-from livedrummer.kit import Kit
-from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
 
 CUT_FADE_S = 0.01  # a hi-hat stroke cut by the next one, or a sound cut by the track's end
 GRAB_FADE_S = 0.005  # a choked cymbal: from the grab to silence

@@ -70,8 +70,8 @@ import numpy as np
 from livedrummer.audio.mix import GRAB_FADE_S, STEP, choke_cut_s, fit_headroom, track_buffer
 from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.errors import LivedrummerError
-from livedrummer.kit import Kit
-from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
 
 log = logging.getLogger(__name__)
 
@@ -93,7 +93,7 @@ GmKey = tuple[str, Zone, HiHat]
 
 @cache
 def _gm_tables() -> tuple[dict[int, GmKey], dict[GmKey, int], dict[str, int]]:
-    from livedrummer.notemap import load_note_map
+    from livedrummer.midi.notemap import load_note_map
 
     gm = load_note_map("general-midi")
     meaning = {n: (s.instrument, s.zone, s.hihat) for n, s in gm.notes.items()}

@@ -51,8 +51,8 @@ from livedrummer.body.strokes import (
     stroke_keys,
 )
 from livedrummer.body.targets import Surfaces, penetration_depth
+from livedrummer.kit.vocabulary import ZONES, Limb, PieceKind, Zone
 from livedrummer.sticking.result import LIMBS, Sticking
-from livedrummer.vocabulary import ZONES, Limb, PieceKind, Zone
 
 X = np.array([1.0, 0.0, 0.0])
 #: Shoulder curves hold world rotations, so a hovering arm stays put while the torso twists
@@ -250,7 +250,7 @@ def hihat_openness(onsets: np.ndarray, controls: np.ndarray, hihat_cc: int = 4,
                    cc_open: np.ndarray | None = None) -> Openness:  # fmt: skip
     """Openness over time from pedal-controller events (``cc_open`` maps 0..127 to openness;
     default 1 - value/127), else from the hi-hat onsets' own openness."""
-    from livedrummer.events import ControlKind
+    from livedrummer.timeline.events import ControlKind
 
     table = cc_open if cc_open is not None else 1.0 - np.arange(128) / 127.0
     ped = controls[controls["kind"] == ControlKind.HIHAT_PEDAL] if controls.size else controls

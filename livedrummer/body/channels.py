@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.body.targets import HIHAT_MAX_LIFT_M, zone_target
-from livedrummer.kit import Piece
-from livedrummer.vocabulary import PieceKind, Zone
+from livedrummer.kit.model import Piece
+from livedrummer.kit.vocabulary import PieceKind, Zone
 
 BEATER_LENGTH_M = 0.20
 BEATER_MAX_RAD = 0.9  # beater angle at full foot lift

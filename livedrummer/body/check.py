@@ -24,8 +24,8 @@ from livedrummer.body.animation import FOOT_LIFT_M, Animation
 from livedrummer.body.channels import BEATER_MAX_RAD, beater_tip
 from livedrummer.body.skeleton import ARM, LEG
 from livedrummer.body.targets import penetration_depth
+from livedrummer.kit.vocabulary import PieceKind
 from livedrummer.sticking.result import Sticking
-from livedrummer.vocabulary import PieceKind
 
 CHUNK = 40_000
 

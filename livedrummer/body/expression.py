@@ -17,9 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from livedrummer.catalog import entries, looks_like_path
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import PresetError
+from livedrummer.kit.catalog import entries, looks_like_path
 
 Shares = tuple[float, float, float]  # wrist, elbow, shoulder
 

@@ -21,10 +21,10 @@ from livedrummer.body.rig import Rig
 from livedrummer.body.sample import choke_times
 from livedrummer.body.secondary import SecondaryParams
 from livedrummer.body.strokes import StrokeParams
-from livedrummer.notemap import NoteMap
-from livedrummer.performance import Performance
+from livedrummer.midi.notemap import NoteMap
 from livedrummer.sticking.result import Sticking
 from livedrummer.sticking.strategy import stick_performance
+from livedrummer.timeline.performance import Performance
 
 
 @dataclass(frozen=True)

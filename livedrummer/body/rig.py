@@ -20,8 +20,8 @@ from livedrummer.body.secondary import SecondaryParams
 from livedrummer.body.skeleton import N_JOINTS, J, SegmentLengths, Skeleton, build_skeleton
 from livedrummer.body.targets import Surfaces, TargetTable, surfaces, target_table
 from livedrummer.errors import UnreachableError
-from livedrummer.kit import Kit
-from livedrummer.vocabulary import ZONES, Limb, PieceKind, Zone
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import ZONES, Limb, PieceKind, Zone
 
 X = np.array([1.0, 0.0, 0.0])
 

@@ -13,11 +13,11 @@ import numpy as np
 from livedrummer.body.animation import Animation
 from livedrummer.body.channels import KitChannels, VibrationParams, kit_channels
 from livedrummer.body.pose import pack_poses
-from livedrummer.events import ControlKind
-from livedrummer.kit import Kit
-from livedrummer.notemap import NoteMap
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import Limb, PieceKind, Zone
+from livedrummer.midi.notemap import NoteMap
 from livedrummer.sticking.result import Sticking
-from livedrummer.vocabulary import Limb, PieceKind, Zone
+from livedrummer.timeline.events import ControlKind
 
 CHUNK = 50_000
 

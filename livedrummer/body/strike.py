@@ -28,7 +28,7 @@ from livedrummer.body import quat
 from livedrummer.body.ik import ArmSolution, LegSolution, solve_arm, solve_leg
 from livedrummer.body.rig import Rig
 from livedrummer.body.skeleton import ARM, LEG, J
-from livedrummer.vocabulary import ZONES, PieceKind, Zone
+from livedrummer.kit.vocabulary import ZONES, PieceKind, Zone
 
 _PEDAL = ZONES.index(Zone.PEDAL)
 

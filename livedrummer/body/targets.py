@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from livedrummer.kit import Kit, Piece
-from livedrummer.vocabulary import PieceKind, Zone
+from livedrummer.kit.model import Kit, Piece
+from livedrummer.kit.vocabulary import PieceKind, Zone
 
 HIHAT_MAX_LIFT_M = 0.03
 KICK_BEATER_DROP = 0.35  # beater contact below the kick head centre, in radii
@@ -105,7 +105,7 @@ class TargetTable:
 
 
 def target_table(kit: Kit) -> TargetTable:
-    from livedrummer.vocabulary import ZONES
+    from livedrummer.kit.vocabulary import ZONES
 
     p, z = len(kit.pieces), len(ZONES)
     point = np.zeros((p, z, 3))

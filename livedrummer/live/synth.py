@@ -81,12 +81,12 @@ from livedrummer.body.animation import hihat_openness
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import Rig
 from livedrummer.body.strokes import StrokeParams
-from livedrummer.events import ONSET_DTYPE
 from livedrummer.live.curves import Answer, CurveSet
 from livedrummer.live.ledger import SampleLedger
 from livedrummer.live.quick import QuickState, quick_contact
 from livedrummer.live.window import NoteWindow, WindowParams
-from livedrummer.notemap import NoteMap
+from livedrummer.midi.notemap import NoteMap
+from livedrummer.timeline.events import ONSET_DTYPE
 
 
 @dataclass(frozen=True)

@@ -39,12 +39,12 @@ import numpy as np
 
 from livedrummer.body.rig import Rig
 from livedrummer.body.sample import kit_choke_times
-from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind
+from livedrummer.kit.vocabulary import INSTRUMENTS
 from livedrummer.live.predict import Guess, HandPredictor
-from livedrummer.notemap import NoteMap
+from livedrummer.midi.notemap import NoteMap
 from livedrummer.sticking.online import Decision, OnlineSticker
 from livedrummer.sticking.result import NOT_PLAYED, Sticking
-from livedrummer.vocabulary import INSTRUMENTS
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind
 
 
 @dataclass(frozen=True)

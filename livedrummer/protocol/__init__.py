@@ -19,7 +19,7 @@ Header frame (:data:`HEADER`, little-endian, 32 bytes)::
                                     (performer, stream)
     12     8    seq           u64   sequence number, +1 for *every* message on the stream
                                     (heartbeats and gaps included), 0 after a sender restart
-    20     8    send_time_s   f64   send time on the machine's shared clock (livedrummer.clock)
+    20     8    send_time_s   f64   send time on the shared clock (livedrummer.timeline.clock)
     28     4    payload_len   u32   total bytes of the payload frames (checked)
 
 Because the header starts with magic, version and kind, a SUB socket can filter one kind with

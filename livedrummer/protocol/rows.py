@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from livedrummer.events import ONSET_DTYPE, ControlKind
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES
 from livedrummer.protocol.spec import MAX_ROWS, Kind, fail
-from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES
+from livedrummer.timeline.events import ONSET_DTYPE, ControlKind
 
 
 def _check_range(rows: np.ndarray, name: str, hi: int, lo: int = 0) -> None:

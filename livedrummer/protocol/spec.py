@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from livedrummer.errors import ProtocolError
-from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
 
 PROTOCOL_VERSION = 1
 MAGIC = b"LDRM"

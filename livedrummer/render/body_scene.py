@@ -1,8 +1,8 @@
 """The body model as the renderer's scene: skeleton, joints, sticks and kit channels per frame.
 
 The body (:mod:`livedrummer.body`) samples a performance into pose records
-(:mod:`livedrummer.body.pose`); the renderer draws :class:`~livedrummer.scene.SceneFrame` s. This
-module is the whole mapping between the two, so there is one motion model and one kit-channel
+(:mod:`livedrummer.body.pose`); the renderer draws :class:`~livedrummer.render.scene.SceneFrame` s.
+This module is the whole mapping between the two, so there is one motion model and one kit-channel
 model (the body's), and the renderer never learns how either is computed.
 
 * Joints: the scene :data:`BODY_SKELETON` has the body's 24 joints in the body's order with the
@@ -36,10 +36,10 @@ from livedrummer.body.rig import build_rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import JOINTS, PARENTS, J
 from livedrummer.body.strokes import StrokeParams
-from livedrummer.kit import Kit
-from livedrummer.notemap import NoteMap
-from livedrummer.performance import Performance
-from livedrummer.scene import (
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import PieceKind
+from livedrummer.midi.notemap import NoteMap
+from livedrummer.render.scene import (
     CH_HIGHLIGHT,
     CH_TRAVEL,
     CH_WOBBLE,
@@ -50,7 +50,7 @@ from livedrummer.scene import (
     Tone,
 )
 from livedrummer.sticking.result import Sticking
-from livedrummer.vocabulary import PieceKind
+from livedrummer.timeline.performance import Performance
 
 #: A 16" stick held a third of the way up: the part behind the grip fulcrum (m).
 STICK_TAIL_M = 0.11

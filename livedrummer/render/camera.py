@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.errors import LivedrummerError
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
 
 
 class CameraError(LivedrummerError):

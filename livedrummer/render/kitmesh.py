@@ -1,10 +1,10 @@
 """Kit geometry to mesh instances: every shell, head, rim, cymbal, stand and pedal as a matrix.
 
 The kit file says where each piece's playing surface is, which way it faces and how big it is
-(:mod:`livedrummer.kit`); this module turns that into instances of the unit meshes of
+(:mod:`livedrummer.kit.model`); this module turns that into instances of the unit meshes of
 :mod:`livedrummer.render.geometry`, so a mirrored or a user kit is drawn without code changes.
 It is built once per kit (:func:`build_kit_mesh`); per frame, :meth:`KitMesh.instances` applies
-the kit channels of :mod:`livedrummer.scene` (wobble about the playing-surface centre, hi-hat
+the kit channels of :mod:`livedrummer.render.scene` (wobble about the playing-surface centre, hi-hat
 lift along the surface normal, kick beater swing about its pivot, hit highlight) to all
 instances at once with array operations.
 
@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from livedrummer.kit import Kit, Piece
-from livedrummer.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE, CH_WOBBLE_AZIMUTH
-from livedrummer.vocabulary import PieceKind
+from livedrummer.kit.model import Kit, Piece
+from livedrummer.kit.vocabulary import PieceKind
+from livedrummer.render.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE, CH_WOBBLE_AZIMUTH
 
 INSTANCE_FLOATS = 24
 MATERIAL_PLAIN, MATERIAL_FLOOR, MATERIAL_CYMBAL, MATERIAL_HEAD = 0.0, 1.0, 2.0, 3.0

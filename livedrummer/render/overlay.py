@@ -37,10 +37,10 @@ import numpy as np
 
 from livedrummer.body.skeleton import ARM, J
 from livedrummer.errors import LivedrummerError
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import PieceKind
 from livedrummer.render.body_scene import BodyScene
 from livedrummer.sticking.result import Sticking
-from livedrummer.vocabulary import PieceKind
 
 log = logging.getLogger(__name__)
 

@@ -26,10 +26,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import Limb, PieceKind
 from livedrummer.sticking.metrics import DOUBLE_STROKE_FACTOR, STANCE_WINDOW_S, crossing_depth
 from livedrummer.sticking.prepare import lead_hand
-from livedrummer.vocabulary import Limb, PieceKind
 
 _TIMEKEEPERS = (PieceKind.HIHAT, PieceKind.RIDE)
 

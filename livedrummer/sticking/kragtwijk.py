@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import Limb, PieceKind
 from livedrummer.sticking.prepare import Routed, chords, lead_hand, reduce_chord, route
 from livedrummer.sticking.result import LIMB_CODE, Sticking
-from livedrummer.vocabulary import Limb, PieceKind
 
 _RH, _LH = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH]
 DEFAULT_RHO = 1e-3

@@ -29,10 +29,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import Limb
 from livedrummer.sticking.prepare import chords
 from livedrummer.sticking.result import LIMB_CODE, LIMBS, NOT_PLAYED, Sticking
-from livedrummer.vocabulary import Limb
 
 STANCE_WINDOW_S = 0.5
 CROSS_TOL_M = 0.10

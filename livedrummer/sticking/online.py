@@ -29,8 +29,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from livedrummer.events import ONSET_DTYPE
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Limb, PieceKind, Zone
 from livedrummer.sticking.cost import CostModel, Weights
 from livedrummer.sticking.optimal import Snapshot, Trellis, apply_step, feed, hand_of
 from livedrummer.sticking.prepare import (
@@ -44,7 +44,7 @@ from livedrummer.sticking.prepare import (
     to_pedal,
 )
 from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED, Sticking
-from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Limb, PieceKind, Zone
+from livedrummer.timeline.events import ONSET_DTYPE
 
 _INITIAL = 256
 _RH = LIMB_CODE[Limb.RH]

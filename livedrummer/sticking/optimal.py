@@ -21,7 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import Limb
 from livedrummer.sticking.cost import CostModel, Weights
 from livedrummer.sticking.prepare import (
     UNANNOTATED,
@@ -33,7 +34,6 @@ from livedrummer.sticking.prepare import (
     route,
 )
 from livedrummer.sticking.result import LIMB_CODE, Sticking
-from livedrummer.vocabulary import Limb
 
 INF = np.inf
 _HAND_CODE = (LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH])

@@ -21,9 +21,9 @@ from itertools import pairwise
 
 import numpy as np
 
-from livedrummer.kit import Kit, Piece
+from livedrummer.kit.model import Kit, Piece
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Limb, PieceKind, Zone
 from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED
-from livedrummer.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Limb, PieceKind, Zone
 
 #: Hand notes within this many seconds of a chord's first note belong to that chord.
 CHORD_WINDOW_S = 0.015

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from livedrummer.vocabulary import Limb
+from livedrummer.kit.vocabulary import Limb
 
 LIMBS: tuple[Limb, ...] = (Limb.RH, Limb.LH, Limb.RF, Limb.LF)
 LIMB_CODE: dict[Limb, int] = {limb: i for i, limb in enumerate(LIMBS)}

@@ -25,11 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import Limb
 from livedrummer.sticking.prepare import UNANNOTATED
 from livedrummer.sticking.result import LIMB_CODE, LIMBS, NOT_PLAYED, Sticking
 from livedrummer.sticking.tab import ScoreError
-from livedrummer.vocabulary import Limb
 
 HEADER = "# livedrummer sticking score 1"
 _TOKENS = {limb.value: LIMB_CODE[limb] for limb in Limb} | {

@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import Limb
 from livedrummer.sticking.metrics import hard_notes
 from livedrummer.sticking.prepare import beat_position
 from livedrummer.sticking.result import LIMBS, NOT_PLAYED, Sticking
-from livedrummer.vocabulary import Limb
 
 _SHORT = {Limb.RH: "R", Limb.LH: "L", Limb.RF: "RF", Limb.LF: "LF"}
 _SIXTEENTH = ("", "e", "&", "a")

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from livedrummer.errors import LivedrummerError
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
 from livedrummer.sticking.kragtwijk import kragtwijk_basic, kragtwijk_pair
 from livedrummer.sticking.online import stick_online
 from livedrummer.sticking.optimal import optimal
@@ -35,7 +35,7 @@ from livedrummer.sticking.score import read_score_file
 from livedrummer.sticking.smed import smed
 
 if TYPE_CHECKING:
-    from livedrummer.performance import Performance
+    from livedrummer.timeline.performance import Performance
 
 
 class StrategyError(LivedrummerError):

@@ -15,7 +15,7 @@ that plays that note::
 Cells: ``.`` no note; ``R``/``L`` a hand (``r``/``l``: a ghost note, played softly);
 ``RF``/``LF`` a foot (``LF`` on a hi-hat row: played with the pedal); ``X`` a note the teacher
 would leave out. ``|`` is a bar line and ignored. A row is named by an instrument role
-(:data:`~livedrummer.vocabulary.INSTRUMENTS`), optionally ``:zone`` (``snare:rim``,
+(:data:`~livedrummer.kit.vocabulary.INSTRUMENTS`), optionally ``:zone`` (``snare:rim``,
 ``ride:bell``, ``hihat:pedal``) or ``hihat:open``. Rows must all have the same number of cells.
 Notes get General MIDI note numbers, for display only.
 
@@ -30,9 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from livedrummer.errors import LivedrummerError
-from livedrummer.events import ONSET_DTYPE
-from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED
-from livedrummer.vocabulary import (
+from livedrummer.kit.vocabulary import (
     DEFAULT_ZONES,
     HIHATS,
     INSTRUMENT_CODE,
@@ -42,6 +40,8 @@ from livedrummer.vocabulary import (
     PieceKind,
     Zone,
 )
+from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED
+from livedrummer.timeline.events import ONSET_DTYPE
 
 
 class ScoreError(LivedrummerError):

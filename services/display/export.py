@@ -32,17 +32,18 @@ import numpy as np
 
 from livedrummer.audio.mix import mix_onsets
 from livedrummer.audio.soundfont import render_soundfont
-from livedrummer.performance import Performance
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
-from services.display.context import DisplayError, headless_context
-from services.display.png import write_png
-from services.display.record import spooled_track
-from services.display.renderer import Renderer, i420_ok
-from services.display.video import VideoSettings, VideoWriter
+from livedrummer.timeline.performance import Performance
+
+from .context import DisplayError, headless_context
+from .png import write_png
+from .record import spooled_track
+from .renderer import Renderer, i420_ok
+from .video import VideoSettings, VideoWriter
 
 Progress = Callable[[int, int], None]
 DEFAULT_SETTINGS = VideoSettings()

@@ -52,17 +52,18 @@ import zmq
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
 from livedrummer.errors import KeyFileError, ProtocolError
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.live.track import PoseTrack
 from livedrummer.protocol import Pose, PoseFormat, SeqStatus, SequenceTracker, decode
 from livedrummer.render.body_scene import frame_from_pose
-from services.badmsg import BadMessages
-from services.display.record import LiveRecorder
-from services.display.surface import HeadlessSurface, WindowSurface
-from services.display.video import VideoSettings
-from services.display.window import WindowOptions
-from services.net import Security, connect, socket, subscribe_protocol
+
+from ..badmsg import BadMessages
+from ..net import Security, connect, socket, subscribe_protocol
+from .record import LiveRecorder
+from .surface import HeadlessSurface, WindowSurface
+from .video import VideoSettings
+from .window import WindowOptions
 
 log = logging.getLogger("livedrummer.display")
 
@@ -97,7 +98,7 @@ class AudioFrameClock:
     latency. Needs sounddevice and PortAudio (libportaudio2); raises DisplayError without."""
 
     def __init__(self, extra_latency_s: float = 0.0, sample_rate: int = 48_000) -> None:
-        from services.display.context import DisplayError
+        from .context import DisplayError
 
         try:
             import sounddevice as sd
@@ -200,7 +201,7 @@ class LiveDisplay:
                 recorder = LiveRecorder(cfg.video, settings)
             if cfg.out is not None:
                 cfg.out.mkdir(parents=True, exist_ok=True)
-                # Line-buffered: a watcher (tests, bench/recovery.py) sees each frame as drawn.
+                # Line-buffered: a watcher (tests, services/bench/recovery.py) sees each frame as drawn.
                 log_file = (cfg.out / "frames.jsonl").open("w", buffering=1)
             period = 1.0 / cfg.fps
             ahead = RenderAhead()
@@ -243,7 +244,7 @@ class LiveDisplay:
                 ):
                     recorder.add(surface.renderer, show)  # from the first frame with a pose
                 if isinstance(surface, HeadlessSurface) and cfg.out is not None and cfg.png:
-                    from services.display.png import write_png
+                    from .png import write_png
 
                     write_png(cfg.out / f"frame_{self.stats.frames:06d}.png",
                               surface.renderer.read_rgb())  # fmt: skip

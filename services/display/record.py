@@ -36,11 +36,12 @@ from typing import Any
 
 import numpy as np
 
-from livedrummer.kit import Kit
-from livedrummer.notemap import NoteMap
-from services.display.context import DisplayError
-from services.display.renderer import Renderer, i420_ok
-from services.display.video import VideoSettings, VideoWriter, encode_audio
+from livedrummer.kit.model import Kit
+from livedrummer.midi.notemap import NoteMap
+
+from .context import DisplayError
+from .renderer import Renderer, i420_ok
+from .video import VideoSettings, VideoWriter, encode_audio
 
 log = logging.getLogger(__name__)
 

@@ -28,8 +28,8 @@ import numpy as np
 from livedrummer.render.camera import Camera
 from livedrummer.render.geometry import Mesh, all_meshes
 from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
+from livedrummer.render.scene import SceneFrame, Skeleton, Tone
 from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
-from livedrummer.scene import SceneFrame, Skeleton, Tone
 
 BACKGROUND = (0.02, 0.02, 0.035)
 #: colour per :class:`Tone`

@@ -15,13 +15,14 @@ from __future__ import annotations
 from contextlib import ExitStack
 from typing import Any
 
-from livedrummer.kit import Kit
+from livedrummer.kit.model import Kit
 from livedrummer.render.body_scene import BODY_SKELETON
 from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
-from livedrummer.scene import SceneFrame
-from services.display.renderer import Renderer
-from services.display.window import WindowOptions, camera_key, key_name, open_window
+from livedrummer.render.scene import SceneFrame
+
+from .renderer import Renderer
+from .window import WindowOptions, camera_key, key_name, open_window
 
 
 class HeadlessSurface:
@@ -29,7 +30,8 @@ class HeadlessSurface:
 
     def __init__(self, kit: Kit, size: tuple[int, int], camera: str) -> None:
         from livedrummer.render.camera import pick_camera
-        from services.display.context import headless_context
+
+        from .context import headless_context
 
         self._ctx = headless_context()
         self.renderer = Renderer(self._ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0)

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from services.display.context import DisplayError
+from .context import DisplayError
 
 AUDIO_FRAME = 1024  # samples per AAC frame
 CONTAINERS = (".mp4", ".m4v", ".mov", ".mkv")

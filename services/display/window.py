@@ -23,16 +23,17 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-from livedrummer.kit import Kit
-from livedrummer.performance import Performance
+from livedrummer.kit.model import Kit
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CAMERA_NAMES, Camera, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.render.transport import KEYS, Transport
-from services.display.context import DisplayError
-from services.display.renderer import Renderer
+from livedrummer.timeline.performance import Performance
+
+from .context import DisplayError
+from .renderer import Renderer
 
 log = logging.getLogger(__name__)
 
@@ -94,7 +95,7 @@ def show(
     ``body`` is the performance animated on ``kit``; without it the body is animated here with
     the defaults (optimal sticking) and the note map the performance was read with."""
     if body is None:
-        from livedrummer.notemap import load_note_map
+        from livedrummer.midi.notemap import load_note_map
 
         body = BodyScene.perform(performance, kit, load_note_map(performance.map_name))
     with open_window(options) as (glfw, window, ctx):

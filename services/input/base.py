@@ -3,7 +3,7 @@
 Why this shape. A MIDI port, a serial trigger board, a file played as if performed and a
 remote site's stream differ only in how bytes arrive. Each backend implements ``open``,
 ``read(timeout_s)`` and ``close``; everything else (decoding MIDI into onsets with the shared
-:class:`~livedrummer.decode.MessageDecoder`, counting problems, the reconnect loop, publishing
+:class:`~livedrummer.midi.decode.MessageDecoder`, counting problems, the reconnect loop, publishing
 and journaling) lives once, in the base and the daemon. ``read`` returns events already
 stamped on the shared clock *at arrival* (in the device callback, or right after the read
 that delivered the bytes), decoded into :class:`Onset`, :class:`Control` or :class:`Gap`.
@@ -20,10 +20,10 @@ from abc import ABC, abstractmethod
 from collections import Counter
 from dataclasses import dataclass
 
-from livedrummer.clock import Clock
-from livedrummer.decode import DecodeStats, MessageDecoder
-from livedrummer.events import Control, Onset
+from livedrummer.midi.decode import DecodeStats, MessageDecoder
 from livedrummer.protocol import Gap
+from livedrummer.timeline.clock import Clock
+from livedrummer.timeline.events import Control, Onset
 
 log = logging.getLogger("livedrummer.input")
 

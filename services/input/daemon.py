@@ -34,7 +34,7 @@ and never in our memory. The rtmidi path has one bounded queue, rtmidi's own (se
 blocks: past the high-water mark (``services.net.DEFAULT_HWM`` messages per subscriber)
 ZeroMQ drops messages for that slow subscriber only, which it sees as a sequence gap; every
 event was journaled before it was offered to ZeroMQ, so the journal stays complete.
-``bench/flood.py`` measures this at 10,000 notes/s.
+``services/bench/flood.py`` measures this at 10,000 notes/s.
 
 Security. With ``config.security`` holding a key pair, both sockets are CURVE servers; with
 an allow folder, a ZAP authenticator (started here, stopped in ``close``) lets in only the
@@ -52,9 +52,7 @@ from typing import Any
 import numpy as np
 import zmq
 
-from livedrummer.clock import Clock
 from livedrummer.errors import JournalError, MidiInputError, ProtocolError
-from livedrummer.events import CONTROL_DTYPE, ONSET_DTYPE, Control, Onset
 from livedrummer.protocol import (
     Flag,
     Gap,
@@ -65,11 +63,14 @@ from livedrummer.protocol import (
     Stream,
     encode,
 )
-from services.badmsg import BadMessages
-from services.input.base import Event, Source
-from services.input.remote import RemoteSource
-from services.journal import JournalWriter
-from services.net import Security, bind, serve_control, socket, start_authenticator
+from livedrummer.timeline.clock import Clock
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, Control, Onset
+
+from ..badmsg import BadMessages
+from ..journal import JournalWriter
+from ..net import Security, bind, serve_control, socket, start_authenticator
+from .base import Event, Source
+from .remote import RemoteSource
 
 log = logging.getLogger("livedrummer.input")
 

@@ -1,11 +1,11 @@
 """File source: a Standard MIDI File played in real time, as if a drummer were performing it.
 
-The file is read once with :func:`~livedrummer.midifile.read_midi_file` (the same decoder the
+The file is read once with :func:`~livedrummer.midi.smf.read_midi_file` (the same decoder the
 live sources use), its onsets and controls are merged in time order (controls first at equal
 times: a module sends CC4 before its note), and each is released when the shared clock
 reaches ``start + time_s``, then stamped with the clock *at release*, exactly like an event
 arriving from a kit. Events due at the same instant come out in one batch. With a
-:class:`~livedrummer.clock.SteppedClock` the whole file "plays" at once, deterministically.
+:class:`~livedrummer.timeline.clock.SteppedClock` the whole file "plays" at once, deterministically.
 
 Limits: ``open`` (re)starts the file from the top; ``loop`` restarts it after ``loop_gap_s``.
 """
@@ -17,12 +17,13 @@ from pathlib import Path
 
 import numpy as np
 
-from livedrummer.clock import Clock
-from livedrummer.decode import DecodeStats
-from livedrummer.events import Control, ControlKind, Onset
-from livedrummer.midifile import read_midi_file
-from livedrummer.notemap import NoteMap
-from services.input.base import Event, Problems, Source
+from livedrummer.midi.decode import DecodeStats
+from livedrummer.midi.notemap import NoteMap
+from livedrummer.midi.smf import read_midi_file
+from livedrummer.timeline.clock import Clock
+from livedrummer.timeline.events import Control, ControlKind, Onset
+
+from .base import Event, Problems, Source
 
 
 class FileSource(Source):

@@ -11,7 +11,7 @@ by :data:`QUEUE_LIMIT`), and the daemon's thread drains it with ``get_message`` 
 Stamps from the driver. Each queued message carries the time since the previous one,
 measured in the driver thread (JACK: ``jack_get_time()`` in the process callback; ALSA: the
 sequencer's real-time event stamp, taken by the kernel on arrival).
-:class:`~livedrummer.drivertime.DeltaStamper` anchors their running sum on the shared clock,
+:class:`~livedrummer.midi.drivertime.DeltaStamper` anchors their running sum on the shared clock,
 so a note's time no longer depends on when the daemon got the CPU. rtmidi's JACK backend
 loses the delta of a message it filters out, so the driver is told to filter nothing and
 system messages (SysEx, clock, active sensing) are dropped here, after their delta counts.
@@ -48,11 +48,12 @@ from typing import Any
 
 import rtmidi
 
-from livedrummer.clock import Clock
-from livedrummer.decode import MessageDecoder
-from livedrummer.drivertime import DeltaStamper
 from livedrummer.errors import MidiInputError
-from services.input.base import Event, MidiSource, Problems
+from livedrummer.midi.decode import MessageDecoder
+from livedrummer.midi.drivertime import DeltaStamper
+from livedrummer.timeline.clock import Clock
+
+from .base import Event, MidiSource, Problems
 
 log = logging.getLogger("livedrummer.input")
 

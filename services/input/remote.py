@@ -27,13 +27,14 @@ from typing import Any
 
 import zmq
 
-from livedrummer.clock import Clock
 from livedrummer.errors import KeyFileError, MidiInputError, ProtocolError
-from livedrummer.events import Control, ControlKind, Onset
 from livedrummer.protocol import Gap, GapReason, Kind, SeqStatus, SequenceTracker, decode
-from services.badmsg import BadMessages
-from services.input.base import Event, Problems, Source
-from services.net import Security, check_endpoint, connect, socket, subscribe_protocol
+from livedrummer.timeline.clock import Clock
+from livedrummer.timeline.events import Control, ControlKind, Onset
+
+from ..badmsg import BadMessages
+from ..net import Security, check_endpoint, connect, socket, subscribe_protocol
+from .base import Event, Problems, Source
 
 log = logging.getLogger("livedrummer.input")
 

@@ -1,6 +1,6 @@
 """Serial source: raw MIDI bytes from a DIY trigger board over USB serial (pyserial).
 
-Bytes go through :class:`~livedrummer.midistream.MidiStreamParser` (running status, real-time
+Bytes go through :class:`~livedrummer.midi.stream.MidiStreamParser` (running status, real-time
 bytes between data bytes, SysEx, garbage; see its docstring), then the shared decoder. Each
 read returns whatever the driver holds (at least one byte, or nothing after ``timeout_s``),
 and every message it completes is stamped with the time that read returned: serial drivers
@@ -33,11 +33,12 @@ from typing import Any
 
 import serial
 
-from livedrummer.clock import Clock
-from livedrummer.decode import MessageDecoder
 from livedrummer.errors import MidiInputError
-from livedrummer.midistream import MidiStreamParser
-from services.input.base import Event, MidiSource, Problems
+from livedrummer.midi.decode import MessageDecoder
+from livedrummer.midi.stream import MidiStreamParser
+from livedrummer.timeline.clock import Clock
+
+from .base import Event, MidiSource, Problems
 
 #: Messages completed by one read are stamped this far apart (ending at the read time), in
 #: order: identical hits in one chunk are two hits, and the decoder must not see them as a

@@ -44,7 +44,6 @@ from typing import Any
 import numpy as np
 import zmq
 
-from livedrummer.clock import Clock
 from livedrummer.errors import KeyFileError, ProtocolError
 from livedrummer.live.synth import LiveSynth, PoseBatch
 from livedrummer.protocol import (
@@ -59,8 +58,10 @@ from livedrummer.protocol import (
     decode,
     encode,
 )
-from services.badmsg import BadMessages
-from services.net import (
+from livedrummer.timeline.clock import Clock
+
+from ..badmsg import BadMessages
+from ..net import (
     Security,
     bind,
     connect,

@@ -1,0 +1,146 @@
+"""Turning MIDI channel messages into onsets and control events, one message at a time.
+
+This is the single place where MIDI meets the drum model, used unchanged by the file reader
+(offline) and by the input daemon (live): feed it ``(time_s, message)`` pairs in time order and
+it returns an :class:`~livedrummer.timeline.events.Onset`, a
+:class:`~livedrummer.timeline.events.Control` or ``None``. It keeps the little state MIDI requires:
+the latest hi-hat pedal position per channel (modules send CC4 *before* the note) and the notes
+already seen at the current instant, to drop Kragtwijk's "double events" (same time, channel, note
+and velocity; they add no information).
+
+Nothing is dropped silently: note-ons the map does not know, duplicates, and message types we
+do not use are all counted in :class:`DecodeStats`, which callers report.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Protocol
+
+from livedrummer.kit.vocabulary import HiHat
+from livedrummer.midi.notemap import NoteMap
+from livedrummer.timeline.events import Control, ControlKind, Onset
+
+STRIKE_POSITION_CCS = frozenset({16, 17, 18})
+
+
+class ChannelMessage(Protocol):
+    """The part of ``mido.Message`` the decoder reads.
+
+    mido messages only carry the attributes of their type (a control change has no ``note``);
+    the decoder reads each attribute only for the types that have it.
+    """
+
+    type: str
+    channel: int
+    note: int
+    velocity: int
+    control: int
+    value: int
+
+
+@dataclass
+class DecodeStats:
+    """Counts of everything the decoder saw, kept or not."""
+
+    note_ons: Counter[int] = field(default_factory=Counter)  # velocity > 0, per note, raw
+    unknown_notes: Counter[int] = field(default_factory=Counter)
+    duplicates_removed: int = 0
+    onsets: int = 0
+    hihat_pedal: int = 0
+    chokes: int = 0
+    strike_positions: int = 0
+    ignored: Counter[str] = field(default_factory=Counter)  # by message type
+
+
+class MessageDecoder:
+    """Stateful MIDI → event decoder for one source (see the module docstring)."""
+
+    def __init__(self, note_map: NoteMap, source: int = 0) -> None:
+        self.note_map = note_map
+        self.source = source
+        self.stats = DecodeStats()
+        self._pedal: dict[int, int] = {}
+        self._instant = float("nan")
+        self._seen_now: set[tuple[int, int, int]] = set()
+
+    def reset(self) -> None:
+        self.stats = DecodeStats()
+        self._pedal.clear()
+        self._instant = float("nan")
+        self._seen_now.clear()
+
+    def feed(self, time_s: float, msg: ChannelMessage) -> Onset | Control | None:
+        kind = msg.type
+        if kind == "note_on" and msg.velocity > 0:
+            return self._note_on(time_s, msg)
+        if kind == "control_change":
+            return self._control(time_s, msg)
+        if kind == "polytouch":
+            return self._polytouch(time_s, msg)
+        self.stats.ignored["note_off" if kind == "note_on" else kind] += 1
+        return None
+
+    def hihat_openness(self, channel: int) -> float | None:
+        """Current pedal openness on ``channel``, or None before any pedal message."""
+        value = self._pedal.get(channel)
+        return None if value is None else self.note_map.openness(value)
+
+    def _note_on(self, time_s: float, msg: ChannelMessage) -> Onset | None:
+        note, velocity, channel = msg.note, msg.velocity, msg.channel
+        stats = self.stats
+        stats.note_ons[note] += 1
+        if time_s != self._instant:
+            self._instant = time_s
+            self._seen_now.clear()
+        key = (channel, note, velocity)
+        if key in self._seen_now:
+            stats.duplicates_removed += 1
+            return None
+        self._seen_now.add(key)
+        spec = self.note_map.lookup(note)
+        if spec is None:
+            stats.unknown_notes[note] += 1
+            return None
+        openness = float("nan")
+        if spec.hihat is not HiHat.NONE:
+            pedal = self.hihat_openness(channel)
+            if spec.hihat is HiHat.PEDAL:
+                openness = 0.0
+            else:
+                openness = spec.hihat.nominal_openness if pedal is None else pedal
+        stats.onsets += 1
+        return Onset(
+            time_s,
+            note,
+            velocity,
+            channel,
+            spec.instrument,
+            spec.zone,
+            spec.hihat,
+            openness,
+            self.source,
+        )
+
+    def _control(self, time_s: float, msg: ChannelMessage) -> Control | None:
+        number, value, channel = msg.control, msg.value, msg.channel
+        if number == self.note_map.hihat_cc:
+            self._pedal[channel] = value
+            self.stats.hihat_pedal += 1
+            kind = ControlKind.HIHAT_PEDAL
+        elif number in STRIKE_POSITION_CCS:
+            self.stats.strike_positions += 1
+            kind = ControlKind.STRIKE_POSITION
+        else:
+            self.stats.ignored[f"control_change {number}"] += 1
+            return None
+        return Control(time_s, kind, channel, number, value, self.source)
+
+    def _polytouch(self, time_s: float, msg: ChannelMessage) -> Control | None:
+        note = msg.note
+        if self.note_map.lookup(note) is None:
+            self.stats.ignored["polytouch on an unmapped note"] += 1
+            return None
+        self.stats.chokes += 1
+        return Control(time_s, ControlKind.CHOKE, msg.channel, note, msg.value, self.source)

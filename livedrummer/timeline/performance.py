@@ -1,0 +1,73 @@
+"""A performance: everything one MIDI file (or one recorded session) says, on one timeline.
+
+Produced by :mod:`livedrummer.midi.smf` (or by a journal replay), consumed by limb assignment,
+stroke synthesis and rendering. Onsets and controls are record arrays sorted by time (see
+:mod:`livedrummer.timeline.events`); the grid and tempo map give the musical structure; ``stats``
+keeps the count of everything that was not turned into an event, so reports can say what was
+skipped and why.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat
+from livedrummer.midi.decode import DecodeStats
+from livedrummer.midi.tempo import Grid, TempoMap
+from livedrummer.timeline.events import ControlKind
+
+
+@dataclass(frozen=True)
+class Performance:
+    """Onsets and controls of one piece, with its tempo map, grid and decode statistics."""
+
+    source: str
+    map_name: str
+    onsets: np.ndarray  # ONSET_DTYPE, sorted by time_s
+    controls: np.ndarray  # CONTROL_DTYPE, sorted by time_s
+    tempo: TempoMap
+    grid: Grid
+    duration_s: float
+    stats: DecodeStats
+
+    def counts_by_piece_zone(self) -> dict[str, dict[str, int]]:
+        """Onset counts per instrument, then per zone (hi-hat zones carry the articulation)."""
+        out: dict[str, Counter[str]] = {}
+        on = self.onsets
+        keys = zip(on["instrument"].tolist(), on["zone"].tolist(), on["hihat"].tolist(),
+                   strict=True)  # fmt: skip
+        for (inst, zone, hihat), n in Counter(keys).items():
+            label = ZONES[zone].value
+            if HIHATS[hihat] not in (HiHat.NONE, HiHat.PEDAL):
+                label = f"{HIHATS[hihat].value}-{label}"
+            out.setdefault(INSTRUMENTS[inst], Counter())[label] += n
+        return {k: dict(sorted(v.items())) for k, v in sorted(out.items())}
+
+    def summary(self) -> dict[str, Any]:
+        """The facts ``livedrummer inspect`` reports, as plain JSON-ready data."""
+        ctl = self.controls["kind"]
+        hihat_mask = self.onsets["hihat"] != HIHATS.index(HiHat.NONE)
+        openness = self.onsets["openness"][hihat_mask]
+        return {
+            "file": self.source,
+            "map": self.map_name,
+            "duration_s": round(self.duration_s, 6),
+            "tempos_bpm": [[round(t, 6), round(b, 3)] for t, b in self.tempo.bpm_changes()],
+            "meters": [[round(t, 6), n, d] for t, n, d in self.grid.meters],
+            "beats": int(self.grid.beat_s.size),
+            "bars": int(self.grid.bar[-1]) + 1 if self.grid.bar.size else 0,
+            "onsets": int(self.onsets.size),
+            "by_piece": self.counts_by_piece_zone(),
+            "by_note": {str(k): v for k, v in sorted(self.stats.note_ons.items())},
+            "unknown_notes": {str(k): v for k, v in sorted(self.stats.unknown_notes.items())},
+            "duplicates_removed": self.stats.duplicates_removed,
+            "hihat_pedal_events": int(np.count_nonzero(ctl == ControlKind.HIHAT_PEDAL)),
+            "choke_events": int(np.count_nonzero(ctl == ControlKind.CHOKE)),
+            "strike_position_events": int(np.count_nonzero(ctl == ControlKind.STRIKE_POSITION)),
+            "hihat_openness_mean": round(float(openness.mean()), 4) if openness.size else None,
+            "ignored_messages": dict(sorted(self.stats.ignored.items())),
+        }

@@ -1,0 +1,311 @@
+"""End-to-end latency of the live pipeline: JACK note-on → bus → pose → rendered frame.
+
+Starts a ``jackd -d dummy -S`` server (Debian jackd2) with a virtual rtmidi output port as
+the kit, then for each rate (default 1, 100 and 1,000 notes/s) a fresh pipeline of three
+processes: ``livedrummer input`` on that port, ``livedrummer synth`` and ``livedrummer
+display --live --headless`` (frames rendered off screen, not written, logged in
+``frames.jsonl``). Notes alternate snare and hi-hat, so each should get a hand and a contact
+sample. Measured per note, on the shared clock, from the moment the note-on is sent:
+
+* JACK loopback: an rtmidi input port on the same server, connected to the kit (reference);
+* onset on the bus: a subscriber to the input daemon receives the ONSET;
+* pose available: a subscriber to the synth receives the POSE message holding the note's
+  contact sample (show time = onset stamp + D);
+* frame rendered: the display has finished the first frame that drew that sample or a later
+  one (``frame - onset``: the same from the onset's stamp);
+* pose - onset: pose available minus the onset's own stamp (with provisional poses the
+  first, possibly provisional, contact sample). ``late`` counts notes whose contact sample
+  arrived after onset + D, when it should already be on screen;
+* pose - bus: pose available minus onset on the bus, both seen by the same subscriber: the
+  synth's own share (one hop in, its work, one hop out);
+* in the input daemon: its ONSET message's send time minus the onset's stamp (the daemon's
+  own share of "onset on the bus"; the rest is ZeroMQ and the subscriber waking up).
+
+Prints p50/p99 per stage and rate and the counts lost at each stage (sent vs on the bus, on
+the bus vs contact samples; a note the sticking leaves out, e.g. a third hand note of a
+chord, has no contact sample). Figures from one run; no assertions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import tempfile
+import threading
+from contextlib import ExitStack
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import zmq
+
+from livedrummer import protocol as p
+from livedrummer.body.pose import pose_dtype
+from livedrummer.kit.loader import load_kit
+from livedrummer.timeline.clock import MonotonicClock
+
+from ..program import program_argv
+from ._jack import dummy_jack, jack_env
+from ._paths import WORKDIR
+
+REPO = WORKDIR  # child processes start in the checkout (or the user's folder)
+NOTES = (38, 42)  # snare head, closed hi-hat (roland-td)
+
+
+def _spawn(args: list[str], home: str, err: Path) -> subprocess.Popen[str]:
+    env = {**os.environ, "LIVEDRUMMER_HOME": home}
+    env.pop("DISPLAY", None)
+    return subprocess.Popen([*program_argv(), *args], text=True, env=env,
+                            stdout=subprocess.PIPE, stderr=err.open("w"), cwd=REPO)  # fmt: skip
+
+
+def _line(proc: subprocess.Popen[str]) -> dict[str, Any]:
+    assert proc.stdout is not None
+    out: dict[str, Any] = json.loads(proc.stdout.readline())
+    return out
+
+
+class Jack:
+    def __init__(self) -> None:
+        import rtmidi
+
+        self._stack = ExitStack()
+        name = self._stack.enter_context(dummy_jack("ldlat", period=64))
+        os.environ.update(jack_env(name))  # the pipeline's processes inherit it
+        self.out = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
+        self.out.open_virtual_port("pads")
+        self.loop = rtmidi.MidiIn(rtmidi.API_UNIX_JACK, "loopback")
+        self.loop.open_virtual_port("in")
+        self.loop_times: list[float] = []
+        clock = MonotonicClock()
+        self.loop.set_callback(lambda _msg, _data: self.loop_times.append(clock.now()))
+        subprocess.run(["jack_connect", "kit:pads", "loopback:in"], check=True)
+
+    def close(self) -> None:
+        self.loop.close_port()
+        self.out.close_port()
+        self._stack.close()
+
+
+def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], delay_ms: float,
+             lookahead_ms: float, tmp: Path, synth_args: list[str],
+             input_args: list[str], display_args: list[str]) -> dict[str, Any]:  # fmt: skip
+    """One pipeline fed ``schedule``: (seconds from the start, note, velocity) per note-on."""
+    clock = MonotonicClock()
+    home = str(tmp / "home")
+    fmt = p.PoseFormat.from_dtype(pose_dtype(len(load_kit("rock5").pieces)))
+    procs = []
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    frames_dir = tmp / f"frames-{label}"
+    try:
+        inp = _spawn(["input", "--midi", "kit:pads", "--api", "jack", "--map", "roland-td",
+                      "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
+                      "--no-journal", *input_args], home, tmp / "input.err")  # fmt: skip
+        procs.append(inp)
+        in_ep = _line(inp)["pub"]
+        syn = _spawn(["synth", "--sub", in_ep, "--pub", "tcp://127.0.0.1:*", "--control",
+                      "tcp://127.0.0.1:*", "--delay-ms", str(delay_ms), "--lookahead-ms",
+                      str(lookahead_ms), *synth_args], home, tmp / "synth.err")  # fmt: skip
+        procs.append(syn)
+        syn_ep = _line(syn)["pub"]
+        disp = _spawn(["display", "--live", "--headless", "--sub", syn_ep, "--size", "320x180",
+                       "--fps", "60", "--frames-dir", str(frames_dir), "--no-png",
+                       *display_args], home, tmp / "display.err")  # fmt: skip
+        procs.append(disp)
+        _line(disp)
+        ev = ctx.socket(zmq.SUB)
+        ev.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
+        ev.connect(in_ep)
+        poses = ctx.socket(zmq.SUB)
+        poses.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.POSE))
+        poses.setsockopt(zmq.RCVHWM, 0)
+        poses.connect(syn_ep)
+        onsets: list[tuple[float, np.ndarray]] = []
+        sent_by_daemon: list[float] = []  # header send time of each onset's message
+        pose_in: list[tuple[float, np.ndarray]] = []
+
+        def pump(seconds: float) -> None:
+            end = clock.now() + seconds
+            while True:
+                left = end - clock.now()
+                if left <= 0:
+                    return
+                for sock in zmq.select([ev, poses], [], [], min(left, 0.005))[0]:
+                    msg = p.decode(sock.recv_multipart(), fmt)
+                    if msg.kind is p.Kind.ONSET and isinstance(msg.body, np.ndarray):
+                        onsets.append((clock.now(), msg.body.copy()))
+                        sent_by_daemon.extend([msg.send_time_s] * msg.body.size)
+                    elif isinstance(msg.body, p.Pose):
+                        show = msg.body.time_s + msg.body.rows["time_s"].astype(np.float64)
+                        pose_in.append((clock.now(), show))
+
+        while not onsets:  # JACK and the subscriptions settle: probe until a note lands
+            jack.out.send_message([0x99, 36, 1])
+            pump(0.2)
+        pump(1.0)
+        onsets.clear()
+        sent_by_daemon.clear()
+        pose_in.clear()
+        jack.loop_times.clear()
+        sent: list[float] = []
+        stop = threading.Event()
+
+        def play() -> None:
+            start = clock.now() + 0.05
+            for at, note, velocity in schedule:
+                clock.wait_until(start + at, stop)
+                sent.append(clock.now())
+                jack.out.send_message([0x99, note, velocity])
+
+        player = threading.Thread(target=play)
+        player.start()
+        pump(schedule[-1][0] + 0.15)
+        player.join()
+        pump(2.0)
+    finally:
+        for proc in reversed(procs):
+            proc.send_signal(signal.SIGTERM)
+        for name, proc in zip(("input", "synth", "display"), procs, strict=False):
+            try:
+                proc.wait(15)
+            except subprocess.TimeoutExpired:
+                print(f"  ({name} did not stop on SIGTERM within 15 s: killed)")
+                proc.kill()
+                proc.wait()
+        ctx.destroy(0)
+    got_t = np.array([t for t, rows in onsets for _ in range(rows.size)])
+    stamps = np.concatenate([rows["time_s"] for _, rows in onsets]).astype(np.float64) if onsets \
+        else np.zeros(0)  # fmt: skip
+    n = min(len(sent), got_t.size)
+    sent_a = np.array(sent[:n])
+    loop = np.array(jack.loop_times[:n]) - sent_a[: len(jack.loop_times[:n])]
+    bus = got_t[:n] - sent_a
+    # pose: the first POSE message holding the contact sample at stamp + D
+    d = delay_ms / 1000.0
+    pose_lat, missing_pose = [], 0
+    shows = [(t, s) for t, s in pose_in]
+    contact_at = np.full(n, np.nan)
+    for i in range(n):
+        target = stamps[i] + d
+        for t, s in shows:
+            if (
+                s.size
+                and s[0] - 1e-6 <= target <= s[-1] + 1e-6
+                and np.min(np.abs(s - target)) < 1e-6
+            ):
+                contact_at[i] = t
+                break
+        if np.isnan(contact_at[i]):
+            missing_pose += 1
+    pose_lat = (contact_at - sent_a)[~np.isnan(contact_at)]
+    after_onset = (contact_at - stamps[:n])[~np.isnan(contact_at)]
+    after_bus = (contact_at - got_t[:n])[~np.isnan(contact_at)]
+    late_mask = contact_at - stamps[:n] > d
+    late = int(np.sum(late_mask))
+    # Where the late ones are: how far past D, and in which quarter of the run (queueing
+    # shows as lateness growing towards the end of a burst; a stray slow answer does not).
+    over = (contact_at - stamps[:n] - d)[late_mask] * 1000.0
+    quarter = np.minimum((4 * np.arange(n) // max(n, 1)), 3)[late_mask]
+    late_where = (
+        f"late by {np.percentile(over, 50):.1f} ms p50, {over.max():.1f} max; per quarter of "
+        f"the run {np.bincount(quarter, minlength=4).tolist()}"
+        if late
+        else "none late"
+    )
+    frames = [json.loads(x) for x in (frames_dir / "frames.jsonl").read_text().splitlines()]
+    drawn = [(f["pose_s"], f["done_s"]) for f in frames if f["pose_s"] is not None]
+    frame_lat, frame_onset = [], []
+    for i in range(n):
+        target = stamps[i] + d
+        done = next((ds for ps, ds in drawn if ps >= target - 1e-6), None)
+        if done is not None:
+            frame_lat.append(done - sent_a[i])
+            frame_onset.append(done - stamps[i])
+    return {
+        "rate": label, "sent": len(sent), "on_bus": int(got_t.size), "loopback": loop,
+        "bus": bus, "pose": np.asarray(pose_lat), "frame": np.asarray(frame_lat),
+        "frame_onset": np.asarray(frame_onset),
+        "after_onset": after_onset, "after_bus": after_bus, "late": late,
+        "in_daemon": np.array(sent_by_daemon[:n]) - stamps[:n],
+        "no_contact": missing_pose, "late_where": late_where,
+        "synth": (tmp / "synth.err").read_text().strip()[-260:],
+    }  # fmt: skip
+
+
+def groove_schedule(seconds: float) -> list[tuple[float, int, int]]:
+    """The demo groove's note-ons (GMD, Roland TD notes) in its first ``seconds``."""
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.midi.smf import read_midi_file
+
+    from ..cli.common import demo_groove
+
+    on = read_midi_file(demo_groove(), load_note_map("roland-td")).onsets
+    on = on[on["time_s"] < seconds]
+    t0 = float(on["time_s"][0])
+    return [(float(r["time_s"]) - t0, int(r["note"]), max(1, int(r["velocity"]))) for r in on]
+
+
+def _pct(a: np.ndarray) -> str:
+    if a.size == 0:
+        return "      -       -"
+    return f"{np.percentile(a, 50) * 1000:7.2f} {np.percentile(a, 99) * 1000:7.2f}"
+
+
+def main(argv: list[str]) -> int:
+    parser = argparse.ArgumentParser(prog="livedrummer bench latency", description=__doc__)
+    parser.add_argument("--rates", type=float, nargs="+", default=[1.0, 100.0, 1000.0])
+    parser.add_argument("--seconds", type=float, default=2.0, help="per rate (min 5 notes)")
+    parser.add_argument("--groove", type=float, default=0.0, metavar="S",
+                        help="also play the first S s of the demo groove as performed")  # fmt: skip
+    parser.add_argument("--delay-ms", type=float, nargs="+", default=[30.0], metavar="D",
+                        help="visual delay(s), measured in turn (default 30)")  # fmt: skip
+    parser.add_argument("--lookahead-ms", type=float, default=None, metavar="L",
+                        help="the sticking's lookahead (default: min(30, D))")  # fmt: skip
+    parser.add_argument("--realtime", type=int, default=0, metavar="PRIO",
+                        help="input daemon at SCHED_FIFO PRIO (if permitted)")  # fmt: skip
+    parser.add_argument("--no-render", action="store_true",
+                        help="the display logs frames without drawing them (the CPU a GPU "
+                        "would spare: llvmpipe draws on the pipeline's cores)")  # fmt: skip
+    parser.add_argument("--no-provisional", action="store_true",
+                        help="the synth publishes a hit only once its hand is decided")  # fmt: skip
+    args = parser.parse_args(argv)
+    synth_args = ["--no-provisional"] if args.no_provisional else []
+    input_args = ["--realtime", str(args.realtime)] if args.realtime else []
+    jack = Jack()
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            runs = [(f"{rate:g}", [(i / rate, NOTES[i % 2], 64 + i % 60)
+                                   for i in range(max(5, int(rate * args.seconds)))])
+                    for rate in args.rates]  # fmt: skip
+            if args.groove > 0:
+                runs.append(("groove", groove_schedule(args.groove)))
+            for delay_ms, (label, schedule) in ((d, run) for d in args.delay_ms for run in runs):
+                lookahead_ms = args.lookahead_ms or min(30.0, delay_ms)
+                if label == runs[0][0]:
+                    print(f"D = {delay_ms:g} ms, L = {lookahead_ms:g} ms; ms from note-on "
+                          f"sent, p50 p99; frame rendered within D + one frame at p99: "
+                          f"<= {delay_ms + 1000 / 60:.1f} ms")  # fmt: skip
+                    print(f"{'notes/s':>8} {'sent':>5} {'bus':>5} {'no-pose':>7} {'late':>5} | "
+                          f"{'JACK loop':>15} | {'onset on bus':>15} | {'pose at display':>15} | "
+                          f"{'frame rendered':>15} | {'pose - onset':>15} | "
+                          f"{'pose - bus':>15}")  # fmt: skip
+                r = run_rate(jack, label, schedule, delay_ms, lookahead_ms,
+                             Path(tmp), synth_args, input_args,
+                             ["--no-render"] if args.no_render else [])  # fmt: skip
+                print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
+                      f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
+                      f"{_pct(r['pose'])} | {_pct(r['frame'])} | "
+                      f"{_pct(r['after_onset'])} | {_pct(r['after_bus'])}", flush=True)  # fmt: skip
+                ab = r["after_bus"]
+                fast = float(np.mean(ab <= 0.001)) if ab.size else 0.0
+                print(f"         pose within 1 ms of the onset on the bus: {fast:.0%} of "
+                      f"contacts; frame - onset {_pct(r['frame_onset'])}; in the input daemon "
+                      f"(stamp -> sent) {_pct(r['in_daemon'])}; {r['late_where']}; "
+                      f"{r['synth']}",
+                      flush=True)  # fmt: skip
+    finally:
+        jack.close()
+    return 0

@@ -1,0 +1,166 @@
+"""``livedrummer check FILE.mid...``: is the drummer's motion physically true?
+
+Animates each file on the kit and measures contact error at every onset, the deepest stick-tip
+penetration and joint-limit violations (see :mod:`livedrummer.body.check`). Several files or
+folders are checked one by one and summarised together (max over files; p99 and mean over all
+onsets), with the number of strokes too fast for one hand or made with the arms crossed
+(:mod:`livedrummer.sticking.metrics`). Limbs come from
+:func:`livedrummer.sticking.stick_performance` (``--sticking``, and ``--score`` for one file),
+as for ``livedrummer sticking``.
+
+``--json`` prints the summary and, per file, every note as the animation played it: time,
+note, piece, limb, whether it is too fast for one hand or made with the arms crossed (and how,
+in ``hard``), and its contact error, so a program can hold the animation against the sticking
+sheet note by note. That list grows with the notes (about 200 bytes each); ``--summary`` leaves
+it out, e.g. for the whole Groove MIDI Dataset.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from livedrummer.errors import LivedrummerError
+
+from .common import (
+    Subparsers,
+    add_command,
+    add_kit_option,
+    add_map_option,
+    add_motion_options,
+    sticking_of,
+)
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from livedrummer.kit.model import Kit
+    from livedrummer.sticking.result import Sticking
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "check", run)
+    p.add_argument("files", nargs="+", help="Standard MIDI File(s) or folders of them")
+    add_kit_option(p)
+    add_map_option(p)
+    add_motion_options(p)
+    p.add_argument("--fps", type=float, default=200.0, help="frames per second checked")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--summary", action="store_true", help="--json: without the notes of each file")
+
+
+def midi_files(specs: list[str]) -> list[Path]:
+    out: list[Path] = []
+    for spec in specs:
+        path = Path(spec)
+        if path.is_dir():
+            out.extend(sorted(path.rglob("*.mid")))
+        else:
+            out.append(path)
+    if not out:
+        raise LivedrummerError(f"no .mid files in {', '.join(specs)}")
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from livedrummer.body.check import check
+    from livedrummer.body.expression import load_expression
+    from livedrummer.body.perform import perform
+    from livedrummer.body.rig import build_rig
+    from livedrummer.body.strokes import StrokeParams
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.midi.smf import read_midi_file
+    from livedrummer.sticking.metrics import crossings, too_fast
+
+    kit = load_kit(args.kit)
+    rig = build_rig(kit)
+    note_map = load_note_map(args.map)
+    expression = load_expression(args.preset) if args.preset else None
+    strokes = StrokeParams(model=args.strokes)
+    files = midi_files(args.files)
+    if args.score is not None and len(files) != 1:
+        raise LivedrummerError(f"--score {args.score}: a score is of one MIDI file, "
+                               f"not of {len(files)}")  # fmt: skip
+    errors: list[np.ndarray] = []
+    worst: dict[str, Any] = {"penetration_mm": 0.0, "file": None, "at_s": 0.0}
+    totals = {"notes": 0, "not_played": 0, "joint_limit_violations": 0, "frames": 0}
+    by_limit: dict[str, int] = {}
+    worst_contact: tuple[float, str] = (0.0, "")
+    per_file: list[dict[str, Any]] = []
+    hard = {"too_fast": 0, "crossed": 0}
+    for path in files:
+        performance = read_midi_file(path, note_map)
+        done = perform(performance, rig, note_map, expression, strokes,
+                       sticking=sticking_of(args, performance, kit))  # fmt: skip
+        r = check(done.animation, done.sticking, args.fps)
+        errors.append(r.contact_error_m)
+        if args.json and not args.summary:
+            notes = notes_json(done.sticking, kit, r.contact_error_m)
+            per_file.append({"file": str(path), "sticking": done.sticking.strategy, "notes": notes})
+        for key in totals:
+            totals[key] += getattr(r, key)
+        hard["too_fast"] += int(too_fast(done.sticking, kit).sum())
+        hard["crossed"] += int(crossings(done.sticking, kit).sum())
+        for k, v in r.violations_by_limit.items():
+            by_limit[k] = by_limit.get(k, 0) + v
+        if r.penetration_m * 1000 > worst["penetration_mm"]:
+            worst = {"penetration_mm": r.penetration_m * 1000, "file": str(path),
+                     "at_s": r.penetration_at_s}  # fmt: skip
+        if r.contact_error_m.size and r.contact_error_m.max() > worst_contact[0]:
+            worst_contact = (float(r.contact_error_m.max()), str(path))
+    e = np.concatenate(errors) * 1000.0 if errors else np.zeros(0)
+    summary: dict[str, Any] = {
+        "files": len(files),
+        "kit": kit.name,
+        "map": note_map.name,
+        **totals,
+        **hard,
+        "contact_error_mm": {
+            "max": round(float(e.max()), 6) if e.size else 0.0,
+            "p99": round(float(np.percentile(e, 99)), 6) if e.size else 0.0,
+            "mean": round(float(e.mean()), 6) if e.size else 0.0,
+            "within_5mm": round(float(np.mean(e <= 5.0)), 6) if e.size else 1.0,
+            "worst_file": worst_contact[1] or None,
+        },
+        "penetration_mm": round(worst["penetration_mm"], 4),
+        "penetration_file": worst["file"],
+        "penetration_at_s": round(worst["at_s"], 4),
+        "violations_by_limit": by_limit,
+    }
+    if args.json:
+        if per_file:
+            summary["per_file"] = per_file
+        print(json.dumps(summary, indent=1))
+    else:
+        c = summary["contact_error_mm"]
+        print(f"{len(files)} file(s), kit {kit.name}, map {note_map.name}")
+        print(f"  notes checked      {summary['notes']}  (not played: {summary['not_played']})")
+        print(f"  too hard to play   {hard['too_fast']} too fast for one hand, "
+              f"{hard['crossed']} with the arms crossed")  # fmt: skip
+        print(f"  contact error mm   max {c['max']:.4f}  p99 {c['p99']:.4f}  mean {c['mean']:.4f}"
+              f"  within 5 mm {c['within_5mm'] * 100:.3f} %")  # fmt: skip
+        print(
+            f"  penetration mm     {summary['penetration_mm']:.3f}"
+            + (f"  ({worst['file']} at {worst['at_s']:.3f} s)" if worst["file"] else "")
+        )
+        print(f"  joint-limit hits   {summary['joint_limit_violations']} of "
+              f"{summary['frames']} frames  {by_limit}")  # fmt: skip
+    return 0
+
+
+def notes_json(sticking: Sticking, kit: Kit, contact_error_m: np.ndarray) -> list[dict[str, Any]]:
+    """Every note as animated: what ``sticking --json`` says of it, and its contact error
+    (``None`` for a note no limb plays)."""
+    from .sticking import as_json
+
+    rows = as_json(sticking, kit)
+    played = (sticking.limb >= 0) & (sticking.piece >= 0)
+    error_mm = iter((contact_error_m * 1000.0).tolist())
+    for row, is_played in zip(rows, played.tolist(), strict=True):
+        row["contact_error_mm"] = round(next(error_mm), 4) if is_played else None
+    return rows

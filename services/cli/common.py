@@ -1,0 +1,182 @@
+"""Small helpers shared by subcommands: option definitions, help, and the bundled demo groove.
+
+One vocabulary: an option that means the same thing in several subcommands is defined once here
+(``--kit``, ``--map``, ``--sticking``, ``--score``, ...) or at least spelled the same; a former
+spelling stays accepted, hidden from ``--help``, through :func:`add_renamed`, with a warning.
+Every option's help states its default: :class:`Parser` appends ``(default X)`` to any help that
+does not say it already, so the stated default cannot drift from the real one; an option whose
+default is ``None`` says in its own words what happens without it.
+
+This module is imported to build the parser, so it imports nothing heavy (no numpy).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from livedrummer.resources import data_dir
+
+if TYPE_CHECKING:
+    from livedrummer.kit.model import Kit
+    from livedrummer.sticking.result import Sticking
+    from livedrummer.timeline.performance import Performance
+
+Subparsers = Any  # argparse's _SubParsersAction is private; its type is not worth importing
+Command = Callable[[argparse.Namespace], int]
+
+DEMO_GROOVE = "grooves/gmd-drummer1-funk-80.mid"
+DEMO_MAP = "roland-td"
+
+
+def has_screen() -> bool:
+    """A graphical session to open a window on (X11 or Wayland)."""
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def demo_groove() -> Path:
+    """The bundled demo groove (Groove MIDI Dataset, CC BY 4.0; see kits/grooves)."""
+    return data_dir("kits") / DEMO_GROOVE
+
+
+def help_with_default(action: argparse.Action) -> str:
+    """An option's help with ``(default X)`` appended where it does not state its default.
+
+    Flags (their default is off), positional arguments and options whose default is ``None``
+    are left as written.
+    """
+    text = action.help or ""
+    default = action.default
+    if (
+        "default" in text
+        or default is None
+        or default is argparse.SUPPRESS
+        or action.nargs == 0
+        or not action.option_strings
+    ):
+        return text
+    shown = f"{default:g}" if isinstance(default, float) else str(default)
+    return f"{text} (default {shown})".replace("%", "%%")
+
+
+class _Formatter(argparse.HelpFormatter):
+    def _get_help_string(self, action: argparse.Action) -> str:
+        return help_with_default(action)
+
+
+class Parser(argparse.ArgumentParser):
+    """The CLI's argument parser: help states every default (see the module docstring)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
+
+class _Renamed(argparse.Action):
+    """A former spelling of an option: warns, then acts as the option's current spelling."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, *, new: argparse.Action,
+                 **kwargs: Any) -> None:  # fmt: skip
+        super().__init__(option_strings, dest, **kwargs)
+        self.new = new
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        current = self.new.option_strings[-1]
+        print(f"livedrummer: warning: {option_string} is now spelled {current}", file=sys.stderr)
+        self.new(parser, namespace, values, current)
+
+
+def add_renamed(parser: Any, old: str, new: argparse.Action) -> None:
+    """Accept ``old``, an option's former spelling, as ``new`` (hidden from help; warns).
+
+    ``parser``: the parser or argument group ``new`` was added to.
+    """
+    parser.add_argument(
+        old, action=_Renamed, new=new, nargs=new.nargs, type=new.type, choices=new.choices,
+        metavar=new.metavar, default=argparse.SUPPRESS, help=argparse.SUPPRESS,
+    )  # fmt: skip
+
+
+def add_command(
+    sub: Subparsers, name: str, func: Command, help_: str | None = None
+) -> argparse.ArgumentParser:
+    """The parser of subcommand ``name``; its one-line help is the one ``COMMANDS`` gives.
+
+    (``livedrummer --help`` lists the subcommands from that table without importing them;
+    a ``help_`` given here must say the same.)
+    """
+    from . import COMMANDS
+
+    summary = COMMANDS[name]
+    if help_ is not None and help_ != summary:
+        raise ValueError(f"subcommand {name}: help {help_!r} differs from COMMANDS {summary!r}")
+    parser: argparse.ArgumentParser = sub.add_parser(name, help=summary, description=summary)
+    parser.set_defaults(func=func)
+    return parser
+
+
+def add_map_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--map", default="general-midi", help="note map name or .toml path (default general-midi)"
+    )
+
+
+def add_api_option(parser: argparse.ArgumentParser) -> None:
+    """``--api``: which MIDI system to find ``--midi`` ports on (services.input.midiport)."""
+    parser.add_argument("--api", choices=("auto", "jack", "alsa"), default="auto",
+                        help="MIDI system of --midi: jack, alsa, or auto (default: the one the "
+                        "port is on, ALSA first when both have it)")  # fmt: skip
+
+
+def add_kit_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--kit", default="rock5", help="kit name or .toml path (default rock5)")
+
+
+#: The limb-assignment strategies, as :data:`livedrummer.sticking.STRATEGIES` names them (kept
+#: here so that building the parser imports no numpy; a test holds the two equal).
+STICKING_STRATEGIES = ("optimal", "kragtwijk-basic", "kragtwijk-pair", "smed")
+
+
+def add_sticking_options(p: argparse.ArgumentParser) -> None:
+    """``--sticking`` and ``--score``: who plays each note, the same in every command."""
+    add_renamed(p, "--strategy", p.add_argument(  # checked by the entry point: one line
+        "--sticking", default=STICKING_STRATEGIES[0], metavar="STRATEGY",
+        help=f"limb assignment: {', '.join(STICKING_STRATEGIES)}",
+    ))  # fmt: skip
+    p.add_argument(
+        "--score", type=Path, metavar="FILE",
+        help="edited text sticking score (sticking --format text) whose limbs are played "
+        "(default: none, the strategy decides every note)",
+    )  # fmt: skip
+
+
+def add_motion_options(p: argparse.ArgumentParser) -> None:
+    """How the body is animated (check, export, render, display): sticking, strokes, preset."""
+    add_sticking_options(p)
+    p.add_argument(
+        "--preset", default=None, help="expression preset name or .toml path (default: neutral)"
+    )
+    p.add_argument(
+        "--strokes",
+        default="livedrummer",
+        choices=("livedrummer", "paper", "smed"),
+        help="stroke overlap rules (default livedrummer)",
+    )
+
+
+def sticking_of(args: argparse.Namespace, performance: Performance, kit: Kit) -> Sticking:
+    """The sticking that ``--sticking`` and ``--score`` ask for, from the one entry point
+    :func:`livedrummer.sticking.stick_performance` (what ``livedrummer sticking`` prints)."""
+    from livedrummer.sticking.strategy import stick_performance
+
+    return stick_performance(performance, kit, args.sticking, score=args.score)

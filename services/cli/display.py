@@ -1,0 +1,185 @@
+"""``livedrummer display FILE.mid``: play a MIDI file in a window (or full screen on a projector).
+
+Keys: space play/pause, left/right step a frame, shift+left/right seek 5 s, home/end, r
+reverse, +/- speed, 0 normal speed, m set a marker, [ ] previous/next marker, 1..8 cameras
+(stage, front, drummer, overhead, left, right, back, kick), o the scrolling score and g the
+joint-angle graph (``--overlay score,joints`` shows them from the start), q or Esc quit. On a
+machine with no screen use ``livedrummer render``. The limbs are those of
+:func:`livedrummer.sticking.stick_performance` (``--sticking``, ``--score``), as ``livedrummer
+sticking`` prints them.
+
+Options share their names with the other commands: ``--seconds`` (as in ``up`` and ``demo``)
+stops the show (the file window or ``--live``), ``--frames-dir`` (as in ``render`` and ``up``)
+is where ``--live --headless`` writes its frames, ``--max-frames`` stops it after so many.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from livedrummer.render.camera import CAMERA_NAMES
+
+from .common import (
+    DEMO_MAP,
+    Subparsers,
+    add_command,
+    add_kit_option,
+    add_motion_options,
+    add_renamed,
+    demo_groove,
+)
+from .keys import add_curve_options, security_from_args
+from .render import body_scene, parse_size
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "display", run)
+    p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
+    add_kit_option(p)
+    p.add_argument("--map", help="note map (default general-midi; roland-td for the demo)")
+    p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="first viewpoint")
+    p.add_argument("--size", default="1280x720", help="window size WIDTHxHEIGHT")
+    p.add_argument("--fullscreen", action="store_true", help="full screen (projectors)")
+    p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
+    p.add_argument("--aa", type=int, default=4, metavar="N", help="multisample N (default 4)")
+    add_renamed(p, "--quit-after", p.add_argument(
+        "--seconds", type=float, metavar="S",
+        help="stop after S seconds; --live: S seconds after the first frame with the drummer "
+        "(default: when closed or stopped)"))  # fmt: skip
+    p.add_argument("--overlay", default="", metavar="LIST",
+                   help="strips shown first: score, joints or both; keys o, g "
+                   "(default: none)")  # fmt: skip
+    add_motion_options(p)
+    live = p.add_argument_group("live (poses from a running synth)")
+    live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
+    live.add_argument("--sub", default="tcp://127.0.0.1:5720",
+                      help="the synth's pose endpoint (default tcp://127.0.0.1:5720)")  # fmt: skip
+    live.add_argument("--headless", action="store_true", help="no window: render off screen")
+    add_renamed(live, "--frames", live.add_argument(
+        "--max-frames", type=int, metavar="N",
+        help="stop after N frames (default: when stopped)"))  # fmt: skip
+    add_renamed(live, "--out", live.add_argument(
+        "--frames-dir", type=Path, metavar="DIR",
+        help="write frame PNGs and frames.jsonl into DIR (default: none)"))  # fmt: skip
+    live.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
+    live.add_argument("--clock", choices=("auto", "audio", "monotonic"), default="auto",
+                      help="frame clock: the audio output's (auto: when not headless)")  # fmt: skip
+    live.add_argument("--no-png", action="store_true",
+                      help="--frames-dir: frames.jsonl only, no PNGs")  # fmt: skip
+    live.add_argument("--video", type=Path, metavar="FILE",
+                      help="with --headless: record the frames on show time as MP4 "
+                      "(default: none)")  # fmt: skip
+    live.add_argument("--no-render", action="store_true",
+                      help="only log frames (benchmarks without a GPU context)")  # fmt: skip
+    live.add_argument("--no-render-ahead", action="store_true",
+                      help="draw each frame for when it is begun, not when it is done")  # fmt: skip
+    add_curve_options(p, server=False, client=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.live:
+        return run_live(args)
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.midi.smf import read_midi_file
+    from livedrummer.render.overlay import parse_overlays
+
+    from ..display.window import WindowOptions, show
+
+    source = Path(args.file) if args.file else demo_groove()
+    map_name = args.map or ("general-midi" if args.file else DEMO_MAP)
+    note_map = load_note_map(map_name)
+    performance = read_midi_file(source, note_map)
+    options = WindowOptions(
+        size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
+        camera=args.camera, samples=args.aa, quit_after_s=args.seconds,
+        overlays=parse_overlays(args.overlay),
+    )  # fmt: skip
+    kit = load_kit(args.kit)
+    show(performance, kit, options, body=body_scene(args, performance, kit, note_map))
+    return 0
+
+
+def run_live(args: argparse.Namespace) -> int:
+    """``--live``: subscribe to poses and render them on the frame clock until stopped."""
+    import json
+    import logging
+    import signal
+    import sys
+    import threading
+    from types import FrameType
+
+    import zmq
+
+    from livedrummer.errors import ConfigError
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.live.calibration import Calibration
+
+    from ..display.live import (
+        AudioFrameClock,
+        FrameClock,
+        LiveConfig,
+        LiveDisplay,
+        MonotonicFrameClock,
+    )
+    from ..notify import ready
+
+    window = None
+    if not args.headless:
+        from ..display.window import WindowOptions
+
+        if args.video is not None or args.frames_dir is not None:
+            raise ConfigError("display --live: --video and --frames-dir record off screen: "
+                              "add --headless")  # fmt: skip
+        window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
+                               monitor=args.monitor, camera=args.camera, samples=args.aa,
+                               vsync=False)  # fmt: skip
+    if args.max_frames is not None and args.max_frames < 1:
+        raise ConfigError(f"--max-frames: expected >= 1 (got {args.max_frames})")
+    if not 0 < args.fps <= 1000:
+        raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps})")
+    calibration = Calibration.load()
+    clock: FrameClock
+    if args.clock == "audio":
+        clock = AudioFrameClock(calibration.audio_ms / 1000.0)
+    elif args.clock == "auto" and window is not None:
+        from ..display.context import DisplayError
+
+        try:  # a stage window follows the sound the audience hears, where there is an output
+            clock = AudioFrameClock(calibration.audio_ms / 1000.0)
+        except DisplayError as exc:
+            logging.getLogger("livedrummer.display").warning("%s: frames on the monotonic clock",
+                                                             exc)  # fmt: skip
+            clock = MonotonicFrameClock(calibration.audio_ms / 1000.0)
+    else:
+        clock = MonotonicFrameClock(calibration.audio_ms / 1000.0)
+    config = LiveConfig(
+        sub=args.sub, fps=args.fps, frames=args.max_frames, out=args.frames_dir,
+        size=parse_size(args.size), camera=args.camera,
+        display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
+        png=not args.no_png, security=security_from_args(args), window=window,
+        video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
+    )  # fmt: skip
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    display = LiveDisplay(load_kit(args.kit), config, clock, ctx)
+    stop = threading.Event()
+
+    def on_signal(signum: int, _frame: FrameType | None) -> None:
+        stop.set()
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    if args.seconds is not None and not args.seconds > 0:  # counted from the first pose drawn
+        raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
+    try:
+        display.start()
+        print(json.dumps({"service": "display", "sub": args.sub}), flush=True)
+        code = display.run(stop, on_ready=lambda: ready(args.sub))
+    finally:
+        ctx.term()
+    s = display.summary()
+    where = f" into {args.frames_dir}" if args.frames_dir else ""
+    print(f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "
+          f"{s['missing']} pose messages lost", file=sys.stderr)  # fmt: skip
+    return code

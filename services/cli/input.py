@@ -1,0 +1,131 @@
+"""``livedrummer input``: run the input daemon on one source until Ctrl-C / SIGTERM.
+
+Once its sockets are bound it prints one JSON line on stdout (``{"service": "input",
+"pub": ..., "control": ..., "journal": ...}``) with the real endpoints (useful with
+``tcp://127.0.0.1:*``), then serves; a launcher may instead send HELLO to the control
+endpoint and wait for READY.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import sys
+import threading
+from pathlib import Path
+from types import FrameType
+
+from .common import Subparsers, add_api_option, add_command, add_map_option
+from .keys import add_curve_options, security_from_args
+
+
+def register(sub: Subparsers) -> None:
+    from ..input.daemon import DEFAULT_CONTROL, DEFAULT_PUB
+
+    p = add_command(sub, "input", run, "capture a kit, trigger board, file or remote stream")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--midi", metavar="PORT", help="MIDI input port (name or substring)")
+    src.add_argument("--serial", metavar="DEV", help="serial device sending raw MIDI bytes")
+    src.add_argument("--file", metavar="F.mid", type=Path, help="play a MIDI file as if live")
+    src.add_argument("--remote", metavar="ENDPOINT", help="another site's input daemon (pub)")
+    p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
+    add_api_option(p)
+    p.add_argument("--loop", action="store_true", help="--file: start again at the end")
+    p.add_argument("--pub", default=DEFAULT_PUB, help=f"publish endpoint (default {DEFAULT_PUB})")
+    p.add_argument("--control", default=DEFAULT_CONTROL,
+                   help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
+    add_map_option(p)
+    p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
+    p.add_argument("--wait-subscribers", type=int, default=0, metavar="N",
+                   help="open the source after N subscriptions (1 per SUB topic)")  # fmt: skip
+    p.add_argument("--exit-at-end", action="store_true", help="--file: exit when played")
+    p.add_argument("--no-journal", action="store_true", help="do not journal the session")
+    p.add_argument("--realtime", type=int, default=0, metavar="PRIO",
+                   help="SCHED_FIFO priority 1..60 when permitted (default 0: off)")  # fmt: skip
+    p.add_argument(
+        "--sessions-dir", type=Path, help="journal folder (default $LIVEDRUMMER_HOME/sessions)"
+    )
+    p.add_argument("--fsync-interval", type=float, default=1.0, metavar="S",
+                   help="fsync the journal at most every S s (0: every batch)")  # fmt: skip
+    add_curve_options(p, server=True, client=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    import zmq
+
+    from livedrummer.errors import ConfigError
+    from livedrummer.midi.decode import MessageDecoder
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.timeline.clock import MonotonicClock
+
+    from ..input.base import Source
+    from ..input.daemon import DaemonConfig, InputDaemon
+    from ..notify import ready
+
+    if not 0 <= args.performer <= 0xFFFF:
+        raise ConfigError(f"--performer: expected 0..65535 (got {args.performer})")
+    security = security_from_args(args)
+    if args.realtime:
+        from ..realtime import request_realtime
+
+        try:  # before any thread starts, so they inherit it
+            request_realtime(args.realtime, "input")
+        except ValueError as exc:
+            raise ConfigError(f"--realtime: {exc}") from None
+    clock = MonotonicClock()
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    note_map = load_note_map(args.map)
+    source: Source
+    if args.file is not None:
+        from ..input.fileplayer import FileSource
+
+        source = FileSource(args.file, clock, note_map, args.performer, loop=args.loop)
+        source.load()
+    elif args.remote is not None:
+        from ..input.remote import RemoteSource
+
+        source = RemoteSource(args.remote, clock, ctx, security=security)
+    elif args.serial is not None:
+        from ..input.serialport import BAUD_RATES, SerialSource
+
+        if args.baud not in BAUD_RATES:
+            raise ConfigError(f"--baud: expected one of {BAUD_RATES} (got {args.baud})")
+        decoder = MessageDecoder(note_map, args.performer)
+        source = SerialSource(args.serial, clock, decoder, args.baud)
+    else:
+        from ..input.midiport import MidiPortSource
+
+        decoder = MessageDecoder(note_map, args.performer)
+        source = MidiPortSource(args.midi, clock, decoder, api=args.api)
+    config = DaemonConfig(
+        pub=args.pub,
+        control=args.control,
+        performer=args.performer,
+        wait_subscribers=args.wait_subscribers,
+        exit_at_end=args.exit_at_end,
+        journal=not args.no_journal,
+        sessions_dir=args.sessions_dir,
+        fsync_interval_s=args.fsync_interval,
+        meta={"map": note_map.name},
+        security=security,
+    )
+    daemon = InputDaemon(source, config, clock, ctx)
+    stop = threading.Event()
+
+    def on_signal(signum: int, _frame: FrameType | None) -> None:
+        stop.set()
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    try:
+        endpoints = daemon.start()
+        print(json.dumps({"service": "input", **endpoints}), flush=True)
+        ready(endpoints.get("pub", ""))
+        code = daemon.run(stop)
+    finally:
+        ctx.term()
+    summary = daemon.summary()
+    print(f"input: {summary['onsets']} onsets, {summary['controls']} controls, "
+          f"{summary['gaps']} gaps published", file=sys.stderr)  # fmt: skip
+    return code

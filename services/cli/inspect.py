@@ -1,0 +1,51 @@
+"""``livedrummer inspect FILE.mid``: what a MIDI file holds, as a drummer reads it."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
+
+from .common import Subparsers, add_command, add_map_option
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "inspect", run, "summarize a MIDI file: tempo, meter, onsets per piece")
+    p.add_argument("file", help="Standard MIDI File")
+    add_map_option(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def run(args: argparse.Namespace) -> int:
+    summary = read_midi_file(args.file, load_note_map(args.map)).summary()
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print_summary(summary)
+    return 0
+
+
+def print_summary(s: dict[str, Any]) -> None:
+    tempos = ", ".join(f"{bpm:g} bpm at {t:.2f} s" for t, bpm in s["tempos_bpm"])
+    meters = ", ".join(f"{n}/{d} at {t:.2f} s" for t, n, d in s["meters"])
+    print(f"{s['file']}  (map {s['map']})")
+    print(f"  duration  {s['duration_s']:.3f} s, {s['bars']} bars, {s['beats']} beats")
+    print(f"  tempo     {tempos}")
+    print(f"  meter     {meters}")
+    print(f"  onsets    {s['onsets']}  (duplicates removed: {s['duplicates_removed']})")
+    for piece, zones in s["by_piece"].items():
+        detail = ", ".join(f"{zone} {n}" for zone, n in zones.items())
+        print(f"    {piece:<10} {sum(zones.values()):>6}  {detail}")
+    print(
+        f"  controls  hi-hat pedal {s['hihat_pedal_events']}, choke {s['choke_events']}, "
+        f"strike position {s['strike_position_events']}"
+    )
+    unknown = s["unknown_notes"]
+    if unknown:
+        listed = ", ".join(f"note {k} x{v}" for k, v in unknown.items())
+        print(f"  UNKNOWN   {listed} (not in map {s['map']}; choose another --map)")
+    else:
+        print("  unknown   none")

@@ -1,0 +1,38 @@
+"""``livedrummer kits``: every kit and note map on the search path, with any file's error."""
+
+from __future__ import annotations
+
+import argparse
+
+from livedrummer.errors import LivedrummerError
+from livedrummer.kit.catalog import entries
+from livedrummer.kit.loader import load_kit_file
+from livedrummer.midi.notemap import load_note_map_file
+
+from .common import Subparsers, add_command
+
+
+def register(sub: Subparsers) -> None:
+    add_command(sub, "kits", run, "list kits and note maps")
+
+
+def run(args: argparse.Namespace) -> int:
+    print("kits:")
+    for name, entry in sorted(entries("kits").items()):
+        try:
+            kit = load_kit_file(entry.path)
+        except LivedrummerError as exc:
+            print(f"  {name:<16} ERROR {exc}")
+            continue
+        mirror = f"{name}-{'left' if kit.handedness == 'right' else 'right'}"
+        print(f"  {name:<16} {kit.description} [{entry.path}]")
+        print(f"  {mirror:<16} {name} mirrored for a {mirror.rsplit('-', 1)[1]}-handed drummer")
+    print("note maps:")
+    for name, entry in sorted(entries("kits/maps").items()):
+        try:
+            nm = load_note_map_file(entry.path)
+        except LivedrummerError as exc:
+            print(f"  {name:<16} ERROR {exc}")
+            continue
+        print(f"  {name:<16} {nm.description} ({len(nm.notes)} notes) [{entry.path}]")
+    return 0

@@ -1,0 +1,182 @@
+"""``livedrummer render FILE.mid -o out.mp4``: the performance as a video with its drum sounds.
+
+Off-screen (EGL; Mesa llvmpipe where there is no GPU), so it works over SSH and in CI. Without
+FILE it renders the bundled demo groove with the Roland map. The drummer is the body model
+(:mod:`livedrummer.body`) playing the limbs :func:`livedrummer.sticking.stick_performance`
+gives, as ``livedrummer sticking`` prints them; ``--sticking``, ``--score``, ``--strokes`` and
+``--preset`` mean what they mean for ``livedrummer check`` (the x264 speed preset is
+``--x264-preset``). ``--frames-dir DIR`` writes PNG frames instead of the video. The progress
+bar goes to stderr and only when stderr is a terminal; the summary line goes to stdout.
+``--overlay score,joints`` adds SMED's scrolling score and the joint-angle graph as strips at
+the bottom of the frame. ``--soundfont FILE.sf2`` plays the drum track with that General MIDI
+SoundFont's kit (FluidSynth, :mod:`livedrummer.audio.soundfont`) instead of the built-in one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import re
+import sys
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from livedrummer.errors import LivedrummerError
+from livedrummer.render.camera import CAMERA_NAMES
+
+from .common import (
+    DEMO_MAP,
+    Subparsers,
+    add_command,
+    add_kit_option,
+    add_motion_options,
+    add_renamed,
+    demo_groove,
+    sticking_of,
+)
+
+if TYPE_CHECKING:
+    from livedrummer.kit.model import Kit
+    from livedrummer.midi.notemap import NoteMap
+    from livedrummer.render.body_scene import BodyScene
+    from livedrummer.timeline.performance import Performance
+
+
+class RenderOptionError(LivedrummerError):
+    """A malformed --size or --fps."""
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "render", run)
+    p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
+    p.add_argument("-o", "--output", type=Path,
+                   help="video file (default: FILE's name, .mp4)")  # fmt: skip
+    add_renamed(p, "--frames", p.add_argument(
+        "--frames-dir", type=Path, metavar="DIR",
+        help="write PNG frames to DIR instead of a video (default: a video)"))  # fmt: skip
+    p.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT, even")
+    p.add_argument("--fps", type=int, default=30, help="frames per second")
+    p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="viewpoint")
+    add_kit_option(p)
+    p.add_argument("--map", help="note map (default general-midi; roland-td for the demo)")
+    p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
+    p.add_argument("--aa", type=int, default=0, metavar="N", help="multisample N (slow on CPU)")
+    p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
+    p.add_argument("--x264-preset", default="veryfast", help="x264 speed")
+    p.add_argument("--overlay", default="", metavar="LIST",
+                   help="bottom strips: score, joints or score,joints (default: none)")  # fmt: skip
+    p.add_argument("--soundfont", type=Path, metavar="SF2",
+                   help="drum sounds from this General MIDI SoundFont via FluidSynth "
+                   "(default: the built-in kit)")  # fmt: skip
+    add_motion_options(p)
+
+
+def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap
+               ) -> BodyScene:  # fmt: skip
+    """The performance animated on ``kit`` with the motion options of ``args``."""
+    from livedrummer.body.expression import load_expression
+    from livedrummer.body.strokes import StrokeParams
+    from livedrummer.render.body_scene import BodyScene
+
+    expression = load_expression(args.preset) if args.preset else None
+    return BodyScene.perform(performance, kit, note_map, sticking_of(args, performance, kit),
+                             expression, StrokeParams(model=args.strokes))  # fmt: skip
+
+
+def first_seconds(performance: Performance, seconds: float) -> Performance:
+    """The performance cut to its first ``seconds`` (onsets and controls before the cut)."""
+    if seconds >= performance.duration_s:
+        return performance
+    return dataclasses.replace(
+        performance,
+        duration_s=max(seconds, 0.0),
+        onsets=performance.onsets[performance.onsets["time_s"] < seconds],
+        controls=performance.controls[performance.controls["time_s"] < seconds],
+    )
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    m = re.fullmatch(r"(\d+)x(\d+)", text.strip())
+    if not m:
+        raise RenderOptionError(f"--size {text!r}: expected WIDTHxHEIGHT, e.g. 1280x720")
+    w, h = int(m.group(1)), int(m.group(2))
+    if not (16 <= w <= 7680 and 16 <= h <= 4320) or w % 2 or h % 2:
+        raise RenderOptionError(f"--size {text!r}: width and height must be even, 16..7680")
+    return w, h
+
+
+class ProgressBar:
+    """Progress on stderr: one self-rewriting line on a terminal (every ``every_s``), else one
+    plain line every ``every_s`` seconds. Bar, percent, frames, speed and time left."""
+
+    def __init__(self, label: str, enabled: bool, fps: int, every_s: float = 0.2) -> None:
+        self.label, self.enabled, self.fps, self.every_s = label, enabled, fps, every_s
+        self.tty = sys.stderr.isatty()
+        self.start = time.perf_counter()
+        self.last = self.start if not self.tty else 0.0
+
+    def __call__(self, done: int, total: int) -> None:
+        now = time.perf_counter()
+        if not self.enabled or (now - self.last < self.every_s and done < total):
+            return
+        self.last = now
+        elapsed = max(now - self.start, 1e-9)
+        filled = int(30 * done / total)
+        speed = done / self.fps / elapsed
+        eta = (total - done) / max(done / elapsed, 1e-9)
+        line = (
+            f"{self.label} [{'#' * filled}{'.' * (30 - filled)}] {100 * done // total:3d}%"
+            f"  {done}/{total} frames  {speed:4.2f}x real time  {eta:4.0f} s left "
+        )
+        if self.tty:
+            sys.stderr.write("\r" + line + ("\n" if done == total else ""))
+        else:
+            sys.stderr.write(line.rstrip() + "\n")
+        sys.stderr.flush()
+
+
+def run(args: argparse.Namespace) -> int:
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.midi.smf import read_midi_file
+    from livedrummer.render.overlay import OVERLAYS, parse_overlays
+
+    from ..display.export import export
+    from ..display.video import VideoSettings
+
+    size = parse_size(args.size)
+    overlays = parse_overlays(args.overlay)
+    if not 1 <= args.fps <= 240:
+        raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
+    if args.soundfont is not None:
+        from livedrummer.audio.soundfont import check_soundfont
+
+        check_soundfont(args.soundfont)
+    source = Path(args.file) if args.file else demo_groove()
+    map_name = args.map or ("general-midi" if args.file else DEMO_MAP)
+    note_map = load_note_map(map_name)
+    performance = read_midi_file(source, note_map)
+    kit = load_kit(args.kit)
+    body = body_scene(args, performance, kit, note_map)
+    out = args.output
+    if out is None and args.frames_dir is None:
+        out = Path(source.stem + ".mp4")
+    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset)
+    bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
+    report = export(
+        performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
+        camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar, overlays=overlays,
+        soundfont=args.soundfont,
+    )  # fmt: skip
+    where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
+    print(
+        f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s, "
+        f"{size[0]}x{size[1]} @ {args.fps} fps, camera {args.camera}, kit {kit.name}, "
+        f"sticking {args.sticking}"
+        f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"
+        f"{', drum track 48 kHz stereo' if out is not None else ''}"
+        f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}; "
+        f"{report.realtime:.2f}x real time"
+    )
+    return 0

@@ -1,0 +1,104 @@
+"""``livedrummer synth``: the online stroke synthesizer between an input daemon and displays.
+
+Once its sockets are bound it prints one JSON line on stdout (``{"service": "synth", "pub":
+..., "control": ..., "sub": ...}``), tells a launcher or systemd it is ready, and serves
+until Ctrl-C / SIGTERM; at exit it prints a one-line summary on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import sys
+import threading
+from types import FrameType
+
+from .common import Subparsers, add_command, add_kit_option
+from .keys import add_curve_options, security_from_args
+
+
+def register(sub: Subparsers) -> None:
+    from ..synth.service import DEFAULT_CONTROL, DEFAULT_PUB, DEFAULT_SUB
+
+    p = add_command(sub, "synth", run, "turn live onsets into drummer poses (online)")
+    p.add_argument("--sub", default=DEFAULT_SUB, help=f"input daemon's pub (default {DEFAULT_SUB})")
+    p.add_argument("--pub", default=DEFAULT_PUB, help=f"pose endpoint (default {DEFAULT_PUB})")
+    p.add_argument("--control", default=DEFAULT_CONTROL,
+                   help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
+    add_kit_option(p)
+    p.add_argument("--map", default="roland-td",
+                   help="note map, for hi-hat pedal and chokes (default roland-td)")  # fmt: skip
+    p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L",
+                   help="limb decisions wait L ms for later notes (default 30)")  # fmt: skip
+    p.add_argument("--delay-ms", type=float, default=30.0, metavar="D",
+                   help="show the drummer D ms behind the sound, D >= L (default 30)")  # fmt: skip
+    p.add_argument("--rate", type=float, default=240.0, help="pose samples per second")
+    p.add_argument("--tick-hz", type=float, default=120.0, help="pose messages per second")
+    p.add_argument("--no-predict", action="store_true", help="no upswing before expected hits")
+    p.add_argument("--no-provisional", action="store_true",
+                   help="publish a hit only once its hand is decided, L after it")  # fmt: skip
+    p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
+    add_curve_options(p, server=True, client=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+    import zmq
+
+    from livedrummer.body.rig import build_rig
+    from livedrummer.errors import ConfigError
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.live.calibration import Calibration
+    from livedrummer.live.synth import LiveSynth, SynthParams
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.timeline.clock import MonotonicClock
+
+    from ..notify import ready
+    from ..synth.service import SynthConfig, SynthService
+
+    try:
+        params = SynthParams(
+            lookahead_s=args.lookahead_ms / 1000.0,
+            delay_s=args.delay_ms / 1000.0,
+            rate_hz=args.rate,
+            predict=not args.no_predict,
+            provisional=not args.no_provisional,
+        )
+    except ValueError as exc:
+        raise ConfigError(f"--lookahead-ms/--delay-ms/--rate: {exc}") from None
+    if not 0 < args.tick_hz <= 1000:
+        raise ConfigError(f"--tick-hz: expected 0 < hz <= 1000 (got {args.tick_hz})")
+    note_map = load_note_map(args.map)
+    cc_open = np.array([note_map.openness(v) for v in range(128)])
+    rig = build_rig(load_kit(args.kit))
+    synth = LiveSynth(rig, params, cc_open=cc_open, note_map=note_map)
+    calibration = Calibration.load()
+    config = SynthConfig(
+        sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
+        tick_hz=args.tick_hz, input_offset_s=calibration.input_ms / 1000.0,
+        security=security_from_args(args),
+    )  # fmt: skip
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    service = SynthService(synth, config, MonotonicClock(), ctx)
+    stop = threading.Event()
+
+    def on_signal(signum: int, _frame: FrameType | None) -> None:
+        stop.set()
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    try:
+        endpoints = service.start()
+        print(json.dumps({"service": "synth", **endpoints}), flush=True)
+        code = service.run(stop, on_ready=lambda: ready(endpoints["pub"]))
+    finally:
+        ctx.term()
+    s = service.summary()
+    p50, p99 = ("-" if v is None else v for v in s["answer_ms"])
+    print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "
+          f"{s['pose_samples']} pose samples in {s['pose_messages']} messages, "
+          f"{s['animations']} re-animations, {s['quick_contacts']} quick contacts, "
+          f"answered in {p50}/{p99} ms p50/p99",
+          file=sys.stderr)  # fmt: skip
+    return code

@@ -1,0 +1,272 @@
+"""``livedrummer up``: the live pipeline in one command: input → synth → display, supervised.
+
+Each stage is its own process (:mod:`services.supervisor`): started in order, each only after
+the previous one said it is ready (no sleeps), restarted with back-off when it dies, all
+stopped on Ctrl-C / SIGTERM or after ``--seconds``. ``--demo`` plays the bundled groove
+into the pipeline as if from a kit (looping). With a screen (``DISPLAY`` or
+``WAYLAND_DISPLAY``) the display opens a window (``--fullscreen --monitor N`` for a
+projector; camera keys 1..8, Q quits the window and the rig). With no screen, or with
+``--headless``, it renders off screen into ``--frames-dir`` (default ``out/live``): numbered PNG
+frames plus ``frames.jsonl``; ``--video FILE`` records those frames on show time into an MP4
+and, when the rig stops, adds the drum track: the journaled onsets (the session's journal, a
+temporary one for ``--demo``) mixed with the built-in kit (or ``--soundfont FILE.sf2``'s) at
+onset + D (:mod:`services.display.record`), so picture and sound line up as the audience would
+see them.
+
+Security. ``--curve-secret RIG.key_secret`` makes every stream of the rig CURVE: the input
+daemon and the synth bind as CURVE servers with that key pair, and the synth and the display
+connect to them as clients with the same pair (the server key is read from the same file), so
+one key made with ``livedrummer keys new`` is all a rig needs. ``--allow DIR`` lets in only
+clients whose public key is in DIR, which must then hold the rig's own public key (checked at
+start, named in the error) or its own services would be refused. ``--bind ADDR`` serves on
+another address than 127.0.0.1 (a remote display); a non-loopback address needs
+``--curve-secret`` or ``--insecure``, as for each service.
+
+Limits: endpoints are fixed TCP ports from ``--port-base``; a recording's drum track ignores
+the input calibration offset.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import tempfile
+import time
+from pathlib import Path
+from types import FrameType
+from typing import TYPE_CHECKING
+
+from ..program import program_argv
+from .common import (
+    DEMO_MAP,
+    Subparsers,
+    add_api_option,
+    add_command,
+    add_kit_option,
+    add_renamed,
+    demo_groove,
+    has_screen,
+)
+from .keys import add_curve_options
+
+if TYPE_CHECKING:
+    from ..supervisor import Supervisor
+
+RECORD_GRACE_S = 60.0  # how long past --seconds a set-length recording may take to finish
+SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscribe_protocol)
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "up", run, "run the live pipeline: input, synth and display")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--midi", metavar="PORT", help="MIDI input port of the kit")
+    src.add_argument("--serial", metavar="DEV", help="serial trigger board")
+    src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
+    add_kit_option(p)
+    p.add_argument("--map", help="note map (default roland-td)")
+    p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
+    add_api_option(p)
+    p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L",
+                   help="limb decisions wait L ms for later notes")  # fmt: skip
+    p.add_argument("--delay-ms", type=float, default=30.0, metavar="D",
+                   help="show the drummer D ms behind the sound, D >= L")  # fmt: skip
+    p.add_argument("--seconds", type=float, metavar="S",
+                   help="stop everything after S seconds (default: when stopped)")  # fmt: skip
+    p.add_argument("--headless", action="store_true", help="render off screen even with a screen")
+    add_renamed(p, "--out", p.add_argument(
+        "--frames-dir", type=Path, default=Path("out/live"), metavar="DIR",
+        help="headless frames folder"))  # fmt: skip
+    p.add_argument("--fps", type=float, default=30.0, help="display frames per second")
+    p.add_argument("--port-base", type=int, default=5710,
+                   help="TCP ports PORT..PORT+11 on --bind (default 5710)")  # fmt: skip
+    p.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
+                   help="address the input and synth serve on (default 127.0.0.1)")  # fmt: skip
+    p.add_argument("--png", action="store_true",
+                   help="headless: also write every frame as a PNG into --frames-dir (about 9 GB "
+                   "an hour at 640x360; default: frames.jsonl only)")  # fmt: skip
+    p.add_argument("--no-png", action="store_true", help=argparse.SUPPRESS)  # the old default
+    p.add_argument("--no-journal", action="store_true", help="do not journal the session")
+    p.add_argument("--video", type=Path, metavar="FILE",
+                   help="headless: record the show and its drum track as MP4 "
+                   "(default: none)")  # fmt: skip
+    p.add_argument("--soundfont", type=Path, metavar="SF2",
+                   help="--video: drum track from this General MIDI SoundFont "
+                   "(default: the built-in kit)")  # fmt: skip
+    p.add_argument("--size", default="640x360", help="headless frame size (default 640x360)")
+    p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
+    p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
+    add_curve_options(p, server=True, client=False)
+
+
+def curve_argv(args: argparse.Namespace) -> dict[str, list[str]]:
+    """The CURVE options of each service (see the module docstring), by service name.
+
+    Checks the key files here, so a bad one is one error before anything starts.
+    """
+    from livedrummer.errors import KeyFileError
+    from livedrummer.protocol.keys import PUBLIC_SUFFIX, read_key_file
+
+    from ..net import Security
+
+    Security.from_files(secret=args.curve_secret, allow=args.allow, insecure=args.insecure)
+    insecure = ["--insecure"] if args.insecure else []
+    if args.curve_secret is None:
+        return {"input": insecure, "synth": insecure, "display": []}
+    secret = str(args.curve_secret.resolve())
+    if args.allow is not None:
+        own = read_key_file(args.curve_secret, secret=True).public
+        keys = {read_key_file(k, secret=False).public for k in args.allow.glob(f"*{PUBLIC_SUFFIX}")}
+        if own not in keys:
+            raise KeyFileError(
+                f"{args.allow}: --allow folder lacks this rig's public key "
+                f"({args.curve_secret.name.removesuffix('_secret')}); its own services "
+                "could not connect"
+            )
+    allow = ["--allow", str(args.allow.resolve())] if args.allow is not None else []
+    serve = ["--curve-secret", secret, *allow, *insecure]
+    return {"input": serve, "synth": [*serve, "--server-key", secret],
+            "display": ["--curve-secret", secret, "--server-key", secret]}  # fmt: skip
+
+
+def windowed(args: argparse.Namespace) -> bool:
+    return has_screen() and not args.headless and args.video is None
+
+
+def recorded(args: argparse.Namespace) -> bool:
+    """A recording of a set length: the display itself stops ``--seconds`` after its first
+    frame with the drummer, so the video holds the whole show and no more."""
+    return args.video is not None and args.seconds is not None
+
+
+def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # type: ignore[type-arg]
+    from ..supervisor import ServiceSpec
+
+    base = args.port_base
+    ep = {name: f"tcp://{args.bind}:{base + k}" for name, k in
+          (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))}  # fmt: skip
+    # Clients reach the servers through loopback unless they serve on one given address.
+    near = {name: e.replace("tcp://0.0.0.0:", "tcp://127.0.0.1:") for name, e in ep.items()}
+    curve = curve_argv(args)
+    map_name = args.map or DEMO_MAP
+    me = program_argv()
+    source: list[str]
+    if args.demo:
+        source = ["--file", str(demo_groove()), "--loop"]
+    elif args.serial:
+        source = ["--serial", args.serial, "--baud", str(args.baud)]
+    else:
+        source = ["--midi", args.midi, "--api", args.api]
+    if sessions is not None:
+        journal = ["--sessions-dir", str(sessions)]
+    else:
+        journal = ["--no-journal"] if args.no_journal or args.demo else []
+    input_argv = [*me, "input", *source, "--map", map_name, "--pub", ep["in_pub"],
+                  "--control", ep["in_ctl"], "--wait-subscribers", str(SYNTH_TOPICS),
+                  *journal, *curve["input"]]  # fmt: skip
+    synth_argv = [*me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
+                  "--control", ep["syn_ctl"], "--kit", args.kit, "--map", map_name,
+                  "--lookahead-ms", str(args.lookahead_ms),
+                  "--delay-ms", str(args.delay_ms), *curve["synth"]]  # fmt: skip
+    display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], "--kit", args.kit,
+                    "--fps", str(args.fps), "--size", args.size, *curve["display"]]  # fmt: skip
+    if windowed(args):
+        display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
+        display_argv += ["--fullscreen"] if args.fullscreen else []
+    else:
+        display_argv += ["--headless", "--frames-dir", str(args.frames_dir)]
+        display_argv += [] if args.png and args.video is None else ["--no-png"]
+        display_argv += ["--video", str(args.video)] if args.video is not None else []
+        display_argv += ["--seconds", str(args.seconds)] if recorded(args) else []
+    return [
+        ServiceSpec("input", input_argv),
+        ServiceSpec("synth", synth_argv),
+        ServiceSpec("display", display_argv, ends_rig=windowed(args) or recorded(args)),
+    ]
+
+
+def run(args: argparse.Namespace) -> int:
+    from livedrummer.errors import ConfigError
+
+    from ..supervisor import Supervisor
+
+    if args.seconds is not None and not args.seconds > 0:
+        raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
+    if args.video is not None and args.no_journal:
+        raise ConfigError("--video: the drum track comes from the journal; drop --no-journal")
+    if args.soundfont is not None:  # now, not after the show
+        from livedrummer.audio.soundfont import check_soundfont
+
+        check_soundfont(args.soundfont)
+    with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
+        sessions = None
+        if args.video is not None:
+            from ..journal import sessions_dir
+
+            sessions = Path(tmp) if args.demo else sessions_dir()
+            args.video.parent.mkdir(parents=True, exist_ok=True)
+        started = time.time()
+        code = _supervise(args, Supervisor(specs(args, sessions)))
+        if code == 0 and args.video is not None and sessions is not None:
+            add_drum_track(args, sessions, started)
+    return code
+
+
+def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
+    stopping: list[int] = []
+
+    def on_signal(signum: int, _frame: FrameType | None) -> None:
+        stopping.append(signum)
+        sup.request_stop()
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        sup.start()
+        where = "in a window" if windowed(args) else f"frames in {args.frames_dir}/"
+        print(f"up: input, synth and display running; {where}", flush=True)
+        # A set-length recording ends when the display has recorded it (a minute's grace
+        # for a display that never gets a pose); otherwise --seconds ends the rig itself.
+        grace = RECORD_GRACE_S if recorded(args) else 0.0
+        deadline = None if args.seconds is None else time.monotonic() + args.seconds + grace
+        while not stopping:
+            left = 0.5 if deadline is None else min(0.5, deadline - time.monotonic())
+            if left <= 0:
+                break
+            sup.run_once(left)
+            if (windowed(args) or recorded(args)) and sup.quit_by_user("display"):
+                break  # the window was closed, or the recording is complete: the show is over
+    finally:
+        sup.stop()
+        for s, handler in old.items():
+            signal.signal(s, handler)
+    restarts = sum(sup.restarts.values())
+    where = "" if windowed(args) else f"; frames in {args.frames_dir}/"
+    print(f"up: stopped ({restarts} restarts){where}", file=sys.stderr)
+    return 0
+
+
+def add_drum_track(args: argparse.Namespace, sessions: Path, started: float) -> None:
+    """Mix the journaled onsets at onset + D, their chokes applied, into the recording (see the
+    module docstring)."""
+    import numpy as np
+
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
+    from livedrummer.timeline.journal import SUFFIX
+
+    from ..display.record import Timing, mux_audio, recording_track
+    from ..journal import load_journal
+
+    timing = Timing.load(args.video)
+    journals = [load_journal(path) for path in sorted(sessions.glob(f"*{SUFFIX}"))
+                if path.stat().st_mtime >= started - 1.0]  # fmt: skip
+    onsets = np.concatenate([j.onsets for j in journals] or [np.zeros(0, ONSET_DTYPE)])
+    controls = np.concatenate([j.controls for j in journals] or [np.zeros(0, CONTROL_DTYPE)])
+    track = recording_track(onsets, controls, timing, delay_s=args.delay_ms / 1000.0,
+                            kit=load_kit(args.kit), note_map=load_note_map(args.map or DEMO_MAP),
+                            soundfont=args.soundfont)  # fmt: skip
+    mux_audio(args.video, track)
+    duration = timing.frames / timing.fps
+    print(f"up: wrote {args.video.resolve()} ({duration:.1f} s, {timing.frames} frames, "
+          f"{onsets.size} hits in its drum track)", flush=True)  # fmt: skip
