@@ -1,0 +1,12 @@
+"""Avatars: the character the audience sees, as a skinned mesh bound to the body's joints.
+
+* :mod:`~livedrummer.avatar.model`: the contract between whoever makes an avatar (the built-in
+  character, a glTF/VRM reader) and whoever draws or exports it: a :class:`SkinnedMesh` whose
+  vertices are weighted to the body's 24 joints, its materials, and the proportions
+  (:class:`~livedrummer.body.skeleton.SegmentLengths`) the IK must use so that *this*
+  avatar's stick tips land on the drums;
+* :mod:`~livedrummer.avatar.skinning`: linear blend skinning in numpy, the reference the GPU
+  vertex shader is tested against.
+
+The package is pure data and numpy; GPU buffers and shaders live in :mod:`services.display`.
+"""
