@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
+from livedrummer.sticking import STRATEGIES
 from services.cli import COMMANDS, build_parser, command_named
 from services.cli.common import STICKING_STRATEGIES, help_with_default
-from livedrummer.sticking import STRATEGIES
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import zmq
 
-from services.bench._faultrig import INDEX, REPO, Rig
 from livedrummer import protocol as p
+from services.bench._faultrig import INDEX, REPO, Rig
 from services.cli import main
 from services.journal import list_sessions, load_journal
 from services.net import Security, connect

@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from services.bench._fuzz import Variant, absurd_note_file, mutations
 from livedrummer.errors import MidiFileError
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import MAX_DURATION_S, MAX_FILE_BYTES, read_midi_bytes
 from livedrummer.timeline.performance import Performance
+from services.bench._fuzz import Variant, absurd_note_file, mutations
 
 REPO = Path(__file__).resolve().parent.parent
 TD = load_note_map("roland-td")

@@ -18,11 +18,11 @@ import pytest
 import zmq
 from test_input import ROLAND, Subscriber, assert_contiguous, pty_pair, start_daemon
 
-from services.bench._fuzz import REALTIME, Inserted, SerialStream, noisy_serial_stream
 from livedrummer import protocol as p
 from livedrummer.midi.decode import MessageDecoder
 from livedrummer.midi.stream import MidiMessage, MidiStreamParser
 from livedrummer.timeline.clock import MonotonicClock
+from services.bench._fuzz import REALTIME, Inserted, SerialStream, noisy_serial_stream
 from services.input.serialport import SerialSource
 
 SEED = 20240607

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from services.cli.common import demo_groove
 from livedrummer.errors import JournalError
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
@@ -21,6 +20,7 @@ from livedrummer.protocol import Gap, GapReason
 from livedrummer.timeline import journal as jr
 from livedrummer.timeline.clock import SteppedClock
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
+from services.cli.common import demo_groove
 from services.journal import (
     JournalWriter,
     export_session,

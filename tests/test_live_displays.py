@@ -17,7 +17,6 @@ import zmq
 
 from livedrummer import protocol as p
 from livedrummer.body.rig import build_rig
-from services.cli.common import DEMO_MAP, demo_groove
 from livedrummer.kit.loader import load_kit
 from livedrummer.live.synth import LiveSynth, SynthParams
 from livedrummer.live.track import PoseTrack
@@ -25,6 +24,7 @@ from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking.online import stick_online
 from livedrummer.timeline.clock import MonotonicClock
+from services.cli.common import DEMO_MAP, demo_groove
 from services.display.live import LiveConfig, LiveDisplay, MonotonicFrameClock
 from services.synth.service import SynthConfig, SynthService
 

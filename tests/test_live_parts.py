@@ -12,7 +12,6 @@ from livedrummer.body.rig import Rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import PARENTS, J
 from livedrummer.body.strike import to_local
-from services.cli.common import DEMO_MAP
 from livedrummer.kit.vocabulary import PieceKind
 from livedrummer.live.curves import blend_rows
 from livedrummer.live.ledger import SampleLedger
@@ -24,6 +23,7 @@ from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking.online import OnlineSticker
 from livedrummer.timeline.events import CONTROL_DTYPE, ControlKind
 from livedrummer.timeline.performance import Performance
+from services.cli.common import DEMO_MAP
 from tests.conftest import MidiWriter
 
 START = 5000.0

@@ -14,9 +14,9 @@ import mido
 import numpy as np
 import pytest
 
-from services.cli import main
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
+from services.cli import main
 
 FPS = 30
 TAIL_S = 0.5

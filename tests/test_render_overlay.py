@@ -20,7 +20,6 @@ import pytest
 from livedrummer.body import quat
 from livedrummer.body.fk import forward
 from livedrummer.body.skeleton import ARM, N_JOINTS, J, build_skeleton
-from services.cli import main
 from livedrummer.kit.loader import load_kit
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import PieceKind
@@ -56,6 +55,7 @@ from livedrummer.render.overlay_raster import (
 from livedrummer.render.transport import KEYS
 from livedrummer.sticking.result import NOT_PLAYED, Sticking
 from livedrummer.timeline.events import ONSET_DTYPE
+from services.cli import main
 from services.display.context import headless_context
 from services.display.renderer import Renderer
 from services.display.window import OVERLAY_KEYS

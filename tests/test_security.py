@@ -26,12 +26,12 @@ import zmq
 import zmq.auth
 
 from livedrummer import protocol as p
-from services.cli import main
 from livedrummer.errors import KeyFileError, ProtocolError
 from livedrummer.kit.vocabulary import HiHat, Zone
 from livedrummer.protocol.keys import format_key_file, parse_key_file, read_key_file
 from livedrummer.timeline.clock import MonotonicClock
 from livedrummer.timeline.events import Onset
+from services.cli import main
 from services.input.base import Event, Source
 from services.input.daemon import DaemonConfig, InputDaemon
 from services.input.remote import RemoteSource

@@ -23,10 +23,10 @@ from test_render_export import choked_crash, crash_rms_around_the_grab, read_bac
 
 from livedrummer.audio.mix import GRAB_FADE_S
 from livedrummer.audio.soundfont import check_soundfont, gm_note, render_soundfont
-from services.cli import main
 from livedrummer.kit.loader import load_kit
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.timeline.events import ONSET_DTYPE, Onset
+from services.cli import main
 
 SR = 48_000
 REPO = Path(__file__).resolve().parent.parent

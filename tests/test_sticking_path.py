@@ -14,7 +14,6 @@ from test_sticking_helpers import DEMO, onsets
 import livedrummer.sticking.strategy as strategy
 from livedrummer.body.perform import perform
 from livedrummer.body.rig import build_rig
-from services.cli import main
 from livedrummer.errors import LivedrummerError
 from livedrummer.kit.loader import load_kit
 from livedrummer.kit.vocabulary import Limb, PieceKind
@@ -23,6 +22,7 @@ from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking import assign, metrics, stick_online, stick_performance
 from livedrummer.sticking.prepare import chords, piece_table
 from livedrummer.sticking.result import LIMB_CODE, Sticking
+from services.cli import main
 
 RH, LH = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH]
 

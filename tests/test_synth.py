@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from services.bench._upswing import upswing_visible
 from livedrummer.body.animation import animate, hihat_openness
 from livedrummer.body.rig import Rig
 from livedrummer.body.skeleton import J
@@ -19,6 +18,7 @@ from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
 from livedrummer.sticking.online import stick_online
 from livedrummer.timeline.events import CONTROL_DTYPE, ControlKind
 from livedrummer.timeline.performance import Performance
+from services.bench._upswing import upswing_visible
 
 TIPS = {0: J["r_tip"], 1: J["l_tip"]}
 START = 5000.0  # onsets live on the shared clock, far from 0

@@ -34,13 +34,13 @@ import zmq
 from livedrummer import protocol as p
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import build_rig
-from services.cli.common import DEMO_MAP, demo_groove
 from livedrummer.kit.loader import load_kit
 from livedrummer.live.synth import LiveSynth, SynthParams
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
 from livedrummer.timeline.clock import MonotonicClock
 from services.badmsg import BadMessages, kind_of
+from services.cli.common import DEMO_MAP, demo_groove
 from services.display.live import LiveConfig, LiveDisplay, MonotonicFrameClock
 from services.input.daemon import DaemonConfig, InputDaemon
 from services.input.fileplayer import FileSource
