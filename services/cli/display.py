@@ -55,6 +55,9 @@ def register(sub: Subparsers) -> None:
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
     live.add_argument("--sub", default="tcp://127.0.0.1:5720",
                       help="the synth's pose endpoint (default tcp://127.0.0.1:5720)")  # fmt: skip
+    live.add_argument("--control", metavar="ENDPOINT",
+                      help="answer HELLO with READY here, e.g. tcp://127.0.0.1:5731 "
+                           "(default: no control socket)")  # fmt: skip
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
     add_renamed(live, "--frames", live.add_argument(
         "--max-frames", type=int, metavar="N",
@@ -103,12 +106,8 @@ def run(args: argparse.Namespace) -> int:
 
 def run_live(args: argparse.Namespace) -> int:
     """``--live``: subscribe to poses and render them on the frame clock until stopped."""
-    import json
     import logging
-    import signal
     import sys
-    import threading
-    from types import FrameType
 
     import zmq
 
@@ -123,7 +122,7 @@ def run_live(args: argparse.Namespace) -> int:
         LiveDisplay,
         MonotonicFrameClock,
     )
-    from ..notify import ready
+    from ..service import serve
 
     window = None
     if not args.headless:
@@ -160,24 +159,13 @@ def run_live(args: argparse.Namespace) -> int:
         display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
         png=not args.no_png, security=security_from_args(args), window=window,
         video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
+        control=args.control,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    display = LiveDisplay(load_kit(args.kit), config, clock, ctx)
-    stop = threading.Event()
-
-    def on_signal(signum: int, _frame: FrameType | None) -> None:
-        stop.set()
-
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
     if args.seconds is not None and not args.seconds > 0:  # counted from the first pose drawn
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
-    try:
-        display.start()
-        print(json.dumps({"service": "display", "sub": args.sub}), flush=True)
-        code = display.run(stop, on_ready=lambda: ready(args.sub))
-    finally:
-        ctx.term()
+    display = LiveDisplay(load_kit(args.kit), config, clock, ctx)
+    code = serve(display, lambda endpoints: endpoints["sub"])
     s = display.summary()
     where = f" into {args.frames_dir}" if args.frames_dir else ""
     print(f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "

@@ -9,12 +9,8 @@ endpoint and wait for READY.
 from __future__ import annotations
 
 import argparse
-import json
-import signal
 import sys
-import threading
 from pathlib import Path
-from types import FrameType
 
 from .common import Subparsers, add_api_option, add_command, add_map_option
 from .keys import add_curve_options, security_from_args
@@ -61,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
 
     from ..input.base import Source
     from ..input.daemon import DaemonConfig, InputDaemon
-    from ..notify import ready
+    from ..service import serve
 
     if not 0 <= args.performer <= 0xFFFF:
         raise ConfigError(f"--performer: expected 0..65535 (got {args.performer})")
@@ -111,20 +107,7 @@ def run(args: argparse.Namespace) -> int:
         security=security,
     )
     daemon = InputDaemon(source, config, clock, ctx)
-    stop = threading.Event()
-
-    def on_signal(signum: int, _frame: FrameType | None) -> None:
-        stop.set()
-
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
-    try:
-        endpoints = daemon.start()
-        print(json.dumps({"service": "input", **endpoints}), flush=True)
-        ready(endpoints.get("pub", ""))
-        code = daemon.run(stop)
-    finally:
-        ctx.term()
+    code = serve(daemon, lambda endpoints: endpoints["pub"])
     summary = daemon.summary()
     print(f"input: {summary['onsets']} onsets, {summary['controls']} controls, "
           f"{summary['gaps']} gaps published", file=sys.stderr)  # fmt: skip

@@ -8,11 +8,7 @@ until Ctrl-C / SIGTERM; at exit it prints a one-line summary on stderr.
 from __future__ import annotations
 
 import argparse
-import json
-import signal
 import sys
-import threading
-from types import FrameType
 
 from .common import Subparsers, add_command, add_kit_option
 from .keys import add_curve_options, security_from_args
@@ -54,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.timeline.clock import MonotonicClock
 
-    from ..notify import ready
+    from ..service import serve
     from ..synth.service import SynthConfig, SynthService
 
     try:
@@ -81,19 +77,7 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)
-    stop = threading.Event()
-
-    def on_signal(signum: int, _frame: FrameType | None) -> None:
-        stop.set()
-
-    signal.signal(signal.SIGTERM, on_signal)
-    signal.signal(signal.SIGINT, on_signal)
-    try:
-        endpoints = service.start()
-        print(json.dumps({"service": "synth", **endpoints}), flush=True)
-        code = service.run(stop, on_ready=lambda: ready(endpoints["pub"]))
-    finally:
-        ctx.term()
+    code = serve(service, lambda endpoints: endpoints["pub"])
     s = service.summary()
     p50, p99 = ("-" if v is None else v for v in s["answer_ms"])
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "

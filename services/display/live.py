@@ -32,6 +32,11 @@ they can also be written as PNGs (``--frames-dir``) and recorded into a video on
 from the first frame that draws the drummer
 (``config.video``, :mod:`~services.display.record`). A remote display sets
 ``config.security`` (our key pair and the synth's public key) to subscribe over CURVE.
+
+Life cycle: the service base's (:mod:`services.service`); readiness comes after the first
+frame that drew the drummer, and a control socket answering HELLO with READY (service
+"display", role "frames", the pose format) is bound only when ``config.control`` names one,
+since ``up`` may run several displays.
 """
 
 from __future__ import annotations
@@ -41,7 +46,6 @@ import logging
 import math
 import threading
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any, Protocol
@@ -51,15 +55,16 @@ import zmq
 
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
-from livedrummer.errors import KeyFileError, ProtocolError
+from livedrummer.errors import ProtocolError
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.live.track import PoseTrack
-from livedrummer.protocol import Pose, PoseFormat, SeqStatus, SequenceTracker, decode
+from livedrummer.protocol import Hello, Pose, PoseFormat, SeqStatus, SequenceTracker, decode
 from livedrummer.render.body_scene import frame_from_pose
 
 from ..badmsg import BadMessages
 from ..net import Security, connect, socket, subscribe_protocol
+from ..service import OnReady, Service
 from .record import LiveRecorder
 from .surface import HeadlessSurface, WindowSurface
 from .video import VideoSettings
@@ -141,6 +146,7 @@ class LiveConfig:
     png: bool = True  # with ``out``: write each frame as a PNG (frames.jsonl is always written)
     render_ahead: bool = True  # draw each frame for when it is done, not when it is begun
     security: Security = field(default_factory=Security)
+    control: str | None = None  # HELLO/READY endpoint (none unless asked: up runs many displays)
 
 
 @dataclass
@@ -153,8 +159,10 @@ class LiveStats:
     held: int = 0  # frames drawn with no pose at or after their show time - 1 frame
 
 
-class LiveDisplay:
+class LiveDisplay(Service):
     """See the module docstring."""
+
+    name = "display"
 
     def __init__(
         self,
@@ -163,10 +171,10 @@ class LiveDisplay:
         clock: FrameClock,
         ctx: zmq.Context[zmq.Socket[bytes]],
     ) -> None:
+        super().__init__(clock, ctx, security=config.security, control=config.control, log=log)
+        self.clock: FrameClock = clock
         self.kit = kit
         self.config = config
-        self.clock = clock
-        self.ctx = ctx
         self.format = PoseFormat.from_dtype(pose_dtype(len(kit.pieces)))
         self.track = PoseTrack()
         self.tracker = SequenceTracker()
@@ -174,17 +182,23 @@ class LiveDisplay:
         self.bad = BadMessages("display pose stream", log)
         self._sub: Any = None
 
-    def start(self) -> None:
-        sub = socket(self.ctx, zmq.SUB)
-        subscribe_protocol(sub)
-        try:
-            connect(sub, self.config.sub, "sub endpoint", self.config.security)
-        except (ProtocolError, KeyFileError):
-            sub.close(0)
-            raise
-        self._sub = sub
+    def open(self) -> None:
+        """Connect to the synth's poses (the base binds the control socket, if one is asked)."""
+        self._sub = socket(self.ctx, zmq.SUB)
+        subscribe_protocol(self._sub)
+        connect(self._sub, self.config.sub, "sub endpoint", self.config.security)
+        self.endpoints["sub"] = self.config.sub
 
-    def run(self, stop: threading.Event, on_ready: Callable[[], None] | None = None) -> int:
+    def release(self) -> None:
+        if self._sub is not None:
+            self._sub.close(0)
+            self._sub = None
+        self.bad.log_summary()
+
+    def hello(self) -> Hello:
+        return Hello(self.name, "frames", self.performer, dict(self.endpoints), self.format)
+
+    def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
         """Draw until ``stop``; ``on_ready`` is called once, after the first frame that drew
         a pose (the display is "ready" when it shows the drummer, not when it has a socket)."""
         cfg = self.config
@@ -201,7 +215,7 @@ class LiveDisplay:
                 recorder = LiveRecorder(cfg.video, settings)
             if cfg.out is not None:
                 cfg.out.mkdir(parents=True, exist_ok=True)
-                # Line-buffered: a watcher (tests, services/bench/recovery.py) sees each frame as drawn.
+                # Line-buffered: a watcher (tests, bench recovery) sees each frame as drawn.
                 log_file = (cfg.out / "frames.jsonl").open("w", buffering=1)
             period = 1.0 / cfg.fps
             ahead = RenderAhead()
@@ -269,10 +283,7 @@ class LiveDisplay:
                 recorder.close()
             if surface is not None:
                 surface.close()
-            if self._sub is not None:
-                self._sub.close(0)
-                self._sub = None
-            self.bad.log_summary()
+            self.shutdown()
         return 0
 
     def _drain(self) -> None:

@@ -7,9 +7,12 @@ rtmidi's own queue by this thread, each message stamped with the driver's time: 
 :mod:`services.input.midiport`). XPUB instead of PUB so the daemon *sees* subscriptions arrive: with
 ``wait_subscribers`` it opens its source only after that many subscriptions arrived (a SUB
 socket subscribed to k topics counts k), which is how a launcher or a test gets every event
-from the first one without sleeping. A second
-thread owns a ROUTER control socket and answers HELLO with READY (service "input", role
-"source", performer, endpoints), so a client can wait for the daemon instead of guessing.
+from the first one without sleeping. Start-up, the control socket (a second thread answering
+HELLO with READY: service "input", role "source", performer, endpoints, so a client can wait
+for the daemon instead of guessing), readiness (once bound) and shutdown are the service
+base's (:mod:`services.service`); :meth:`InputDaemon.open` binds the pub socket and opens the
+journal, :meth:`InputDaemon.release` closes the source, the journal (END record with the
+summary) and the socket.
 
 Stream. Every message on the events stream (ONSET, CONTROL, GAP, HEARTBEAT) takes the next
 sequence number, so a subscriber's :class:`~livedrummer.protocol.SequenceTracker` sees any
@@ -37,7 +40,7 @@ event was journaled before it was offered to ZeroMQ, so the journal stays comple
 ``services/bench/flood.py`` measures this at 10,000 notes/s.
 
 Security. With ``config.security`` holding a key pair, both sockets are CURVE servers; with
-an allow folder, a ZAP authenticator (started here, stopped in ``close``) lets in only the
+an allow folder, a ZAP authenticator (started and stopped by the service base) lets in only the
 clients whose public keys are there (see :mod:`services.net`).
 """
 
@@ -66,9 +69,9 @@ from livedrummer.protocol import (
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, Control, Onset
 
-from ..badmsg import BadMessages
 from ..journal import JournalWriter
-from ..net import Security, bind, serve_control, socket, start_authenticator
+from ..net import Security, bind, socket
+from ..service import OnReady, Service
 from .base import Event, Source
 from .remote import RemoteSource
 
@@ -105,8 +108,10 @@ class DaemonStats:
     subscribers: int = 0
 
 
-class InputDaemon:
+class InputDaemon(Service):
     """See the module docstring. ``start`` binds; ``run`` serves until ``stop`` is set."""
+
+    name = "input"
 
     def __init__(
         self,
@@ -115,14 +120,13 @@ class InputDaemon:
         clock: Clock,
         ctx: zmq.Context[zmq.Socket[bytes]],
     ) -> None:
+        super().__init__(clock, ctx, performer=config.performer, security=config.security,
+                         control=config.control, log=log)  # fmt: skip
+        self.clock: Clock = clock
         self.source = source
         self.config = config
-        self.clock = clock
-        self.ctx = ctx
         self.problems = source.problems
-        self.bad_control = BadMessages("input control socket", log)
         self.stats = DaemonStats()
-        self.endpoints: dict[str, str] = {}
         self.journal: JournalWriter | None = None
         self._flags = (Flag.SIMULATED if source.simulated else 0) | (
             Flag.RELAYED if source.relayed else 0
@@ -130,67 +134,38 @@ class InputDaemon:
         self._seq = 0
         self._last_send = 0.0
         self._pub: Any = None
-        self._control_thread: threading.Thread | None = None
-        self._control_stop = threading.Event()
         self._unknown_seen = 0
-        self._auth: Any = None
 
     # ---------------------------------------------------------------- lifecycle
 
-    def start(self) -> dict[str, str]:
-        """Bind the sockets, open the journal, start answering HELLO; return the endpoints."""
+    def open(self) -> None:
+        """Bind the pub socket and open the journal (the base binds the control socket)."""
         cfg = self.config
-        if cfg.security.allow is not None:
-            self._auth = start_authenticator(self.ctx, cfg.security.allow)
-        pub = socket(self.ctx, zmq.XPUB)
-        pub.setsockopt(zmq.XPUB_VERBOSE, 1)
-        try:
-            self.endpoints["pub"] = bind(pub, cfg.pub, "pub endpoint", cfg.security)
-        except ProtocolError:
-            pub.close(0)
-            self._stop_auth()
-            raise
-        self._pub = pub
-        control = socket(self.ctx, zmq.ROUTER)
-        try:
-            self.endpoints["control"] = bind(control, cfg.control, "control endpoint", cfg.security)
-        except ProtocolError:
-            control.close(0)
-            pub.close(0)
-            self._pub = None
-            self._stop_auth()
-            raise
+        self._pub = socket(self.ctx, zmq.XPUB)
+        self._pub.setsockopt(zmq.XPUB_VERBOSE, 1)
+        self.endpoints["pub"] = bind(self._pub, cfg.pub, "pub endpoint", cfg.security)
         if cfg.journal:
             meta = {
                 "performer": cfg.performer,
                 "source": self.source.name,
-                "protocol_endpoints": self.endpoints,
+                "protocol_endpoints": dict(self.endpoints),
                 **cfg.meta,
             }
-            try:
-                self.journal = JournalWriter.create(
-                    meta, self.clock, cfg.sessions_dir, fsync_interval_s=cfg.fsync_interval_s
-                )
-            except JournalError:
-                control.close(0)
-                pub.close(0)
-                self._pub = None
-                self._stop_auth()
-                raise
+            self.journal = JournalWriter.create(
+                meta, self.clock, cfg.sessions_dir, fsync_interval_s=cfg.fsync_interval_s
+            )
             self.endpoints["journal"] = str(self.journal.path)
-        self._control_thread = threading.Thread(
-            target=self._serve_control, args=(control,), name="input-control", daemon=True
-        )
-        self._control_thread.start()
-        return dict(self.endpoints)
 
     def hello(self) -> Hello:
-        return Hello("input", "source", self.config.performer, dict(self.endpoints))
+        return Hello(self.name, "source", self.config.performer, dict(self.endpoints))
 
-    def run(self, stop: threading.Event) -> int:
+    def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
+        """Serve until ``stop`` (or the end of a file with ``exit_at_end``); ready once bound."""
         cfg = self.config
         src = self.source
         lost_at: float | None = None
+        if on_ready is not None:
+            on_ready()  # serving: subscribers get every event from their subscription on
         try:
             while not stop.is_set():
                 self._poll_subscribers(0)
@@ -223,15 +198,11 @@ class InputDaemon:
                 if cfg.exit_at_end and src.finished():
                     break
         finally:
-            self.close()
+            self.shutdown()
         return 0
 
-    def close(self) -> None:
+    def release(self) -> None:
         self.source.close()
-        self._control_stop.set()
-        if self._control_thread is not None:
-            self._control_thread.join(2.0)
-            self._control_thread = None
         summary = self.summary()
         if self.journal is not None:
             try:
@@ -242,16 +213,9 @@ class InputDaemon:
         if self._pub is not None:
             self._pub.close(0)
             self._pub = None
-        self._stop_auth()
-        self.bad_control.log_summary()
         if isinstance(self.source, RemoteSource):
             self.source.bad.log_summary()
         log.info("input stopped: %s", summary)
-
-    def _stop_auth(self) -> None:
-        if self._auth is not None:
-            self._auth.stop()
-            self._auth = None
 
     def summary(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -367,15 +331,7 @@ class InputDaemon:
 
     # ---------------------------------------------------------------- control socket
 
-    def _ready(self) -> Message:
-        return Message(Kind.READY, self.hello(), self.config.performer, 0, self.clock.now(),
-                       Stream.CONTROL)  # fmt: skip
-
-    def _control_dropped(self, kind: str) -> None:
+    def control_dropped(self, kind: str) -> None:
         # Totals in the problems report too, which goes into the journal's END record.
         what = "unexpected control message" if kind == "unexpected" else "bad control message"
         self.problems.counts[what] += 1
-
-    def _serve_control(self, sock: Any) -> None:
-        serve_control(sock, self._control_stop, self._ready, self.bad_control,
-                      self._control_dropped)  # fmt: skip

@@ -12,10 +12,11 @@ sample's show time; each record's ``time_s`` is its offset from it). Each batch 
 ``LiveSynth.poses_until`` (``answer=``), which calls it between the steps of a re-animation:
 it reads the socket there, so a hit is answered within a step (a few ms) even while the synth
 is busy.
-Sequence numbers of the input stream are tracked, so a gap upstream is counted and logged. A
-second thread answers HELLO with READY on a ROUTER control socket; the READY carries the pose
-format, which a display checks against its own. ``ready()`` tells a launcher or systemd the
-service is serving once both sockets are bound.
+Sequence numbers of the input stream are tracked, so a gap upstream is counted and logged. The
+service base (:mod:`services.service`) runs the control socket (a second thread answering HELLO
+with READY; the READY carries the pose format, which a display checks against its own), start-up
+and shutdown; the synth tells a launcher or systemd it is ready once its first poses are
+published (it is ready when it does its job, not when its sockets are bound).
 
 Bad input. Every message on the SUB socket (subscribed to the protocol magic, so another
 protocol version is seen, not filtered away) and on the control socket is decoded and
@@ -27,7 +28,7 @@ Limits: the pose socket is a plain PUB (a slow display loses samples past the hi
 mark; it sees the gap in the sequence numbers); one performer per synth.
 
 Security: ``config.security`` with a key pair makes the pose and control sockets CURVE
-servers (an allow folder starts a ZAP authenticator, stopped in ``close``); with the input
+servers (an allow folder starts a ZAP authenticator, stopped at shutdown); with the input
 daemon's public key too, the SUB socket is a CURVE client of it (see :mod:`services.net`).
 """
 
@@ -37,14 +38,13 @@ import logging
 import math
 import threading
 from collections import deque
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import zmq
 
-from livedrummer.errors import KeyFileError, ProtocolError
+from livedrummer.errors import ProtocolError
 from livedrummer.live.synth import LiveSynth, PoseBatch
 from livedrummer.protocol import (
     Hello,
@@ -65,11 +65,10 @@ from ..net import (
     Security,
     bind,
     connect,
-    serve_control,
     socket,
-    start_authenticator,
     subscribe_protocol,
 )
+from ..service import OnReady, Service
 
 log = logging.getLogger("livedrummer.synth")
 
@@ -105,8 +104,10 @@ class SynthStats:
     answer_s: deque[float] = field(default_factory=lambda: deque(maxlen=10_000))
 
 
-class SynthService:
+class SynthService(Service):
     """See the module docstring. ``start`` binds and connects; ``run`` serves until ``stop``."""
+
+    name = "synth"
 
     def __init__(
         self,
@@ -115,53 +116,34 @@ class SynthService:
         clock: Clock,
         ctx: zmq.Context[zmq.Socket[bytes]],
     ) -> None:
+        super().__init__(clock, ctx, performer=config.performer, security=config.security,
+                         control=config.control, log=log)  # fmt: skip
+        self.clock: Clock = clock
         self.synth = synth
         self.config = config
-        self.clock = clock
-        self.ctx = ctx
         self.format = PoseFormat.from_dtype(synth.dtype)
         self.stats = SynthStats()
         self.tracker = SequenceTracker()
         self.bad_events = BadMessages("synth input stream", log)
-        self.bad_control = BadMessages("synth control socket", log)
-        self.endpoints: dict[str, str] = {}
         self._sub: Any = None
         self._pub: Any = None
         self._seq = 0
-        self._control_stop = threading.Event()
-        self._control_thread: threading.Thread | None = None
-        self._auth: Any = None
         self._ticked = 0  # onsets heard when the last tick began
 
-    def start(self) -> dict[str, str]:
+    def open(self) -> None:
+        """Bind the pose socket, connect to the input daemon (the base binds the control)."""
         cfg = self.config
-        if cfg.security.allow is not None:
-            self._auth = start_authenticator(self.ctx, cfg.security.allow)
-        pub = socket(self.ctx, zmq.PUB)
-        control = socket(self.ctx, zmq.ROUTER)
-        sub = socket(self.ctx, zmq.SUB)
-        try:
-            self.endpoints["pub"] = bind(pub, cfg.pub, "pub endpoint", cfg.security)
-            self.endpoints["control"] = bind(control, cfg.control, "control endpoint", cfg.security)
-            subscribe_protocol(sub)
-            connect(sub, cfg.sub, "sub endpoint", cfg.security)
-        except (ProtocolError, KeyFileError):
-            for s in (pub, control, sub):
-                s.close(0)
-            self._stop_auth()
-            raise
+        self._pub = socket(self.ctx, zmq.PUB)
+        self._sub = socket(self.ctx, zmq.SUB)
+        self.endpoints["pub"] = bind(self._pub, cfg.pub, "pub endpoint", cfg.security)
+        subscribe_protocol(self._sub)
+        connect(self._sub, cfg.sub, "sub endpoint", cfg.security)
         self.endpoints["sub"] = cfg.sub
-        self._pub, self._sub = pub, sub
-        self._control_thread = threading.Thread(
-            target=self._serve_control, args=(control,), name="synth-control", daemon=True
-        )
-        self._control_thread.start()
-        return dict(self.endpoints)
 
     def hello(self) -> Hello:
-        return Hello("synth", "poses", self.config.performer, dict(self.endpoints), self.format)
+        return Hello(self.name, "poses", self.config.performer, dict(self.endpoints), self.format)
 
-    def run(self, stop: threading.Event, on_ready: Callable[[], None] | None = None) -> int:
+    def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
         """Serve until ``stop``; ``on_ready`` is called once the first poses are published
         (the synth is "ready" when it does its job, not when its sockets are bound)."""
         period = 1.0 / self.config.tick_hz
@@ -190,7 +172,7 @@ class SynthService:
                     if now >= next_tick:
                         next_tick = max(next_tick + period, now)
         finally:
-            self.close()
+            self.shutdown()
         return 0
 
     def tick(self, now: float) -> None:
@@ -278,23 +260,12 @@ class SynthService:
             self.stats.controls += msg.body.size
         return None
 
-    def close(self) -> None:
-        self._control_stop.set()
-        if self._control_thread is not None:
-            self._control_thread.join(2.0)
-            self._control_thread = None
+    def release(self) -> None:
         for s in (self._sub, self._pub):
             if s is not None:
                 s.close(0)
         self._sub = self._pub = None
-        self._stop_auth()
         self.bad_events.log_summary()
-        self.bad_control.log_summary()
-
-    def _stop_auth(self) -> None:
-        if self._auth is not None:
-            self._auth.stop()
-            self._auth = None
 
     def summary(self) -> dict[str, Any]:
         s = self.stats
@@ -318,10 +289,3 @@ class SynthService:
         """Dropped messages by socket ("events", "control") and kind; sockets with none left out."""
         out = {"events": self.bad_events.summary(), "control": self.bad_control.summary()}
         return {k: v for k, v in out.items() if v}
-
-    def _ready(self) -> Message:
-        return Message(Kind.READY, self.hello(), self.config.performer, 0, self.clock.now(),
-                       Stream.CONTROL)  # fmt: skip
-
-    def _serve_control(self, sock: Any) -> None:
-        serve_control(sock, self._control_stop, self._ready, self.bad_control)
