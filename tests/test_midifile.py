@@ -148,10 +148,15 @@ def test_truncated_file_names_the_track_and_offset() -> None:
     _raises(data[: len(data) // 2], r"byte 14: truncated: track 1 declares \d+ bytes")
 
 
-def test_corrupt_chunk_and_stray_bytes() -> None:
+def test_corrupt_chunk_is_an_error_and_stray_bytes_after_the_tracks_a_warning() -> None:
     data = DEMO.read_bytes()
-    _raises(data + b"\x01\x02\x03", r"3 stray bytes")
     _raises(data[:14] + b"\x00\xff\x13\x37" + data[18:], r"byte 14: corrupt chunk id")
+    perf = read_midi_bytes(data + b"\x01\x02\x03", "stray.mid", TD)
+    assert perf.warnings == (
+        f"byte {len(data)}: 3 stray bytes where a chunk header should start: the 3 bytes after "
+        "the last declared track are ignored",
+    )
+    assert perf.onsets.tobytes() == read_midi_bytes(data, "ok.mid", TD).onsets.tobytes()
 
 
 def test_bad_event_data_names_the_track() -> None:

@@ -16,12 +16,17 @@ File layout (strict, like kits)::
 
     [notes]
     46 = { piece = "hihat", zone = "bow", hihat = "open", label = "Hi-hat open bow" }
+    33 = { ignored = true, label = "Metronome click" }
+
+A note marked ``ignored`` is a sound with no place on a drum kit (a metronome click, a scratch):
+it is known (the ``auto`` map choice counts it), never turned into an onset, and counted and
+reported by the decoder as ignored rather than unknown.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 
@@ -67,12 +72,18 @@ class NoteMap:
     hihat_cc_closed: int
     notes: Mapping[int, NoteSpec]
     source: str = "<memory>"
+    ignored: Mapping[int, str] = field(default_factory=dict)  # note -> label: never played
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "notes", MappingProxyType(dict(self.notes)))
+        object.__setattr__(self, "ignored", MappingProxyType(dict(self.ignored)))
 
     def lookup(self, note: int) -> NoteSpec | None:
         return self.notes.get(note)
+
+    def knows(self, note: int) -> bool:
+        """Whether the map says what ``note`` is (played or ignored)."""
+        return note in self.notes or note in self.ignored
 
     def openness(self, cc_value: int) -> float:
         """Hi-hat openness 0 (closed) … 1 (open) from the pedal controller's value."""
@@ -92,13 +103,19 @@ def parse_note_map(data: dict[str, object], source: str, stem: str | None = None
     head.done()
     table = root.table("notes")
     notes = {}
+    ignored = {}
     for key in table.keys():
         if not key.isdigit() or not 0 <= int(key) <= 127:
             raise table.fail(key, "note keys must be MIDI note numbers 0-127")
-        notes[int(key)] = _parse_note(int(key), table.table(key))
+        entry = table.table(key)
+        if entry.boolean("ignored", False):
+            ignored[int(key)] = entry.text("label")
+            entry.done()
+        else:
+            notes[int(key)] = _parse_note(int(key), entry)
     table.done()
     root.done()
-    return NoteMap(name, description, hihat_cc, closed, notes, source)
+    return NoteMap(name, description, hihat_cc, closed, notes, source, ignored)
 
 
 def _parse_note(note: int, t: Table) -> NoteSpec:

@@ -23,8 +23,24 @@ a few microseconds each), so the bounds are checked as early as they can be:
   refused, naming the track and the tick, instead of yielding a day of silence to render;
 * zero tempo is an error, and grids are capped (:data:`livedrummer.midi.tempo.MAX_BEATS`).
 
-Many notes at one tick are a correct, bounded result: the decoder keeps one onset per
-(channel, note, velocity) and counts the rest as duplicates.
+Many notes at one tick are a correct, bounded result: one onset per note is kept and the
+rest are counted as duplicates.
+
+Lenient where it is safe, strict where it matters. A file that other readers play is read
+with a warning instead of refused, when what is wrong carries no drum data: bytes after the
+declared tracks (two newlines, a few KB of junk), a header whose track count differs from the
+tracks the file holds, a malformed meta event or running status after SysEx
+(:mod:`livedrummer.midi.repair`, run only on tracks mido refuses). RIFF-RMID files (``.rmi``)
+are unwrapped. Each warning names the byte and the problem, once, and is kept in
+:attr:`Performance.warnings`; a track that truly cannot be read (a truncated chunk, an event
+with out-of-range data) is still a one-line error.
+
+Drums only. :mod:`livedrummer.midi.channels` chooses the file's drum channels from the first
+pass's counts (``channel="auto"``: channel 10 when notes are on several channels). The note map
+may be a tuple of candidates: the one that knows most of the drum channels' notes is chosen
+(``auto``, :func:`choose_map`). Doubled notes (one note twice within 1 ms, e.g. on two tracks)
+are merged into one onset at the higher velocity
+(:func:`~livedrummer.midi.decode.merge_doubled_notes`).
 """
 
 from __future__ import annotations
@@ -32,6 +48,8 @@ from __future__ import annotations
 import io
 import logging
 import struct
+from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,8 +57,10 @@ import mido
 import numpy as np
 
 from livedrummer.errors import MidiFileError
-from livedrummer.midi.decode import MessageDecoder
+from livedrummer.midi.channels import DRUM_BANKS, ChannelChoice, choose_drum_channels
+from livedrummer.midi.decode import MessageDecoder, merge_doubled_notes
 from livedrummer.midi.notemap import NoteMap
+from livedrummer.midi.repair import repair_track
 from livedrummer.midi.tempo import Grid, TempoMap
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, Control, Onset
 from livedrummer.timeline.performance import Performance
@@ -69,6 +89,7 @@ class SmfLayout:
     format: int
     division: int  # raw 16-bit division word
     tracks: tuple[Chunk, ...]
+    warnings: tuple[str, ...] = ()
 
 
 def check_layout(data: bytes, name: str) -> SmfLayout:
@@ -91,34 +112,67 @@ def check_layout(data: bytes, name: str) -> SmfLayout:
         raise MidiFileError(f"{name}: byte 12: division (ticks per beat) is 0")
     pos = 8 + hlen
     tracks: list[Chunk] = []
+    warnings: list[str] = []
     while pos < len(data):
-        if len(data) - pos < 8:
-            raise MidiFileError(
-                f"{name}: byte {pos}: {len(data) - pos} stray bytes where a chunk header "
-                "should start"
-            )
+        problem = _chunk_problem(data, pos, len(tracks))
+        if problem is not None:
+            if tracks and len(tracks) >= ntracks:  # after the declared tracks: junk, not music
+                warnings.append(f"byte {pos}: {problem}: the {len(data) - pos} bytes after the "
+                                f"last declared track are ignored")  # fmt: skip
+                break
+            raise MidiFileError(f"{name}: byte {pos}: {problem}")
         kind = data[pos : pos + 4]
         (length,) = struct.unpack(">I", data[pos + 4 : pos + 8])
-        if pos + 8 + length > len(data):
-            what = f"track {len(tracks) + 1}" if kind == b"MTrk" else f"chunk {kind!r}"
-            raise MidiFileError(
-                f"{name}: byte {pos}: truncated: {what} declares {length} bytes but the file "
-                f"ends {len(data) - pos - 8} bytes after its header"
-            )
         if kind == b"MTrk":
             tracks.append(Chunk(kind, pos, length))
-        elif not kind.isascii() or not kind.isalpha():
-            raise MidiFileError(f"{name}: byte {pos}: corrupt chunk id {kind!r}")
         pos += 8 + length
     if not tracks:
         raise MidiFileError(f"{name}: no MTrk track chunk (header says {ntracks})")
-    if len(tracks) != ntracks:  # common writer bug; harmless, but worth a line in the log
-        log.warning("%s: header declares %d tracks, file holds %d", name, ntracks, len(tracks))
-    return SmfLayout(fmt, division, tuple(tracks))
+    if len(tracks) != ntracks:  # a common writer bug, harmless: every track found is read
+        warnings.append(f"byte 10: header declares {ntracks} tracks, file holds {len(tracks)}: "
+                        f"all {len(tracks)} are read")  # fmt: skip
+    return SmfLayout(fmt, division, tuple(tracks), tuple(warnings))
+
+
+def _chunk_problem(data: bytes, pos: int, tracks: int) -> str | None:
+    """What makes ``data[pos:]`` not a chunk, or None."""
+    if len(data) - pos < 8:
+        return f"{len(data) - pos} stray bytes where a chunk header should start"
+    kind = data[pos : pos + 4]
+    (length,) = struct.unpack(">I", data[pos + 4 : pos + 8])
+    if kind != b"MTrk" and (not kind.isascii() or not kind.isalpha()):
+        return f"corrupt chunk id {kind!r}"
+    if pos + 8 + length > len(data):
+        what = f"track {tracks + 1}" if kind == b"MTrk" else f"chunk {kind!r}"
+        return (f"truncated: {what} declares {length} bytes but the file ends "
+                f"{len(data) - pos - 8} bytes after its header")  # fmt: skip
+    return None
+
+
+def unwrap_rmid(data: bytes, name: str) -> tuple[bytes, str]:
+    """The Standard MIDI File inside a RIFF-RMID file (``.rmi``), and the name errors use.
+
+    Byte offsets in later messages count from the start of the embedded file, which the name
+    says. Other bytes are returned as they are.
+    """
+    if data[:4] != b"RIFF" or data[8:12] != b"RMID":
+        return data, name
+    pos = 12
+    while pos + 8 <= len(data):
+        kind = data[pos : pos + 4]
+        (length,) = struct.unpack("<I", data[pos + 4 : pos + 8])
+        if kind == b"data":
+            inner = data[pos + 8 : pos + 8 + length]
+            return inner, f"{name} (RMID data at byte {pos + 8})"
+        pos += 8 + length + (length & 1)
+    raise MidiFileError(f"{name}: byte 12: RIFF-RMID file without a 'data' chunk")
 
 
 def parse_smf(data: bytes, name: str) -> tuple[mido.MidiFile, SmfLayout]:
-    """Check the layout, then parse with mido; errors name the file, track and bytes."""
+    """Check the layout, then parse with mido; errors name the file, track and bytes.
+
+    The layout's warnings include those of any track repaired (see the module docstring).
+    """
     layout = check_layout(data, name)
     # mido gets the track chunks only, under a header that counts them: it reads the declared
     # count as a *signed* 16-bit number (0x8000 and more read no track at all, silently) and
@@ -127,6 +181,19 @@ def parse_smf(data: bytes, name: str) -> tuple[mido.MidiFile, SmfLayout]:
     body = b"".join(data[c.offset : c.offset + 8 + c.length] for c in layout.tracks)
     try:
         return mido.MidiFile(file=io.BytesIO(b"MThd" + header + body), clip=False), layout
+    except _MIDO_ERRORS:
+        pass
+    chunks: list[bytes] = []
+    warnings = list(layout.warnings)
+    for i, c in enumerate(layout.tracks, start=1):
+        where = f"track {i} (bytes {c.offset}-{c.offset + 8 + c.length})"
+        events, found = repair_track(data, c.offset + 8, c.offset + 8 + c.length, name, where)
+        chunks.append(b"MTrk" + struct.pack(">I", len(events)) + events)
+        warnings += found
+    repaired = SmfLayout(layout.format, layout.division, layout.tracks, tuple(warnings))
+    try:
+        midi = mido.MidiFile(file=io.BytesIO(b"MThd" + header + b"".join(chunks)), clip=False)
+        return midi, repaired
     except _MIDO_ERRORS as exc:
         # Some mido errors carry no text (an EOFError when an event runs past its track).
         what = str(exc) or (
@@ -181,8 +248,17 @@ def _too_long(tracks: list[mido.MidiTrack], tempo: TempoMap) -> str:
     return f"the file lasts {limit}"  # not reached: some track holds the last event
 
 
-def read_midi_file(path: Path | str, note_map: NoteMap, source: int = 0) -> Performance:
-    """Read a Standard MIDI File into a :class:`Performance` (see the module docstring)."""
+MapChoice = NoteMap | Sequence[NoteMap]
+
+
+def read_midi_file(
+    path: Path | str, note_map: MapChoice, source: int = 0, channel: ChannelChoice = "auto"
+) -> Performance:
+    """Read a Standard MIDI File into a :class:`Performance` (see the module docstring).
+
+    ``note_map``: a map, or candidate maps to choose from (:func:`choose_map`); ``channel``:
+    which channels are drums (:func:`livedrummer.midi.channels.choose_drum_channels`).
+    """
     path = Path(path)
     name = str(path)
     if path.is_dir():
@@ -191,16 +267,39 @@ def read_midi_file(path: Path | str, note_map: NoteMap, source: int = 0) -> Perf
         data = path.read_bytes()
     except OSError as exc:
         raise MidiFileError(f"{name}: cannot read: {exc.strerror or exc}") from exc
-    return read_midi_bytes(data, name, note_map, source)
+    return read_midi_bytes(data, name, note_map, source, channel)
 
 
-def read_midi_bytes(data: bytes, name: str, note_map: NoteMap, source: int = 0) -> Performance:
+def choose_map(maps: Sequence[NoteMap], notes: Counter[int]) -> tuple[NoteMap, str]:
+    """The map that knows most of ``notes`` (note-on counts; first of ``maps`` on a tie) and
+    the line that says so."""
+    if not maps:
+        raise ValueError("choose_map: no candidate maps")
+    total = sum(notes.values())
+    known = [sum(n for note, n in notes.items() if m.knows(note)) for m in maps]
+    best = max(range(len(maps)), key=lambda i: (known[i], -i))
+    line = f"map auto: {maps[best].name} knows {known[best]:,} of {total:,} drum notes"
+    others = sorted((k, -i) for i, k in enumerate(known) if i != best)
+    if others:
+        k, i = others[-1]
+        line += f" (next: {maps[-i].name}, {k:,})"
+    return maps[best], line
+
+
+def read_midi_bytes(
+    data: bytes,
+    name: str,
+    note_map: MapChoice,
+    source: int = 0,
+    channel: ChannelChoice = "auto",
+) -> Performance:
     """As :func:`read_midi_file`, from bytes already in memory."""
     if len(data) > MAX_FILE_BYTES:
         raise MidiFileError(
             f"{name}: {len(data)} bytes, more than {MAX_FILE_BYTES} (4 MiB): not a performance"
         )
-    midi, layout = parse_smf(data, name)
+    data, where = unwrap_rmid(data, name)
+    midi, layout = parse_smf(data, where)
     count = sum(len(track) for track in midi.tracks)
     if count > MAX_MESSAGES:
         raise MidiFileError(f"{name}: {count} messages, more than {MAX_MESSAGES}")
@@ -208,15 +307,26 @@ def read_midi_bytes(data: bytes, name: str, note_map: NoteMap, source: int = 0) 
     smpte = layout.division & 0x8000
     tempos: list[tuple[int, int]] = []
     meters: list[tuple[int, int, int]] = []
+    notes: Counter[tuple[int, int]] = Counter()  # (channel, note) -> note-ons
+    programs: dict[int, set[int]] = {}
+    drum_banks: set[int] = set()
     for tick, msg in zip(ticks.tolist(), merged, strict=True):
-        if msg.type == "set_tempo" and not smpte:
+        kind = msg.type
+        if kind == "note_on":
+            if msg.velocity:
+                notes[msg.channel, msg.note] += 1
+        elif kind == "set_tempo" and not smpte:
             if msg.tempo <= 0:
                 raise MidiFileError(f"{name}: tick {tick}: tempo {msg.tempo} (must be > 0)")
             tempos.append((tick, msg.tempo))
-        elif msg.type == "time_signature":
+        elif kind == "time_signature":
             if msg.numerator <= 0 or msg.denominator <= 0:
                 raise MidiFileError(f"{name}: tick {tick}: bad time signature")
             meters.append((tick, msg.numerator, msg.denominator))
+        elif kind == "program_change":
+            programs.setdefault(msg.channel, set()).add(msg.program)
+        elif kind == "control_change" and msg.control == 0 and msg.value in DRUM_BANKS:
+            drum_banks.add(msg.channel)
     if smpte:
         fps = -((layout.division >> 8) - 256)
         tempo = TempoMap.smpte(29.97 if fps == 29 else float(fps), layout.division & 0xFF or 1)
@@ -231,7 +341,22 @@ def read_midi_bytes(data: bytes, name: str, note_map: NoteMap, source: int = 0) 
     except ValueError as exc:
         raise MidiFileError(f"{name}: {exc}") from exc
 
-    decoder = MessageDecoder(note_map, source)
+    by_channel: Counter[int] = Counter()
+    for (ch, _), n in notes.items():
+        by_channel[ch] += n
+    drums = choose_drum_channels(channel, by_channel, programs, drum_banks)
+    notices = [drums.notice] if drums.notice else []
+    if isinstance(note_map, NoteMap):
+        chosen = note_map
+    else:
+        wanted = drums.channels
+        drum_notes: Counter[int] = Counter()
+        for (ch, note), n in notes.items():
+            if wanted is None or ch in wanted:
+                drum_notes[note] += n
+        chosen, line = choose_map(note_map, drum_notes)
+        notices.append(line)
+    decoder = MessageDecoder(chosen, source, drums.channels, drop_doubles=False)
     onsets: list[tuple[object, ...]] = []
     controls: list[tuple[object, ...]] = []
     for time_s, msg in zip(seconds.tolist(), merged, strict=True):
@@ -242,13 +367,22 @@ def read_midi_bytes(data: bytes, name: str, note_map: NoteMap, source: int = 0) 
             onsets.append(event.to_record())
         elif isinstance(event, Control):
             controls.append(event.to_record())
+    decoded = np.array(onsets, dtype=ONSET_DTYPE)
+    merged_onsets = merge_doubled_notes(decoded)
+    stats = decoder.stats
+    stats.duplicates_removed += decoded.size - merged_onsets.size
+    stats.onsets -= decoded.size - merged_onsets.size
+    inner = where[len(name) + 1 :]  # "(RMID data at byte N)" for an RMID file, else ""
     return Performance(
         source=name,
-        map_name=note_map.name,
-        onsets=np.array(onsets, dtype=ONSET_DTYPE),
+        map_name=chosen.name,
+        onsets=merged_onsets,
         controls=np.array(controls, dtype=CONTROL_DTYPE),
         tempo=tempo,
         grid=grid,
         duration_s=float(seconds[-1]) if seconds.size else 0.0,
-        stats=decoder.stats,
+        stats=stats,
+        warnings=tuple(f"{inner} {w}" if inner else w for w in layout.warnings),
+        notices=tuple(notices),
+        channels=None if drums.channels is None else tuple(sorted(drums.channels)),
     )

@@ -4,12 +4,15 @@ Produced by :mod:`livedrummer.midi.smf` (or by a journal replay), consumed by li
 stroke synthesis and rendering. Onsets and controls are record arrays sorted by time (see
 :mod:`livedrummer.timeline.events`); the grid and tempo map give the musical structure; ``stats``
 keeps the count of everything that was not turned into an event, so reports can say what was
-skipped and why.
+skipped and why; ``warnings`` are what the reader read past in a damaged file, ``notices`` the
+reader's choices a person should know of (channels left out, the map ``auto`` chose).
+:meth:`Performance.report_lines` is the one text every command prints about a file it reads.
 """
 
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,6 +36,33 @@ class Performance:
     grid: Grid
     duration_s: float
     stats: DecodeStats
+    warnings: tuple[str, ...] = ()
+    notices: tuple[str, ...] = ()
+    channels: tuple[int, ...] | None = None  # 0-based channels read as drums; None: all
+
+    def report_lines(self, note_labels: Mapping[int, str] | None = None) -> list[str]:
+        """What a person must hear of this file: warnings, notices, notes left out, and that it
+        has no drum notes if so (one line each; empty for a clean drum file).
+
+        ``note_labels``: names of the map's ignored notes, for the ignored-notes line.
+        """
+        lines = [f"warning: {w}" for w in self.warnings]
+        lines += self.notices
+        unknown = self.stats.unknown_notes
+        if unknown:
+            listed = ", ".join(f"note {k} x{v}" for k, v in sorted(unknown.items()))
+            lines.append(f"unknown notes: {listed} (not in map {self.map_name}; not played)")
+        ignored = self.stats.ignored_notes
+        if ignored:
+            labels = note_labels or {}
+            listed = ", ".join(
+                f"note {k}{' ' + labels[k] if k in labels else ''} x{v}"
+                for k, v in sorted(ignored.items())
+            )
+            lines.append(f"ignored notes: {listed} (no place on a drum kit; not played)")
+        if not self.onsets.size:
+            lines.append("no drum notes: nothing for the drummer to play")
+        return lines
 
     def counts_by_piece_zone(self) -> dict[str, dict[str, int]]:
         """Onset counts per instrument, then per zone (hi-hat zones carry the articulation)."""
@@ -64,6 +94,13 @@ class Performance:
             "by_piece": self.counts_by_piece_zone(),
             "by_note": {str(k): v for k, v in sorted(self.stats.note_ons.items())},
             "unknown_notes": {str(k): v for k, v in sorted(self.stats.unknown_notes.items())},
+            "ignored_notes": {str(k): v for k, v in sorted(self.stats.ignored_notes.items())},
+            "channels": None if self.channels is None else [c + 1 for c in self.channels],
+            "other_channel_notes": {
+                str(c + 1): n for c, n in sorted(self.stats.other_channel_notes.items())
+            },
+            "warnings": list(self.warnings),
+            "notices": list(self.notices),
             "duplicates_removed": self.stats.duplicates_removed,
             "hihat_pedal_events": int(np.count_nonzero(ctl == ControlKind.HIHAT_PEDAL)),
             "choke_events": int(np.count_nonzero(ctl == ControlKind.CHOKE)),
