@@ -162,3 +162,20 @@ def load_note_map(spec: str) -> NoteMap:
 
 def note_map_names() -> list[str]:
     return sorted(entries("kits/maps"))
+
+
+#: The map name that asks the file reader to choose among :func:`bundled_note_maps`.
+AUTO = "auto"
+#: Preferred first when two bundled maps know as many of a file's notes.
+_FIRST = "general-midi"
+
+
+def bundled_note_maps() -> tuple[NoteMap, ...]:
+    """Every note map shipped with livedrummer, ``general-midi`` first (the ``auto`` choice's
+    candidates; a user's own maps are chosen by name)."""
+    from livedrummer.resources import data_dir
+
+    paths = sorted(
+        (data_dir("kits") / "maps").glob("*.toml"), key=lambda p: (p.stem != _FIRST, p.stem)
+    )
+    return tuple(load_note_map_file(p) for p in paths)

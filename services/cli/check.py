@@ -13,23 +13,30 @@ note, piece, limb, whether it is too fast for one hand or made with the arms cro
 in ``hard``), and its contact error, so a program can hold the animation against the sticking
 sheet note by note. That list grows with the notes (about 200 bytes each); ``--summary`` leaves
 it out, e.g. for the whole Groove MIDI Dataset.
+
+A folder is searched for ``.mid .midi .kar .rmi`` files in any case. A file that cannot be read
+is reported on its own line and the others are checked; a file with no drum notes is reported
+and left out. The count of unreadable files ends the report, and any makes the exit status 2.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
+import sys
 from typing import TYPE_CHECKING, Any
 
 from livedrummer.errors import LivedrummerError
 
 from .common import (
     Subparsers,
+    add_channel_option,
     add_command,
     add_kit_option,
     add_map_option,
     add_motion_options,
+    midi_files,
+    read_performance,
     sticking_of,
 )
 
@@ -45,23 +52,11 @@ def register(sub: Subparsers) -> None:
     p.add_argument("files", nargs="+", help="Standard MIDI File(s) or folders of them")
     add_kit_option(p)
     add_map_option(p)
+    add_channel_option(p)
     add_motion_options(p)
     p.add_argument("--fps", type=float, default=200.0, help="frames per second checked")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--summary", action="store_true", help="--json: without the notes of each file")
-
-
-def midi_files(specs: list[str]) -> list[Path]:
-    out: list[Path] = []
-    for spec in specs:
-        path = Path(spec)
-        if path.is_dir():
-            out.extend(sorted(path.rglob("*.mid")))
-        else:
-            out.append(path)
-    if not out:
-        raise LivedrummerError(f"no .mid files in {', '.join(specs)}")
-    return out
 
 
 def run(args: argparse.Namespace) -> int:
@@ -73,13 +68,11 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.body.rig import build_rig
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.kit.loader import load_kit
-    from livedrummer.midi.notemap import load_note_map
-    from livedrummer.midi.smf import read_midi_file
     from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
     rig = build_rig(kit)
-    note_map = load_note_map(args.map)
+    map_names: set[str] = set()
     expression = load_expression(args.preset) if args.preset else None
     strokes = StrokeParams(model=args.strokes)
     files = midi_files(args.files)
@@ -93,8 +86,19 @@ def run(args: argparse.Namespace) -> int:
     worst_contact: tuple[float, str] = (0.0, "")
     per_file: list[dict[str, Any]] = []
     hard = {"too_fast": 0, "crossed": 0}
+    unreadable = 0
+    no_drums = 0
     for path in files:
-        performance = read_midi_file(path, note_map)
+        try:
+            performance, note_map = read_performance(args, path)
+        except LivedrummerError as exc:  # one line per file; the others are still checked
+            print(f"livedrummer: error: {exc}", file=sys.stderr)
+            unreadable += 1
+            continue
+        if not performance.onsets.size:  # said on stderr
+            no_drums += 1
+            continue
+        map_names.add(note_map.name)
         done = perform(performance, rig, note_map, expression, strokes,
                        sticking=sticking_of(args, performance, kit))  # fmt: skip
         r = check(done.animation, done.sticking, args.fps)
@@ -115,9 +119,11 @@ def run(args: argparse.Namespace) -> int:
             worst_contact = (float(r.contact_error_m.max()), str(path))
     e = np.concatenate(errors) * 1000.0 if errors else np.zeros(0)
     summary: dict[str, Any] = {
-        "files": len(files),
+        "files": len(files) - unreadable - no_drums,
+        "unreadable_files": unreadable,
+        "files_without_drums": no_drums,
         "kit": kit.name,
-        "map": note_map.name,
+        "map": ", ".join(sorted(map_names)) or None,
         **totals,
         **hard,
         "contact_error_mm": {
@@ -138,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(summary, indent=1))
     else:
         c = summary["contact_error_mm"]
-        print(f"{len(files)} file(s), kit {kit.name}, map {note_map.name}")
+        print(f"{summary['files']} file(s), kit {kit.name}, map {summary['map']}")
         print(f"  notes checked      {summary['notes']}  (not played: {summary['not_played']})")
         print(f"  too hard to play   {hard['too_fast']} too fast for one hand, "
               f"{hard['crossed']} with the arms crossed")  # fmt: skip
@@ -150,6 +156,13 @@ def run(args: argparse.Namespace) -> int:
         )
         print(f"  joint-limit hits   {summary['joint_limit_violations']} of "
               f"{summary['frames']} frames  {by_limit}")  # fmt: skip
+    if no_drums:
+        print(f"livedrummer: {no_drums} of {len(files)} files have no drum notes",
+              file=sys.stderr)  # fmt: skip
+    if unreadable:
+        print(f"livedrummer: error: {unreadable} of {len(files)} files could not be read",
+              file=sys.stderr)  # fmt: skip
+        return 2
     return 0
 
 

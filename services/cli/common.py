@@ -23,6 +23,7 @@ from livedrummer.resources import data_dir
 
 if TYPE_CHECKING:
     from livedrummer.kit.model import Kit
+    from livedrummer.midi.notemap import NoteMap
     from livedrummer.sticking.result import Sticking
     from livedrummer.timeline.performance import Performance
 
@@ -125,10 +126,79 @@ def add_command(
     return parser
 
 
-def add_map_option(parser: argparse.ArgumentParser) -> None:
+def add_map_option(parser: argparse.ArgumentParser, default: str = "auto") -> None:
+    """``--map``; for a file, ``auto`` (the default) picks the bundled map that knows the most
+    of the file's notes and says which."""
     parser.add_argument(
-        "--map", default="general-midi", help="note map name or .toml path (default general-midi)"
-    )
+        "--map", default=default,
+        help=f"note map name or .toml path; auto: the bundled map that knows the most of the "
+        f"file's notes (default {default})",
+    )  # fmt: skip
+
+
+def add_channel_option(parser: Any, default: str = "auto") -> None:
+    """``--channel N|all``: which MIDI channel is the drums (parsed by
+    :func:`livedrummer.midi.channels.parse_channel`)."""
+    parser.add_argument(
+        "--channel", default=default, metavar="N|all",
+        help="MIDI channel 1-16 read as drums, or all; auto: channel 10 when notes are on "
+        f"several channels (default {default})",
+    )  # fmt: skip
+
+
+#: What a folder given as input is searched for (any case).
+MIDI_SUFFIXES = (".mid", ".midi", ".kar", ".rmi")
+
+
+def midi_files(specs: Sequence[str]) -> list[Path]:
+    """The files named, with every MIDI file (:data:`MIDI_SUFFIXES`) under each folder named."""
+    from livedrummer.errors import LivedrummerError
+
+    out: list[Path] = []
+    for spec in specs:
+        path = Path(spec)
+        if path.is_dir():
+            found = (p for p in path.rglob("*") if p.suffix.lower() in MIDI_SUFFIXES)
+            out.extend(sorted(p for p in found if p.is_file()))
+        else:
+            out.append(path)
+    if not out:
+        raise LivedrummerError(f"no MIDI files ({' '.join(MIDI_SUFFIXES)}) in {', '.join(specs)}")
+    return out
+
+
+def report(path: Path | str, performance: Performance, note_map: NoteMap) -> None:
+    """The lines every command prints on stderr about a file it read
+    (:meth:`~livedrummer.timeline.performance.Performance.report_lines`)."""
+    for line in performance.report_lines(note_map.ignored):
+        print(f"livedrummer: {path}: {line}", file=sys.stderr)
+
+
+def read_performance(
+    args: argparse.Namespace, path: Path | str, default_map: str = "auto", *, quiet: bool = False
+) -> tuple[Performance, NoteMap]:
+    """``path`` read as ``--map`` and ``--channel`` say, its report printed (unless
+    ``quiet``); the one way every file command reads its file."""
+    from livedrummer.errors import ConfigError
+    from livedrummer.midi.channels import parse_channel
+    from livedrummer.midi.notemap import AUTO, bundled_note_maps, load_note_map
+    from livedrummer.midi.smf import read_midi_file
+
+    try:
+        channel = parse_channel(getattr(args, "channel", "auto"))
+    except ValueError as exc:
+        raise ConfigError(f"--channel: {exc}") from None
+    spec = getattr(args, "map", None) or default_map
+    if spec == AUTO:
+        maps = bundled_note_maps()
+        performance = read_midi_file(path, maps, channel=channel)
+        note_map = next(m for m in maps if m.name == performance.map_name)
+    else:
+        note_map = load_note_map(spec)
+        performance = read_midi_file(path, note_map, channel=channel)
+    if not quiet:
+        report(path, performance, note_map)
+    return performance, note_map
 
 
 def add_api_option(parser: argparse.ArgumentParser) -> None:

@@ -23,11 +23,13 @@ from livedrummer.render.camera import CAMERA_NAMES
 from .common import (
     DEMO_MAP,
     Subparsers,
+    add_channel_option,
     add_command,
     add_kit_option,
     add_motion_options,
     add_renamed,
     demo_groove,
+    read_performance,
 )
 from .keys import add_curve_options, security_from_args
 from .render import body_scene, parse_size
@@ -37,7 +39,9 @@ def register(sub: Subparsers) -> None:
     p = add_command(sub, "display", run)
     p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
     add_kit_option(p)
-    p.add_argument("--map", help="note map (default general-midi; roland-td for the demo)")
+    p.add_argument("--map", help="note map name or .toml path (default auto: the bundled map "
+                   "that knows the most of the file's notes; roland-td for the demo)")  # fmt: skip
+    add_channel_option(p)
     p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="first viewpoint")
     p.add_argument("--size", default="1280x720", help="window size WIDTHxHEIGHT")
     p.add_argument("--fullscreen", action="store_true", help="full screen (projectors)")
@@ -84,16 +88,14 @@ def run(args: argparse.Namespace) -> int:
     if args.live:
         return run_live(args)
     from livedrummer.kit.loader import load_kit
-    from livedrummer.midi.notemap import load_note_map
-    from livedrummer.midi.smf import read_midi_file
     from livedrummer.render.overlay import parse_overlays
 
     from ..display.window import WindowOptions, show
 
     source = Path(args.file) if args.file else demo_groove()
-    map_name = args.map or ("general-midi" if args.file else DEMO_MAP)
-    note_map = load_note_map(map_name)
-    performance = read_midi_file(source, note_map)
+    performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
+    if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
+        return 0
     options = WindowOptions(
         size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
         camera=args.camera, samples=args.aa, quit_after_s=args.seconds,

@@ -2,7 +2,8 @@
 
 Animates the file on the kit, with the limbs :func:`livedrummer.sticking.stick_performance`
 gives (``--sticking``, ``--score``: what ``livedrummer sticking`` prints), and samples it at
-``--fps`` from the first onset minus a second to the last plus a second.
+``--fps`` from the start of the file to its end plus ``--tail`` (default 1 s), the same span
+``render`` and ``display`` show. A file with no drum notes writes nothing and says so.
 """
 
 from __future__ import annotations
@@ -14,10 +15,12 @@ from livedrummer.errors import LivedrummerError
 
 from .common import (
     Subparsers,
+    add_channel_option,
     add_command,
     add_kit_option,
     add_map_option,
     add_motion_options,
+    read_performance,
     sticking_of,
 )
 
@@ -27,8 +30,10 @@ def register(sub: Subparsers) -> None:
     p.add_argument("file", help="Standard MIDI File")
     p.add_argument("-o", "--output", required=True, help="output .bvh path")
     p.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
+    p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
     add_kit_option(p)
     add_map_option(p)
+    add_channel_option(p)
     add_motion_options(p)
 
 
@@ -41,15 +46,16 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.body.rig import build_rig
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.kit.loader import load_kit
-    from livedrummer.midi.notemap import load_note_map
-    from livedrummer.midi.smf import read_midi_file
 
     if not 1.0 <= args.fps <= 1000.0:
         raise LivedrummerError(f"--fps must be between 1 and 1000 (got {args.fps})")
-    note_map = load_note_map(args.map)
+    if not 0.0 <= args.tail <= 60.0:
+        raise LivedrummerError(f"--tail must be between 0 and 60 s (got {args.tail})")
+    performance, note_map = read_performance(args, args.file)
+    if not performance.onsets.size:  # said on stderr: no motion to write
+        return 0
     kit = load_kit(args.kit)
     rig = build_rig(kit)
-    performance = read_midi_file(args.file, note_map)
     expression = load_expression(args.preset) if args.preset else None
     done = perform(
         performance,
@@ -59,10 +65,9 @@ def run(args: argparse.Namespace) -> int:
         StrokeParams(model=args.strokes),
         sticking=sticking_of(args, performance, kit),
     )
-    t = performance.onsets["time_s"]
-    start = max(0.0, float(t.min()) - 1.0) if t.size else 0.0
-    end = float(t.max()) + 1.0 if t.size else 1.0
-    times = np.arange(start, end, 1.0 / args.fps)
+    # One length for every command: render and display show the file plus the same tail.
+    end = max(performance.duration_s, float(performance.onsets["time_s"].max())) + args.tail
+    times = np.arange(0.0, end, 1.0 / args.fps)
     local, root = done.animation.locals(times)
     out = Path(args.output)
     try:

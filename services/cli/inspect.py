@@ -6,21 +6,26 @@ import argparse
 import json
 from typing import Any
 
-from livedrummer.midi.notemap import load_note_map
-from livedrummer.midi.smf import read_midi_file
-
-from .common import Subparsers, add_command, add_map_option
+from .common import (
+    Subparsers,
+    add_channel_option,
+    add_command,
+    add_map_option,
+    read_performance,
+)
 
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "inspect", run, "summarize a MIDI file: tempo, meter, onsets per piece")
     p.add_argument("file", help="Standard MIDI File")
     add_map_option(p)
+    add_channel_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 def run(args: argparse.Namespace) -> int:
-    summary = read_midi_file(args.file, load_note_map(args.map)).summary()
+    performance, _ = read_performance(args, args.file, quiet=True)  # the summary says it all
+    summary = performance.summary()
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
@@ -32,6 +37,10 @@ def print_summary(s: dict[str, Any]) -> None:
     tempos = ", ".join(f"{bpm:g} bpm at {t:.2f} s" for t, bpm in s["tempos_bpm"])
     meters = ", ".join(f"{n}/{d} at {t:.2f} s" for t, n, d in s["meters"])
     print(f"{s['file']}  (map {s['map']})")
+    for warning in s.get("warnings", []):
+        print(f"  warning   {warning}")
+    for notice in s.get("notices", []):
+        print(f"  note      {notice}")
     print(f"  duration  {s['duration_s']:.3f} s, {s['bars']} bars, {s['beats']} beats")
     print(f"  tempo     {tempos}")
     print(f"  meter     {meters}")
@@ -49,3 +58,9 @@ def print_summary(s: dict[str, Any]) -> None:
         print(f"  UNKNOWN   {listed} (not in map {s['map']}; choose another --map)")
     else:
         print("  unknown   none")
+    ignored = s.get("ignored_notes", {})
+    if ignored:
+        listed = ", ".join(f"note {k} x{v}" for k, v in ignored.items())
+        print(f"  ignored   {listed} (no place on a drum kit; not played)")
+    if not s["onsets"]:
+        print("  no drum notes: nothing for the drummer to play")

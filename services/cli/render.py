@@ -28,11 +28,13 @@ from livedrummer.render.camera import CAMERA_NAMES
 from .common import (
     DEMO_MAP,
     Subparsers,
+    add_channel_option,
     add_command,
     add_kit_option,
     add_motion_options,
     add_renamed,
     demo_groove,
+    read_performance,
     sticking_of,
 )
 
@@ -59,7 +61,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--fps", type=int, default=30, help="frames per second")
     p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="viewpoint")
     add_kit_option(p)
-    p.add_argument("--map", help="note map (default general-midi; roland-td for the demo)")
+    p.add_argument("--map", help="note map name or .toml path (default auto: the bundled map "
+                   "that knows the most of the file's notes; roland-td for the demo)")  # fmt: skip
+    add_channel_option(p)
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
     p.add_argument("--aa", type=int, default=0, metavar="N", help="multisample N (slow on CPU)")
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
@@ -138,8 +142,6 @@ class ProgressBar:
 
 def run(args: argparse.Namespace) -> int:
     from livedrummer.kit.loader import load_kit
-    from livedrummer.midi.notemap import load_note_map
-    from livedrummer.midi.smf import read_midi_file
     from livedrummer.render.overlay import OVERLAYS, parse_overlays
 
     from ..display.export import export
@@ -154,9 +156,9 @@ def run(args: argparse.Namespace) -> int:
 
         check_soundfont(args.soundfont)
     source = Path(args.file) if args.file else demo_groove()
-    map_name = args.map or ("general-midi" if args.file else DEMO_MAP)
-    note_map = load_note_map(map_name)
-    performance = read_midi_file(source, note_map)
+    performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
+    if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
+        return 0
     kit = load_kit(args.kit)
     body = body_scene(args, performance, kit, note_map)
     out = args.output

@@ -19,10 +19,12 @@ from typing import TYPE_CHECKING, Any
 
 from .common import (
     Subparsers,
+    add_channel_option,
     add_command,
     add_kit_option,
     add_map_option,
     add_sticking_options,
+    read_performance,
 )
 
 if TYPE_CHECKING:
@@ -35,6 +37,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("file", help="Standard MIDI File")
     add_kit_option(p)
     add_map_option(p)
+    add_channel_option(p)
     add_sticking_options(p)
     p.add_argument(
         "--lookahead-ms",
@@ -50,13 +53,15 @@ def register(sub: Subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from livedrummer.kit.loader import load_kit
-    from livedrummer.midi.notemap import load_note_map
-    from livedrummer.midi.smf import read_midi_file
     from livedrummer.sticking.score import write_score
     from livedrummer.sticking.sheet import render_sheet
     from livedrummer.sticking.strategy import stick_performance
 
-    perf = read_midi_file(args.file, load_note_map(args.map))
+    perf, _ = read_performance(args, args.file)
+    if not perf.onsets.size:  # said on stderr; nothing to stick
+        if args.json:
+            print("[]")
+        return 0
     kit = load_kit(args.kit)
     lookahead_s = None if args.lookahead_ms is None else args.lookahead_ms / 1000.0
     result = stick_performance(perf, kit, args.sticking, score=args.score, lookahead_s=lookahead_s)
