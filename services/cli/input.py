@@ -12,7 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import Subparsers, add_api_option, add_command, add_map_option
+from .common import Subparsers, add_api_option, add_channel_option, add_command, add_map_option
 from .keys import add_curve_options, security_from_args
 
 
@@ -31,7 +31,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--pub", default=DEFAULT_PUB, help=f"publish endpoint (default {DEFAULT_PUB})")
     p.add_argument("--control", default=DEFAULT_CONTROL,
                    help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
-    add_map_option(p)
+    add_map_option(p, "general-midi")
+    add_channel_option(p, "all")  # live: the kit's channel; a keyboard on the port is not drums
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
     p.add_argument("--wait-subscribers", type=int, default=0, metavar="N",
                    help="open the source after N subscriptions (1 per SUB topic)")  # fmt: skip
@@ -51,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
     import zmq
 
     from livedrummer.errors import ConfigError
+    from livedrummer.midi.channels import parse_channel
     from livedrummer.midi.decode import MessageDecoder
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.timeline.clock import MonotonicClock
@@ -72,11 +74,17 @@ def run(args: argparse.Namespace) -> int:
     clock = MonotonicClock()
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     note_map = load_note_map(args.map)
+    try:
+        channel = parse_channel(args.channel)
+    except ValueError as exc:
+        raise ConfigError(f"--channel: {exc}") from None
+    channels = None if channel in ("all", "auto") else frozenset({int(channel)})
     source: Source
     if args.file is not None:
         from ..input.fileplayer import FileSource
 
-        source = FileSource(args.file, clock, note_map, args.performer, loop=args.loop)
+        source = FileSource(args.file, clock, note_map, args.performer, loop=args.loop,
+                            channel=channel)  # fmt: skip
         source.load()
     elif args.remote is not None:
         from ..input.remote import RemoteSource
@@ -87,12 +95,12 @@ def run(args: argparse.Namespace) -> int:
 
         if args.baud not in BAUD_RATES:
             raise ConfigError(f"--baud: expected one of {BAUD_RATES} (got {args.baud})")
-        decoder = MessageDecoder(note_map, args.performer)
+        decoder = MessageDecoder(note_map, args.performer, channels)
         source = SerialSource(args.serial, clock, decoder, args.baud)
     else:
         from ..input.midiport import MidiPortSource
 
-        decoder = MessageDecoder(note_map, args.performer)
+        decoder = MessageDecoder(note_map, args.performer, channels)
         source = MidiPortSource(args.midi, clock, decoder, api=args.api)
     config = DaemonConfig(
         pub=args.pub,

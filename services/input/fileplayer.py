@@ -7,16 +7,21 @@ reaches ``start + time_s``, then stamped with the clock *at release*, exactly li
 arriving from a kit. Events due at the same instant come out in one batch. With a
 :class:`~livedrummer.timeline.clock.SteppedClock` the whole file "plays" at once, deterministically.
 
+``channel`` chooses the drum channels as for every file command (``all`` by default, as a kit's
+port is read); what the file's report says (channels left out, unknown notes) is logged once.
+
 Limits: ``open`` (re)starts the file from the top; ``loop`` restarts it after ``loop_gap_s``.
 """
 
 from __future__ import annotations
 
+import logging
 import threading
 from pathlib import Path
 
 import numpy as np
 
+from livedrummer.midi.channels import ChannelChoice
 from livedrummer.midi.decode import DecodeStats
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.midi.smf import read_midi_file
@@ -24,6 +29,8 @@ from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import Control, ControlKind, Onset
 
 from .base import Event, Problems, Source
+
+log = logging.getLogger(__name__)
 
 
 class FileSource(Source):
@@ -38,11 +45,13 @@ class FileSource(Source):
         loop: bool = False,
         loop_gap_s: float = 1.0,
         problems: Problems | None = None,
+        channel: ChannelChoice = "all",
     ) -> None:
         super().__init__(f"file:{path}", clock, problems)
         self.path = path
         self.note_map = note_map
         self.performer = performer
+        self.channel = channel
         self.loop = loop
         self.loop_gap_s = loop_gap_s
         self._times = np.zeros(0)
@@ -60,7 +69,9 @@ class FileSource(Source):
     def load(self) -> None:
         """Read the file (a bad file is a MidiFileError here, before anything is bound)."""
         if not self._events:
-            perf = read_midi_file(self.path, self.note_map, self.performer)
+            perf = read_midi_file(self.path, self.note_map, self.performer, self.channel)
+            for line in perf.report_lines(self.note_map.ignored):
+                log.warning("%s: %s", self.path, line)
             self._stats = perf.stats
             events: list[tuple[float, int, Onset | Control]] = []
             for c in perf.controls:
