@@ -42,6 +42,8 @@ COMMANDS: dict[str, str] = {
     "synth": "turn live onsets into drummer poses (online)",
     "up": "run the live pipeline: input, synth and display",
     "keys": "make and list CURVE key pairs for remote streams",
+    "avatar": "describe an avatar file: bones, proportions, triangles, textures",
+    "avatars": "list the avatars --avatar NAME can pick",
 }
 
 

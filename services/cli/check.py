@@ -54,6 +54,9 @@ def register(sub: Subparsers) -> None:
     add_map_option(p)
     add_channel_option(p)
     add_motion_options(p)
+    from .common import add_avatar_option
+
+    add_avatar_option(p)
     p.add_argument("--fps", type=float, default=200.0, help="frames per second checked")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--summary", action="store_true", help="--json: without the notes of each file")
@@ -65,13 +68,15 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.body.check import check
     from livedrummer.body.expression import load_expression
     from livedrummer.body.perform import perform
-    from livedrummer.body.rig import build_rig
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.kit.loader import load_kit
     from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
-    rig = build_rig(kit)
+    from .common import avatar_of, rig_for
+
+    avatar = avatar_of(args)
+    rig = rig_for(kit, avatar)
     map_names: set[str] = set()
     expression = load_expression(args.preset) if args.preset else None
     strokes = StrokeParams(model=args.strokes)
@@ -123,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
         "unreadable_files": unreadable,
         "files_without_drums": no_drums,
         "kit": kit.name,
+        "avatar": "default" if avatar is None else avatar.source,
         "map": ", ".join(sorted(map_names)) or None,
         **totals,
         **hard,

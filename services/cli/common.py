@@ -22,6 +22,8 @@ from typing import TYPE_CHECKING, Any
 from livedrummer.resources import data_dir
 
 if TYPE_CHECKING:
+    from livedrummer.avatar.model import Avatar
+    from livedrummer.body.rig import Rig
     from livedrummer.kit.model import Kit
     from livedrummer.midi.notemap import NoteMap
     from livedrummer.sticking.result import Sticking
@@ -210,6 +212,55 @@ def add_api_option(parser: argparse.ArgumentParser) -> None:
 
 def add_kit_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--kit", default="rock5", help="kit name or .toml path (default rock5)")
+
+
+def add_avatar_option(parser: Any) -> None:
+    """``--avatar FILE|NAME`` and ``--bone-map FILE``: who plays. The rig takes the avatar's
+    proportions (:func:`rig_for`), the renderer its mesh; the same in every command."""
+    parser.add_argument(
+        "--avatar", metavar="FILE|NAME",
+        help="the drummer: a .vrm, .glb or .gltf file, or a name from `livedrummer avatars` "
+        "(default: the built-in character)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--bone-map", type=Path, metavar="FILE",
+        help="TOML bone map for a glTF rig whose bone names are not known (default: "
+        "FILE.bones.toml beside the avatar, else the VRM map or known rig names)",
+    )  # fmt: skip
+
+
+def avatar_of(args: argparse.Namespace) -> Avatar | None:
+    """The avatar ``--avatar`` names, loaded and bound to the body (None: the built-in one)."""
+    spec = getattr(args, "avatar", None)
+    if spec is None:
+        return None
+    from livedrummer.avatar.loader import load_avatar
+
+    return load_avatar(spec, getattr(args, "bone_map", None))
+
+
+def avatar_argv(args: argparse.Namespace) -> list[str]:
+    """``--avatar``/``--bone-map`` as given, for a child process (``up``)."""
+    out: list[str] = []
+    if getattr(args, "avatar", None) is not None:
+        out += ["--avatar", str(args.avatar)]
+    if getattr(args, "bone_map", None) is not None:
+        out += ["--bone-map", str(args.bone_map)]
+    return out
+
+
+def rig_for(kit: Kit, avatar: Avatar | None) -> Rig:
+    """The body fitted to ``kit`` with ``avatar``'s proportions (the default body's without
+    one); a piece the avatar cannot reach is the rig's one-line error, naming the avatar."""
+    from livedrummer.body.rig import build_rig
+    from livedrummer.errors import UnreachableError
+
+    if avatar is None:
+        return build_rig(kit)
+    try:
+        return build_rig(kit, avatar.lengths)
+    except UnreachableError as exc:
+        raise UnreachableError(f"{exc}, with avatar {avatar.source}") from None
 
 
 #: The limb-assignment strategies, as :data:`livedrummer.sticking.STRATEGIES` names them (kept

@@ -32,6 +32,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
     add_kit_option(p)
+    from .common import add_avatar_option
+
+    add_avatar_option(p)
     add_map_option(p)
     add_channel_option(p)
     add_motion_options(p)
@@ -43,7 +46,6 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.body.bvh import bvh_text
     from livedrummer.body.expression import load_expression
     from livedrummer.body.perform import perform
-    from livedrummer.body.rig import build_rig
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.kit.loader import load_kit
 
@@ -55,7 +57,9 @@ def run(args: argparse.Namespace) -> int:
     if not performance.onsets.size:  # said on stderr: no motion to write
         return 0
     kit = load_kit(args.kit)
-    rig = build_rig(kit)
+    from .common import avatar_of, rig_for
+
+    rig = rig_for(kit, avatar_of(args))
     expression = load_expression(args.preset) if args.preset else None
     done = perform(
         performance,
