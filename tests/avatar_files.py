@@ -51,7 +51,7 @@ for _side, _sx in (("left", 1.0), ("right", -1.0)):
     })  # fmt: skip
 
 #: leaf ends of the boxes (a bone with no child in BONES)
-ENDS = {"head": (0.0, 1.75, 0.0), "hair": (0.0, 1.74, -0.10)}
+ENDS = {"head": (0.0, 1.75, 0.0), "hair": (0.0, 1.70, -0.12)}
 for _side, _sx in (("left", 1.0), ("right", -1.0)):
     ENDS[f"{_side}MiddleDistal"] = (_sx * 0.91, 1.40, 0.0)
     ENDS[f"{_side}ThumbDistal"] = (_sx * 0.81, 1.39, 0.095)
@@ -219,7 +219,7 @@ def _segments(
             continue
         thick = THICK.get(bone, 0.03 if "Middle" in bone or "Thumb" in bone else
                           0.04 if "Shoulder" in bone else 0.07 if "Arm" in bone or "Hand" in bone
-                          else 0.10)  # fmt: skip
+                          else 0.04 if "Foot" in bone or "Toes" in bone else 0.10)  # fmt: skip
         out.append((bone, pos[bone], end, thick * k))
     return out
 
@@ -285,7 +285,7 @@ def build(spec: Spec) -> bytes:
     nose_a = head + np.array([0, 0.05, 0]) * k + forward * 0.05 * k
     head_parts = [("head", head, top, 0.18 * k, 1), ("head", nose_a, nose_a + forward * 0.05 * k,
                                                       0.03 * k, 1),
-                  ("hair", pos["hair"], pos["END:hair"], 0.12 * k, 2)]  # fmt: skip
+                  ("hair", pos["hair"], pos["END:hair"], 0.05 * k, 2)]  # fmt: skip
     body = [(b, a, e, t, 0) for b, a, e, t in _segments(spec, pos)]
     roots = [index["hips"]]
     if spec.rigid:
