@@ -19,7 +19,10 @@ def test_bundled_maps() -> None:
 
 def test_general_midi_covers_every_percussion_note() -> None:
     gm = load_note_map("general-midi")
-    assert sorted(gm.notes) == list(range(35, 82))
+    assert sorted(gm.notes) == list(range(35, 88))  # GM1 35-81, GM2/GS hand percussion 82-87
+    assert sorted(gm.ignored) == list(range(27, 35))  # GM2/GS sticks, clicks, scratches
+    assert gm.ignored[33] == "Metronome click" and gm.lookup(33) is None
+    assert gm.lookup(82).instrument == "percussion"  # type: ignore[union-attr]
     assert gm.lookup(42).hihat is HiHat.CLOSED  # type: ignore[union-attr]
     assert gm.lookup(44).zone is Zone.PEDAL  # type: ignore[union-attr]
     assert gm.lookup(53).zone is Zone.BELL  # type: ignore[union-attr]

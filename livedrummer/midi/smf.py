@@ -116,7 +116,9 @@ def check_layout(data: bytes, name: str) -> SmfLayout:
     while pos < len(data):
         problem = _chunk_problem(data, pos, len(tracks))
         if problem is not None:
-            if tracks and len(tracks) >= ntracks:  # after the declared tracks: junk, not music
+            # Junk after a track is no music lost; a truncated chunk before the declared
+            # tracks are all there is (a file cut short).
+            if tracks and (len(tracks) >= ntracks or not problem.startswith("truncated")):
                 warnings.append(f"byte {pos}: {problem}: the {len(data) - pos} bytes after the "
                                 f"last declared track are ignored")  # fmt: skip
                 break
@@ -355,7 +357,8 @@ def read_midi_bytes(
             if wanted is None or ch in wanted:
                 drum_notes[note] += n
         chosen, line = choose_map(note_map, drum_notes)
-        notices.append(line)
+        if drum_notes:  # with no drum notes, the choice means nothing
+            notices.append(line)
     decoder = MessageDecoder(chosen, source, drums.channels, drop_doubles=False)
     onsets: list[tuple[object, ...]] = []
     controls: list[tuple[object, ...]] = []
