@@ -28,8 +28,9 @@ Because the header starts with magic, version and kind, a SUB socket can filter 
 Kinds (:data:`SPECS`; "frames" counts the payload frames after the header)::
 
     kind       code frames payload
-    HELLO      1    1      UTF-8 JSON object (Hello): service, role, protocol, performer,
-                           endpoints {name: zmq endpoint}, pose (PoseFormat JSON or null)
+    HELLO      1    1      UTF-8 JSON object (Hello), keys in spec.HELLO_KEYS: service,
+                           role, protocol, performer, endpoints {name: zmq endpoint}, pose
+                           (PoseFormat JSON or null), avatar (digest; may be absent)
     READY      2    1      same JSON as HELLO: the service's answer, sent once it is serving
     ONSET      3    1      n >= 1 rows of events.ONSET_DTYPE (20 bytes each), time order
     CONTROL    4    1      n >= 1 rows of events.CONTROL_DTYPE (14 bytes each), time order
@@ -43,7 +44,8 @@ Limits checked by :func:`decode`: header size exact; payload_len <= ``max_payloa
 (default :data:`MAX_PAYLOAD`, 16 MiB) and equal to the frames' total; row payloads a whole
 number of rows, 1 … :data:`MAX_ROWS`; every onset/control field in range (codes index the
 vocabulary, MIDI values < 128, channels < 16, times finite); POSE rows match the announced
-dtype's hash and size; HELLO JSON <= 64 KiB with exactly the known keys. Any violation raises
+dtype's hash and size; HELLO JSON <= 64 KiB with the keys of ``HELLO_KEYS`` only, every
+required one there. Any violation raises
 :class:`~livedrummer.errors.ProtocolError` naming the field and the value, and nothing else is
 ever raised on bad bytes (a hypothesis fuzz test holds us to it). Errors about the wire are
 :class:`WireError`, whose ``field`` attribute names that field for a program (``"version"``,
@@ -77,6 +79,7 @@ from livedrummer.protocol.sequence import SeqReport, SeqStats, SeqStatus, Sequen
 from livedrummer.protocol.spec import (
     GAP_PAYLOAD,
     HEADER,
+    HELLO_KEYS,
     KNOWN_FLAGS,
     MAGIC,
     MAX_HELLO,
@@ -98,6 +101,7 @@ from livedrummer.protocol.spec import (
 __all__ = [
     "GAP_PAYLOAD",
     "HEADER",
+    "HELLO_KEYS",
     "KNOWN_FLAGS",
     "MAGIC",
     "MAX_HELLO",

@@ -15,6 +15,8 @@ import numpy as np
 from livedrummer.errors import ProtocolError
 from livedrummer.protocol.poseformat import PoseFormat
 from livedrummer.protocol.spec import (
+    AVATAR_DIGEST_LEN,
+    HELLO_KEYS,
     MAX_HELLO,
     PROTOCOL_VERSION,
     U16,
@@ -35,6 +37,7 @@ class Hello:
     endpoints: Mapping[str, str] = field(default_factory=dict)
     pose: PoseFormat | None = None
     protocol: int = PROTOCOL_VERSION
+    avatar: str = ""  # the avatar's digest; "" for the built-in character
 
     def to_bytes(self) -> bytes:
         obj = {
@@ -44,6 +47,7 @@ class Hello:
             "performer": self.performer,
             "endpoints": dict(self.endpoints),
             "pose": None if self.pose is None else self.pose.to_json(),
+            "avatar": self.avatar,
         }
         return json.dumps(obj, separators=(",", ":"), sort_keys=True).encode()
 
@@ -55,10 +59,10 @@ class Hello:
             obj = json.loads(data.decode("utf-8"))
         except (UnicodeDecodeError, ValueError, RecursionError) as exc:
             raise fail("hello", f"not UTF-8 JSON ({exc.__class__.__name__})", data[:40]) from exc
-        keys = {"service", "role", "protocol", "performer", "endpoints", "pose"}
-        if not isinstance(obj, dict) or set(obj) != keys:
+        required = {k for k, (needed, _) in HELLO_KEYS.items() if needed}
+        if not isinstance(obj, dict) or not required <= set(obj) <= set(HELLO_KEYS):
             got = sorted(obj) if isinstance(obj, dict) else obj
-            raise fail("hello", f"expected keys {sorted(keys)}", got)
+            raise fail("hello", f"expected keys {sorted(HELLO_KEYS)}", got)
         for key in ("service", "role"):
             if not isinstance(obj[key], str) or not 0 < len(obj[key]) <= 200:
                 raise fail(f"hello.{key}", "expected a short string", obj[key])
@@ -73,7 +77,12 @@ class Hello:
         ):
             raise fail("hello.endpoints", "expected {name: endpoint string}", endpoints)
         pose = None if obj["pose"] is None else PoseFormat.from_json(obj["pose"])
-        return cls(obj["service"], obj["role"], performer, dict(endpoints), pose)
+        avatar = obj.get("avatar", "")
+        if not isinstance(avatar, str) or (
+            avatar and (len(avatar) != AVATAR_DIGEST_LEN or avatar.strip("0123456789abcdef"))
+        ):
+            raise fail("hello.avatar", f"expected {AVATAR_DIGEST_LEN} hex digits or ''", avatar)
+        return cls(obj["service"], obj["role"], performer, dict(endpoints), pose, avatar=avatar)
 
 
 @dataclass(frozen=True)

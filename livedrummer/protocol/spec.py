@@ -91,6 +91,22 @@ SPECS: dict[int, KindSpec] = {
 }
 
 
+#: The HELLO/READY JSON object's keys, in the one place they are listed: key -> (required, what
+#: it holds). :class:`~livedrummer.protocol.bodies.Hello` writes every key and reads exactly these
+#: (a key that is not required may be absent: a peer from before it was added).
+HELLO_KEYS: dict[str, tuple[bool, str]] = {
+    "service": (True, "the speaker's service name (input, synth, display)"),
+    "role": (True, "what it sends: source, poses, frames, or a client's own word"),
+    "protocol": (True, "PROTOCOL_VERSION"),
+    "performer": (True, "performer id 0..65535"),
+    "endpoints": (True, "{name: zmq endpoint} of its sockets"),
+    "pose": (True, "PoseFormat JSON of the POSE rows it sends, or null"),
+    "avatar": (False, "digest (16 hex digits) of the avatar whose proportions it plays or "
+               "draws; empty for the built-in character"),
+}  # fmt: skip
+AVATAR_DIGEST_LEN = 16
+
+
 def topic(kind: Kind) -> bytes:
     """Prefix to subscribe to one kind of message on a SUB socket."""
     return MAGIC + bytes((PROTOCOL_VERSION, int(kind)))

@@ -10,7 +10,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import Subparsers, add_command, add_kit_option
+from .common import (
+    Subparsers,
+    add_avatar_option,
+    add_command,
+    add_kit_option,
+    avatar_of,
+    rig_for,
+)
 from .keys import add_curve_options, security_from_args
 
 
@@ -23,6 +30,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--control", default=DEFAULT_CONTROL,
                    help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
     add_kit_option(p)
+    add_avatar_option(p)
     p.add_argument("--map", default="roland-td",
                    help="note map, for hi-hat pedal and chokes (default roland-td)")  # fmt: skip
     p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L",
@@ -42,7 +50,6 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import zmq
 
-    from livedrummer.body.rig import build_rig
     from livedrummer.errors import ConfigError
     from livedrummer.kit.loader import load_kit
     from livedrummer.live.calibration import Calibration
@@ -67,13 +74,14 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--tick-hz: expected 0 < hz <= 1000 (got {args.tick_hz})")
     note_map = load_note_map(args.map)
     cc_open = np.array([note_map.openness(v) for v in range(128)])
-    rig = build_rig(load_kit(args.kit))
+    avatar = avatar_of(args)
+    rig = rig_for(load_kit(args.kit), avatar)
     synth = LiveSynth(rig, params, cc_open=cc_open, note_map=note_map)
     calibration = Calibration.load()
     config = SynthConfig(
         sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
         tick_hz=args.tick_hz, input_offset_s=calibration.input_ms / 1000.0,
-        security=security_from_args(args),
+        security=security_from_args(args), avatar="" if avatar is None else avatar.digest,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)

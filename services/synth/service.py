@@ -88,6 +88,7 @@ class SynthConfig:
     tick_hz: float = 120.0
     input_offset_s: float = 0.0
     security: Security = field(default_factory=Security)
+    avatar: str = ""  # digest of the avatar whose proportions the rig has, announced in READY
 
 
 @dataclass
@@ -141,7 +142,8 @@ class SynthService(Service):
         self.endpoints["sub"] = cfg.sub
 
     def hello(self) -> Hello:
-        return Hello(self.name, "poses", self.config.performer, dict(self.endpoints), self.format)
+        return Hello(self.name, "poses", self.config.performer, dict(self.endpoints), self.format,
+                     avatar=self.config.avatar)  # fmt: skip
 
     def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
         """Serve until ``stop``; ``on_ready`` is called once the first poses are published
