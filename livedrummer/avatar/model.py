@@ -21,8 +21,9 @@ exporters and the live display never learn where an avatar came from:
   checks, BVH offsets) is the avatar's, so its sticks reach the struck zone.
 
 Materials are glTF's metallic-roughness subset that a stage needs: a base colour factor,
-an optional base-colour texture (RGBA8, row 0 at the top, as decoded), an alpha mode, and a
-shading flag (``lit``, or ``toon`` for VRM's MToon drawn as banded lighting).
+an optional base-colour texture (RGBA8, row 0 at the top, as decoded), an alpha mode, a
+roughness factor, and a shading flag (``lit``, or ``toon`` for VRM's MToon drawn as banded
+lighting).
 
 Limits: four weights per vertex (extra influences are dropped by the loader and the rest
 renormalised); one UV set; no morph targets (faces do not change expression); 32-bit indices.
@@ -59,6 +60,9 @@ class Material:
     alpha_cutoff: float = 0.5
     double_sided: bool = False
     shading: Shading = "lit"
+    #: glTF's roughness factor: 1 is matte, 0 a sharp highlight (the renderer maps it to a
+    #: specular exponent); metalness is not drawn.
+    roughness: float = 1.0
 
 
 @dataclass(frozen=True)

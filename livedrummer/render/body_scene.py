@@ -11,6 +11,8 @@ model (the body's), and the renderer never learns how either is computed.
   sticks are drawn as sticks).
 * Sticks: from the tip through the grip fulcrum (the body's ``*_stick`` joint) and on past it by
   the stick's tail behind the hand (:data:`STICK_TAIL_M`), right stick first.
+* Rotations: the body's world joint rotations (the records carry local ones; the product
+  down the parent chain, :func:`world_rotations`), which a skinned avatar is posed with.
 * Kit channels: ``glow`` is the highlight; ``swing`` is a cymbal's wobble, and for the kick the
   beater's angle back from the head, which the scene calls travel; ``lift`` (the hi-hat top
   cymbal's height above closed, metres) is the hi-hat's travel. The hi-hat footboard's angle
@@ -30,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from livedrummer.body import quat
 from livedrummer.body.expression import Expression
 from livedrummer.body.perform import Performed, perform
 from livedrummer.body.rig import build_rig
@@ -124,13 +127,24 @@ def scene_channels(poses: np.ndarray, kit: Kit) -> np.ndarray:
     return out
 
 
+def world_rotations(local_q: np.ndarray) -> np.ndarray:
+    """World rotations (..., 24, 4) float32 from the records' local ones (..., 24, 4)."""
+    local = np.asarray(local_q, np.float64)
+    out = np.empty_like(local)
+    out[..., 0, :] = local[..., 0, :]
+    for j in range(1, len(JOINTS)):
+        out[..., j, :] = quat.mul(out[..., PARENTS[j], :], local[..., j, :])
+    return out.astype(np.float32)
+
+
 def frame_from_pose(pose: np.ndarray, time_s: float, kit: Kit) -> SceneFrame:
     """The scene frame of one pose record (a live pose received over the wire)."""
     poses = np.asarray(pose).reshape(1)
     position = np.ascontiguousarray(poses["position"], np.float32)
     return SceneFrame(
-        position[0], stick_segments(position)[0], scene_channels(poses, kit)[0], time_s
-    )
+        position[0], stick_segments(position)[0], scene_channels(poses, kit)[0], time_s,
+        world_rotations(poses["rotation"])[0],
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -171,9 +185,13 @@ class BodyScene:
         times = np.asarray(times, np.float64)
         for start in range(0, times.size, chunk):
             t = times[start : start + chunk]
-            joints, sticks, channels = self.arrays(t)
+            poses = self.poses(t)
+            joints = np.ascontiguousarray(poses["position"], np.float32)
+            sticks = stick_segments(joints)
+            channels = scene_channels(poses, self.kit)
+            rotations = world_rotations(poses["rotation"])
             for i in range(t.size):
-                yield SceneFrame(joints[i], sticks[i], channels[i], float(t[i]))
+                yield SceneFrame(joints[i], sticks[i], channels[i], float(t[i]), rotations[i])
 
     def frame_at(self, time_s: float) -> SceneFrame:
         return next(self.frames(np.array([time_s])))

@@ -84,12 +84,15 @@ def kit_cameras(kit: Kit) -> dict[str, Camera]:
     c = np.array([cx, cy * 0.6, cz])
     head = (0.0, 0.23, kit.seat_height_m + 0.82)  # just in front of the face
 
-    def cam(name: str, offset: tuple[float, float, float], fov: float = 40.0) -> Camera:
-        return Camera(name, tuple(float(v) for v in c + offset), tuple(float(v) for v in c), fov)  # type: ignore[arg-type]
+    def cam(name: str, offset: tuple[float, float, float], fov: float = 40.0,
+            drop: float = 0.0) -> Camera:  # fmt: skip
+        at = c - (0.0, 0.0, drop)
+        return Camera(name, tuple(float(v) for v in at + offset), tuple(float(v) for v in at), fov)  # type: ignore[arg-type]
 
     cams = [
-        cam("stage", (1.5, 2.5, 1.5)),
-        cam("front", (0.0, 3.3, 0.55)),
+        # front and stage frame the drummer and the kit to ~85 % of the frame's height
+        cam("stage", (1.4, 2.4, 1.35), drop=0.12),
+        cam("front", (0.0, 2.8, 0.62), drop=0.07),
         Camera("drummer", head, (cx, 0.75, 0.62), 70.0),
         cam("overhead", (0.0, 0.2, 3.6)),
         cam("left", (-3.2, 0.2, 0.45)),

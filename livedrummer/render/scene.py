@@ -15,9 +15,13 @@ float32 ``(J, 3)`` array of joint positions, a ``(2, 2, 3)`` array of stick segm
 one row per ``kit.pieces`` entry, with the columns named by the ``CH_*`` indices below. A
 frame with no joints (shape ``(0, 3)``) draws no drummer: the kit and the sticks only.
 
-Limits: joint positions only, no joint orientations, so limbs are drawn as round capsules and
-cannot twist visibly; the sticks are straight segments. Arrays are validated by shape and
-dtype once per frame (:meth:`SceneFrame.check`), not by value: NaN joints are the body's bug.
+A frame may also carry ``rotations_q``, the joints' *world* rotations (float32 ``(J, 4)``
+quaternions, w x y z, each orienting the joint's bone towards its child), which a skinned
+avatar needs (:mod:`livedrummer.avatar`); the body's frames always carry them, a frame without
+them (``None``: a test's stand-in pose) is drawn as capsules. Limits: the capsules use joint
+positions only, so they cannot twist visibly; the sticks are straight segments. Arrays are
+validated by shape and dtype once per frame (:meth:`SceneFrame.check`), not by value: NaN
+joints are the body's bug.
 """
 
 from __future__ import annotations
@@ -122,6 +126,7 @@ class SceneFrame:
     sticks_m: np.ndarray  # float32 (2, 2, 3): [stick, butt|tip, xyz]
     channels: np.ndarray  # float32 (P, 4): CH_* columns per kit piece
     time_s: float = 0.0
+    rotations_q: np.ndarray | None = None  # float32 (J, 4) world rotations, w x y z; or None
 
     def check(self, skeleton: Skeleton | None, pieces: int) -> None:
         """Raise :class:`SceneError` unless the arrays fit ``skeleton`` and a kit of ``pieces``."""
@@ -133,6 +138,8 @@ class SceneFrame:
             "sticks_m": (2, 2, 3),
             "channels": (pieces, N_CHANNELS),
         }
+        if self.rotations_q is not None:
+            want["rotations_q"] = (self.joints_m.shape[0], 4)
         for field, shape in want.items():
             arr = getattr(self, field)
             if arr.shape != shape or arr.dtype != np.float32:

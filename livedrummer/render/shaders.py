@@ -23,6 +23,7 @@ PROGRAMS: dict[str, tuple[str, str]] = {
     "floor": ("mesh.vert", "floor.frag"),
     "segment": ("segment.vert", "lit.frag"),
     "ball": ("ball.vert", "lit.frag"),
+    "skin": ("skin.vert", "skin.frag"),
 }
 
 

@@ -1,4 +1,10 @@
-"""The renderer: kit instances, body capsules and sticks drawn with the ``shaders/`` programs.
+"""The renderer: kit instances, the drummer and the sticks drawn with the ``shaders/`` programs.
+
+The drummer is a skinned avatar (``avatar``; by default the built-in character of
+:func:`livedrummer.avatar.character.build_character`) posed by the frame's world rotations
+and joint positions on the GPU (:mod:`.avatar_gl`, ``shaders/skin.*``), or, with
+``avatar="mannequin"`` or for a frame without rotations or a skeleton other than the body's
+24 joints, the capsule mannequin described next.
 
 Built once per (context, kit, skeleton, size): unit meshes are uploaded once; per frame only
 the instance buffers change. The kit's instances come from :meth:`KitMesh.instances` (one
@@ -21,15 +27,19 @@ the same rig; the window must set :attr:`Renderer.size` when its framebuffer is 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
+from livedrummer.avatar.model import Avatar
+from livedrummer.body.skeleton import N_JOINTS
 from livedrummer.render.camera import Camera
 from livedrummer.render.geometry import Mesh, all_meshes
 from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
 from livedrummer.render.scene import SceneFrame, Skeleton, Tone
 from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
+
+from .avatar_gl import SkinnedDraw
 
 BACKGROUND = (0.02, 0.02, 0.035)
 #: colour per :class:`Tone`
@@ -57,6 +67,7 @@ class Renderer:
         *,
         samples: int = 4,
         offscreen: bool = True,
+        avatar: Avatar | Literal["mannequin"] | None = None,
     ) -> None:
         self.ctx = ctx
         self.kit_mesh = kit_mesh
@@ -81,6 +92,14 @@ class Renderer:
                             "in_model", "in_color", "in_material")  # fmt: skip
             self._kit_vaos.append((vao, buf, idx))
         self._body_setup(meshes)
+        self.skinned: SkinnedDraw | None = None
+        if skeleton is not None and skeleton.size == N_JOINTS and avatar != "mannequin":
+            if avatar is None:
+                from livedrummer.avatar.character import build_character
+
+                avatar = build_character()
+            self.skinned = SkinnedDraw(ctx, self.programs["skin"], avatar)
+        self._pose: tuple[np.ndarray, np.ndarray] | None = None
         self._fbo: Any = None
         self._resolve: Any = None
         if offscreen:
@@ -158,6 +177,10 @@ class Renderer:
         frame.check(self.skeleton, self.kit_mesh.pieces)
         nb = len(self._bones)
         has_body = self.skeleton is not None and len(frame.joints_m) > 0
+        self._pose = None
+        if has_body and self.skinned is not None and frame.rotations_q is not None:
+            self._pose = (frame.rotations_q, frame.joints_m)
+            has_body = False  # the avatar, not the capsules; the sticks stay
         self._seg_count = len(self._seg) if has_body else 2
         if has_body and self.skeleton is not None:
             j = frame.joints_m
@@ -205,6 +228,8 @@ class Renderer:
         # Nearest and largest first, the floor last: hidden fragments fail the depth test
         # before they are shaded (llvmpipe tests depth early for these shaders).
         if self._draw_body:
+            if self._pose is not None and self.skinned is not None:
+                self.skinned.draw(*self._pose, fbo)
             self._seg_vao.render(instances=self._seg_count)
             if self._ball_count:
                 self._ball_vao.render(instances=self._ball_count)
