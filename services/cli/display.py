@@ -23,11 +23,13 @@ from livedrummer.render.camera import CAMERA_NAMES
 from .common import (
     DEMO_MAP,
     Subparsers,
+    add_avatar_option,
     add_channel_option,
     add_command,
     add_kit_option,
     add_motion_options,
     add_renamed,
+    avatar_of,
     demo_groove,
     read_performance,
 )
@@ -55,6 +57,7 @@ def register(sub: Subparsers) -> None:
                    help="strips shown first: score, joints or both; keys o, g "
                    "(default: none)")  # fmt: skip
     add_motion_options(p)
+    add_avatar_option(p)
     live = p.add_argument_group("live (poses from a running synth)")
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
     live.add_argument("--sub", default="tcp://127.0.0.1:5720",
@@ -62,6 +65,9 @@ def register(sub: Subparsers) -> None:
     live.add_argument("--control", metavar="ENDPOINT",
                       help="answer HELLO with READY here, e.g. tcp://127.0.0.1:5731 "
                            "(default: no control socket)")  # fmt: skip
+    live.add_argument("--synth-control", metavar="ENDPOINT",
+                      help="ask the synth here which avatar it plays; warn when it is not "
+                      "--avatar (default: not asked)")  # fmt: skip
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
     add_renamed(live, "--frames", live.add_argument(
         "--max-frames", type=int, metavar="N",
@@ -102,7 +108,8 @@ def run(args: argparse.Namespace) -> int:
         overlays=parse_overlays(args.overlay),
     )  # fmt: skip
     kit = load_kit(args.kit)
-    show(performance, kit, options, body=body_scene(args, performance, kit, note_map))
+    avatar = avatar_of(args)
+    show(performance, kit, options, body=body_scene(args, performance, kit, note_map, avatar))
     return 0
 
 
@@ -141,6 +148,7 @@ def run_live(args: argparse.Namespace) -> int:
     if not 0 < args.fps <= 1000:
         raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps})")
     calibration = Calibration.load()
+    avatar = avatar_of(args)
     clock: FrameClock
     if args.clock == "audio":
         clock = AudioFrameClock(calibration.audio_ms / 1000.0)
@@ -164,6 +172,10 @@ def run_live(args: argparse.Namespace) -> int:
         control=args.control,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    if args.synth_control is not None:  # one line when the synth plays another avatar
+        from ..display.avatar_check import check_synth_avatar
+
+        check_synth_avatar(ctx, args.synth_control, avatar, security_from_args(args))
     if args.seconds is not None and not args.seconds > 0:  # counted from the first pose drawn
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
     display = LiveDisplay(load_kit(args.kit), config, clock, ctx)

@@ -28,17 +28,21 @@ from livedrummer.render.camera import CAMERA_NAMES
 from .common import (
     DEMO_MAP,
     Subparsers,
+    add_avatar_option,
     add_channel_option,
     add_command,
     add_kit_option,
     add_motion_options,
     add_renamed,
+    avatar_of,
     demo_groove,
     read_performance,
+    rig_for,
     sticking_of,
 )
 
 if TYPE_CHECKING:
+    from livedrummer.avatar.model import Avatar
     from livedrummer.kit.model import Kit
     from livedrummer.midi.notemap import NoteMap
     from livedrummer.render.body_scene import BodyScene
@@ -74,18 +78,23 @@ def register(sub: Subparsers) -> None:
                    help="drum sounds from this General MIDI SoundFont via FluidSynth "
                    "(default: the built-in kit)")  # fmt: skip
     add_motion_options(p)
+    add_avatar_option(p)
 
 
-def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap
-               ) -> BodyScene:  # fmt: skip
-    """The performance animated on ``kit`` with the motion options of ``args``."""
+def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap,
+               avatar: Avatar | None = None) -> BodyScene:  # fmt: skip
+    """The performance animated on ``kit`` with the motion options of ``args``, by a body with
+    ``avatar``'s proportions (the built-in character's without one)."""
     from livedrummer.body.expression import load_expression
+    from livedrummer.body.perform import perform
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.render.body_scene import BodyScene
 
     expression = load_expression(args.preset) if args.preset else None
-    return BodyScene.perform(performance, kit, note_map, sticking_of(args, performance, kit),
-                             expression, StrokeParams(model=args.strokes))  # fmt: skip
+    sticking = sticking_of(args, performance, kit)
+    done = perform(performance, rig_for(kit, avatar), note_map, expression,
+                   StrokeParams(model=args.strokes), sticking=sticking)  # fmt: skip
+    return BodyScene(kit, done)
 
 
 def first_seconds(performance: Performance, seconds: float) -> Performance:
@@ -160,7 +169,8 @@ def run(args: argparse.Namespace) -> int:
     if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
         return 0
     kit = load_kit(args.kit)
-    body = body_scene(args, performance, kit, note_map)
+    avatar = avatar_of(args)
+    body = body_scene(args, performance, kit, note_map, avatar)
     out = args.output
     if out is None and args.frames_dir is None:
         out = Path(source.stem + ".mp4")

@@ -42,9 +42,12 @@ from .common import (
     DEMO_MAP,
     Subparsers,
     add_api_option,
+    add_avatar_option,
     add_command,
     add_kit_option,
     add_renamed,
+    avatar_argv,
+    avatar_of,
     demo_groove,
     has_screen,
 )
@@ -64,6 +67,7 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--serial", metavar="DEV", help="serial trigger board")
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
     add_kit_option(p)
+    add_avatar_option(p)
     p.add_argument("--map", help="note map (default roland-td)")
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
@@ -167,9 +171,11 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     synth_argv = [*me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
                   "--control", ep["syn_ctl"], "--kit", args.kit, "--map", map_name,
                   "--lookahead-ms", str(args.lookahead_ms),
-                  "--delay-ms", str(args.delay_ms), *curve["synth"]]  # fmt: skip
+                  "--delay-ms", str(args.delay_ms), *avatar_argv(args),
+                  *curve["synth"]]  # fmt: skip
     display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], "--kit", args.kit,
-                    "--fps", str(args.fps), "--size", args.size, *curve["display"]]  # fmt: skip
+                    "--fps", str(args.fps), "--size", args.size, *avatar_argv(args),
+                    "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
         display_argv += ["--fullscreen"] if args.fullscreen else []
@@ -198,6 +204,7 @@ def run(args: argparse.Namespace) -> int:
         from livedrummer.audio.soundfont import check_soundfont
 
         check_soundfont(args.soundfont)
+    avatar_of(args)  # a bad --avatar is one line here, before three services start
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None
         if args.video is not None:
