@@ -399,3 +399,63 @@ def test_a_note_doubled_on_two_tracks_is_one_hit_at_the_higher_velocity(tmp_path
     assert perf.onsets["note"].tolist() == [38, 42, 36, 36]
     assert perf.onsets["velocity"].tolist() == [110, 90, 50, 127]
     assert perf.stats.duplicates_removed == 2 and perf.summary()["duplicates_removed"] == 2
+
+
+# ---- 4. rhythm-game charts --------------------------------------------------------------------
+
+
+def chart_file(path: Path) -> Path:
+    """A chart: guitar and drums on channel 1, drums with Expert and Hard gems, animation notes
+    and a yellow tom marker over beats 4-7."""
+    guitar = [mido.MetaMessage("track_name", name="PART GUITAR")]
+    drums = [mido.MetaMessage("track_name", name="PART DRUMS")]
+    for beat in range(12):
+        guitar += note(96 + beat % 5, 0 if beat == 0 else 470, ch=0)
+    tick = 0
+    events: list[tuple[int, mido.Message]] = []
+    for beat in range(12):
+        at = beat * 480
+        gems = [96 if beat % 2 == 0 else 97, 98] + ([100] if beat == 0 else [])
+        for gem in gems:
+            events.append((at, mido.Message("note_on", note=gem, velocity=100)))
+            events.append((at + 10, mido.Message("note_on", note=gem, velocity=0)))
+        events.append((at, mido.Message("note_on", note=86, velocity=90)))  # Hard yellow
+        events.append((at, mido.Message("note_on", note=24 + beat, velocity=90)))  # animation
+    events.append((4 * 480, mido.Message("note_on", note=110, velocity=100)))
+    events.append((8 * 480, mido.Message("note_off", note=110, velocity=0)))  # ends before 8
+    for at, msg in sorted(events, key=lambda e: e[0]):
+        drums.append(msg.copy(time=at - tick))
+        tick = at
+    return save(path, [mido.MetaMessage("set_tempo", tempo=500_000)], guitar, drums)
+
+
+def test_a_chart_plays_its_expert_drums_with_tom_markers(tmp_path: Path) -> None:
+    path = chart_file(tmp_path / "notes.mid")
+    # Independent count from mido: Expert gems of PART DRUMS, yellow gems under the marker.
+    mid = mido.MidiFile(path)
+    part = next(t for t in mid.tracks if t.name == "PART DRUMS")
+    tick, start, end = 0, -1, -1
+    gems: Counter[int] = Counter()
+    yellow_ticks = []
+    for msg in part:
+        tick += msg.time
+        if msg.type == "note_on" and msg.velocity and 95 <= msg.note <= 100:
+            gems[msg.note] += 1
+            if msg.note == 98:
+                yellow_ticks.append(tick)
+        if msg.type == "note_on" and msg.note == 110:
+            start = tick
+        if msg.type == "note_off" and msg.note == 110:
+            end = tick
+    toms = sum(start <= t < end for t in yellow_ticks)
+    perf = read_midi_file(path, bundled_note_maps())
+    assert perf.map_name == "rock-band-chart"
+    by_piece: dict[str, dict[str, int]] = perf.summary()["by_piece"]
+    counts = {k: sum(v.values()) for k, v in by_piece.items()}
+    assert counts == {"kick": gems[96], "snare": gems[97], "hihat": gems[98] - toms,
+                      "tom1": toms, "crash1": gems[100]}  # fmt: skip
+    assert toms == 4
+    assert perf.stats.unknown_notes == Counter()
+    assert sum(perf.stats.ignored_notes.values()) == 24  # Hard gems and animation notes
+    assert perf.notices == ("rhythm-game chart: track 'PART DRUMS' read, Expert gems played, "
+                            "1 tom markers applied; 12 notes on its other tracks ignored",)  # fmt: skip

@@ -14,7 +14,10 @@ MAPS = Path(__file__).resolve().parent.parent / "kits" / "maps"
 
 
 def test_bundled_maps() -> None:
-    assert note_map_names() == ["alesis-nitro", "general-midi", "roland-td", "yamaha-dtx"]
+    assert note_map_names() == [
+        "alesis-nitro", "general-midi", "rock-band-chart", "roland-td", "yamaha-dtx",
+        "yamaha-dtx502",
+    ]  # fmt: skip
 
 
 def test_general_midi_covers_every_percussion_note() -> None:
@@ -28,7 +31,7 @@ def test_general_midi_covers_every_percussion_note() -> None:
     assert gm.lookup(53).zone is Zone.BELL  # type: ignore[union-attr]
 
 
-def test_roland_td_map_matches_the_td11_layout() -> None:
+def test_roland_td_map_matches_the_td11_layout_with_tom4_and_aux() -> None:
     td = load_note_map("roland-td")
     expect = {
         36: ("kick", "head"), 38: ("snare", "head"), 40: ("snare", "rim"),
@@ -38,6 +41,8 @@ def test_roland_td_map_matches_the_td11_layout() -> None:
         44: ("hihat", "pedal"), 49: ("crash1", "bow"), 55: ("crash1", "edge"),
         57: ("crash2", "bow"), 52: ("crash2", "edge"), 51: ("ride", "bow"), 59: ("ride", "edge"),
         53: ("ride", "bell"),
+        41: ("tom4", "head"), 39: ("tom4", "rim"),  # larger modules' tom 4
+        27: ("percussion", "head"), 28: ("percussion", "head"),  # TD-17 AUX head/rim
     }  # fmt: skip
     got = {n: (s.instrument, s.zone.value) for n, s in td.notes.items()}
     assert got == expect
@@ -45,6 +50,24 @@ def test_roland_td_map_matches_the_td11_layout() -> None:
     assert td.hihat_cc_closed == 90
     assert td.openness(0) == 1.0 and td.openness(90) == 0.0 and td.openness(127) == 0.0
     assert td.openness(45) == pytest.approx(0.5)
+
+
+def test_dtx502_map_follows_the_reference_manual_table() -> None:
+    dtx = load_note_map("yamaha-dtx502")
+    assert {n: (s.instrument, s.zone.value) for n, s in dtx.notes.items() if n in
+            (36, 38, 59, 49, 78, 85, 83, 35)} == {
+        36: ("kick", "head"), 38: ("snare", "head"), 59: ("crash1", "bow"),
+        49: ("crash1", "edge"), 78: ("hihat", "edge"), 85: ("hihat", "bell"),
+        83: ("hihat", "pedal"), 35: ("kick", "head"),
+    }  # fmt: skip
+    assert "DTX502 Reference Manual" in Path(dtx.source).read_text()  # the source is cited
+
+
+def test_every_bundled_map_cites_its_source() -> None:
+    from livedrummer.midi.notemap import bundled_note_maps
+
+    for m in bundled_note_maps():
+        assert "Source" in Path(m.source).read_text(), m.name
 
 
 def test_vendor_maps_use_their_own_numbers() -> None:

@@ -18,6 +18,9 @@ File layout (strict, like kits)::
     46 = { piece = "hihat", zone = "bow", hihat = "open", label = "Hi-hat open bow" }
     33 = { ignored = true, label = "Metronome click" }
 
+``chart = true`` in ``[map]`` marks a rhythm-game chart's map: a file read with it is read as a
+chart (:mod:`livedrummer.midi.chart`), and ``auto`` never picks it by counting notes.
+
 A note marked ``ignored`` is a sound with no place on a drum kit (a metronome click, a scratch):
 it is known (the ``auto`` map choice counts it), never turned into an onset, and counted and
 reported by the decoder as ignored rather than unknown.
@@ -73,6 +76,7 @@ class NoteMap:
     notes: Mapping[int, NoteSpec]
     source: str = "<memory>"
     ignored: Mapping[int, str] = field(default_factory=dict)  # note -> label: never played
+    chart: bool = False  # a rhythm-game chart's map (see livedrummer.midi.chart)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "notes", MappingProxyType(dict(self.notes)))
@@ -100,6 +104,7 @@ def parse_note_map(data: dict[str, object], source: str, stem: str | None = None
     description = head.text("description", "")
     hihat_cc = head.integer("hihat_cc", 4, lo=0, hi=127)
     closed = head.integer("hihat_cc_closed", 127, lo=1, hi=127)
+    chart = head.boolean("chart", False)
     head.done()
     table = root.table("notes")
     notes = {}
@@ -115,7 +120,7 @@ def parse_note_map(data: dict[str, object], source: str, stem: str | None = None
             notes[int(key)] = _parse_note(int(key), entry)
     table.done()
     root.done()
-    return NoteMap(name, description, hihat_cc, closed, notes, source, ignored)
+    return NoteMap(name, description, hihat_cc, closed, notes, source, ignored, chart)
 
 
 def _parse_note(note: int, t: Table) -> NoteSpec:

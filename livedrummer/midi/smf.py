@@ -58,6 +58,7 @@ import numpy as np
 
 from livedrummer.errors import MidiFileError
 from livedrummer.midi.channels import DRUM_BANKS, ChannelChoice, choose_drum_channels
+from livedrummer.midi.chart import apply_tom_markers, drum_track
 from livedrummer.midi.decode import MessageDecoder, merge_doubled_notes
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.midi.repair import repair_track
@@ -343,23 +344,30 @@ def read_midi_bytes(
     except ValueError as exc:
         raise MidiFileError(f"{name}: {exc}") from exc
 
-    by_channel: Counter[int] = Counter()
-    for (ch, _), n in notes.items():
-        by_channel[ch] += n
-    drums = choose_drum_channels(channel, by_channel, programs, drum_banks)
-    notices = [drums.notice] if drums.notice else []
-    if isinstance(note_map, NoteMap):
-        chosen = note_map
+    chart = _chart_map(note_map, midi.tracks)
+    notices: list[str] = []
+    if chart is not None:
+        chosen, channels = chart, None
+        merged, seconds, line = _chart_part(midi.tracks, tempo, merged, ticks)
+        notices.append(line)
     else:
-        wanted = drums.channels
-        drum_notes: Counter[int] = Counter()
-        for (ch, note), n in notes.items():
-            if wanted is None or ch in wanted:
-                drum_notes[note] += n
-        chosen, line = choose_map(note_map, drum_notes)
-        if drum_notes:  # with no drum notes, the choice means nothing
-            notices.append(line)
-    decoder = MessageDecoder(chosen, source, drums.channels, drop_doubles=False)
+        by_channel: Counter[int] = Counter()
+        for (ch, _), n in notes.items():
+            by_channel[ch] += n
+        drums = choose_drum_channels(channel, by_channel, programs, drum_banks)
+        channels = drums.channels
+        notices += [drums.notice] if drums.notice else []
+        if isinstance(note_map, NoteMap):
+            chosen = note_map
+        else:
+            drum_notes: Counter[int] = Counter()
+            for (ch, note), n in notes.items():
+                if channels is None or ch in channels:
+                    drum_notes[note] += n
+            chosen, line = choose_map([m for m in note_map if not m.chart], drum_notes)
+            if drum_notes:  # with no drum notes, the choice means nothing
+                notices.append(line)
+    decoder = MessageDecoder(chosen, source, channels, drop_doubles=False)
     onsets: list[tuple[object, ...]] = []
     controls: list[tuple[object, ...]] = []
     for time_s, msg in zip(seconds.tolist(), merged, strict=True):
@@ -387,5 +395,32 @@ def read_midi_bytes(
         stats=stats,
         warnings=tuple(f"{inner} {w}" if inner else w for w in layout.warnings),
         notices=tuple(notices),
-        channels=None if drums.channels is None else tuple(sorted(drums.channels)),
+        channels=None if channels is None else tuple(sorted(channels)),
     )
+
+
+def _chart_map(note_map: MapChoice, tracks: list[mido.MidiTrack]) -> NoteMap | None:
+    """The chart map to read the file with, if it is read as a rhythm-game chart."""
+    if isinstance(note_map, NoteMap):
+        return note_map if note_map.chart else None
+    charts = [m for m in note_map if m.chart]
+    return charts[0] if charts and drum_track(tracks) is not None else None
+
+
+def _chart_part(
+    tracks: list[mido.MidiTrack], tempo: TempoMap, merged: list[mido.Message], ticks: np.ndarray
+) -> tuple[list[mido.Message], np.ndarray, str]:
+    """A chart's drum messages (tom markers applied), their seconds and the line saying so."""
+    index = drum_track(tracks)
+    if index is None:  # a chart map given for a file with no drum track: read it all
+        part, part_ticks, others, what = merged, ticks, 0, "all tracks read as one chart part"
+    else:
+        part, part_ticks = merge_tracks([tracks[index]])
+        others = sum(1 for i, t in enumerate(tracks) if i != index for m in t
+                     if m.type == "note_on" and m.velocity > 0)  # fmt: skip
+        what = f"track {tracks[index].name.strip()!r} read"
+    part, part_ticks, markers = apply_tom_markers(part, part_ticks)
+    line = f"rhythm-game chart: {what}, Expert gems played, {markers:,} tom markers applied"
+    if others:
+        line += f"; {others:,} notes on its other tracks ignored"
+    return part, tempo.seconds(part_ticks), line
