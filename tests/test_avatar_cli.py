@@ -126,3 +126,32 @@ def test_avatars_lists_built_in_and_user_files(tmp_path: Path) -> None:
     assert found["vrm1"]["path"] == str(tmp_path / "avatars" / "vrm1.vrm")
     proc = run("avatar", "info", "vrm1", LIVEDRUMMER_HOME=str(tmp_path))
     assert proc.returncode == 0 and "VRM 1.0" in proc.stdout
+
+
+def test_render_draws_the_avatar(files: dict[str, Path], tmp_path: Path) -> None:
+    import mido
+    import numpy as np
+
+    from livedrummer.avatar.gltf import decode_image
+
+    mid = mido.MidiFile(ticks_per_beat=480)
+    track = mido.MidiTrack()
+    for _ in range(4):
+        track.append(mido.Message("note_on", channel=9, note=38, velocity=100, time=0))
+        track.append(mido.Message("note_off", channel=9, note=38, velocity=0, time=240))
+    mid.tracks.append(track)
+    song = tmp_path / "snare.mid"
+    mid.save(song)
+    frames = {}
+    for who in ("default", "tall.glb"):
+        out = tmp_path / who
+        avatar = [] if who == "default" else ["--avatar", str(files[who])]
+        proc = run("render", str(song), "--map", "general-midi", "--frames-dir", str(out),
+                   "--size", "160x90", "--fps", "10", "--tail", "0.2", "--camera", "front",
+                   *avatar)  # fmt: skip
+        assert proc.returncode == 0, proc.stderr
+        png = sorted(out.glob("*.png"))[5]
+        frames[who] = decode_image(png.read_bytes(), str(png))
+    # the box-limbed 1.95 m avatar is not the built-in character
+    diff = np.abs(frames["default"].astype(int) - frames["tall.glb"].astype(int)).sum(axis=-1)
+    assert (diff > 60).mean() > 0.02

@@ -109,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     kit = load_kit(args.kit)
     avatar = avatar_of(args)
-    show(performance, kit, options, body=body_scene(args, performance, kit, note_map, avatar))
+    body = body_scene(args, performance, kit, note_map, avatar)
+    show(performance, kit, options, body=body, avatar=avatar)
     return 0
 
 
@@ -169,7 +170,7 @@ def run_live(args: argparse.Namespace) -> int:
         display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
         png=not args.no_png, security=security_from_args(args), window=window,
         video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
-        control=args.control,
+        control=args.control, avatar=avatar,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     if args.synth_control is not None:  # one line when the synth plays another avatar

@@ -179,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
     report = export(
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar, overlays=overlays,
-        soundfont=args.soundfont,
+        soundfont=args.soundfont, avatar=avatar,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(

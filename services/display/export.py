@@ -32,6 +32,7 @@ import numpy as np
 
 from livedrummer.audio.mix import mix_onsets
 from livedrummer.audio.soundfont import render_soundfont
+from livedrummer.avatar.model import Avatar
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
@@ -78,6 +79,7 @@ def export(
     progress: Progress | None = None,
     overlays: frozenset[str] = frozenset(),
     soundfont: Path | None = None,
+    avatar: Avatar | None = None,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
@@ -110,7 +112,7 @@ def export(
     try:
         ctx = headless_context()
         renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
-                            samples=samples)  # fmt: skip
+                            samples=samples, avatar=avatar)  # fmt: skip
         gpu_yuv = i420_ok(settings.size)
         strips = overlay_image(settings.size, overlays, OverlayModels(body, n / fps))
         for i, frame in enumerate(body.frames(times)):

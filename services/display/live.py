@@ -53,6 +53,7 @@ from typing import IO, Any, Protocol
 import numpy as np
 import zmq
 
+from livedrummer.avatar.model import Avatar
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
 from livedrummer.errors import ProtocolError
@@ -147,6 +148,7 @@ class LiveConfig:
     render_ahead: bool = True  # draw each frame for when it is done, not when it is begun
     security: Security = field(default_factory=Security)
     control: str | None = None  # HELLO/READY endpoint (none unless asked: up runs many displays)
+    avatar: Avatar | None = None  # who is drawn (None: the built-in character); READY says which
 
 
 @dataclass
@@ -196,7 +198,9 @@ class LiveDisplay(Service):
         self.bad.log_summary()
 
     def hello(self) -> Hello:
-        return Hello(self.name, "frames", self.performer, dict(self.endpoints), self.format)
+        avatar = "" if self.config.avatar is None else self.config.avatar.digest
+        return Hello(self.name, "frames", self.performer, dict(self.endpoints), self.format,
+                     avatar=avatar)  # fmt: skip
 
     def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
         """Draw until ``stop``; ``on_ready`` is called once, after the first frame that drew
@@ -207,9 +211,9 @@ class LiveDisplay(Service):
         log_file: IO[str] | None = None
         try:
             if cfg.window is not None:
-                surface = WindowSurface(self.kit, cfg.window)
+                surface = WindowSurface(self.kit, cfg.window, cfg.avatar)
             elif cfg.render:
-                surface = HeadlessSurface(self.kit, cfg.size, cfg.camera)
+                surface = HeadlessSurface(self.kit, cfg.size, cfg.camera, cfg.avatar)
             if cfg.video is not None and isinstance(surface, HeadlessSurface):
                 settings = VideoSettings(size=cfg.size, fps=round(cfg.fps))
                 recorder = LiveRecorder(cfg.video, settings)

@@ -15,6 +15,7 @@ from __future__ import annotations
 from contextlib import ExitStack
 from typing import Any
 
+from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
 from livedrummer.render.body_scene import BODY_SKELETON
 from livedrummer.render.camera import CameraMove, kit_cameras
@@ -28,13 +29,15 @@ from .window import WindowOptions, camera_key, key_name, open_window
 class HeadlessSurface:
     """An off-screen renderer on an EGL context; read frames back from :attr:`renderer`."""
 
-    def __init__(self, kit: Kit, size: tuple[int, int], camera: str) -> None:
+    def __init__(self, kit: Kit, size: tuple[int, int], camera: str,
+                 avatar: Avatar | None = None) -> None:  # fmt: skip
         from livedrummer.render.camera import pick_camera
 
         from .context import headless_context
 
         self._ctx = headless_context()
-        self.renderer = Renderer(self._ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0)
+        self.renderer = Renderer(self._ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0,
+                                 avatar=avatar)  # fmt: skip
         self._camera = pick_camera(kit, camera)
 
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
@@ -50,7 +53,7 @@ class HeadlessSurface:
 class WindowSurface:
     """A GLFW window (see the module docstring); :meth:`present` is False once the user quits."""
 
-    def __init__(self, kit: Kit, options: WindowOptions) -> None:
+    def __init__(self, kit: Kit, options: WindowOptions, avatar: Avatar | None = None) -> None:
         self._stack = ExitStack()
         try:
             glfw, window, ctx = self._stack.enter_context(open_window(options))
@@ -59,7 +62,8 @@ class WindowSurface:
             raise
         self._glfw, self._window, self._ctx = glfw, window, ctx
         size = glfw.get_framebuffer_size(window)
-        self.renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False)
+        self.renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False,
+                                 avatar=avatar)  # fmt: skip
         self._cameras = kit_cameras(kit)
         start = self._cameras[options.camera]
         self._move = CameraMove(start, start, 0.0, 0.0)

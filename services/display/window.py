@@ -23,6 +23,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
+from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CAMERA_NAMES, Camera, CameraMove, kit_cameras
@@ -89,8 +90,10 @@ def show(
     options: WindowOptions = DEFAULT_OPTIONS,
     clock: Callable[[], float] = time.monotonic,
     body: BodyScene | None = None,
+    avatar: Avatar | None = None,
 ) -> None:
-    """Open the window and play ``performance`` until the user quits.
+    """Open the window and play ``performance`` until the user quits (the drummer drawn as
+    ``avatar``, by default the built-in character).
 
     ``body`` is the performance animated on ``kit``; without it the body is animated here with
     the defaults (optimal sticking) and the note map the performance was read with."""
@@ -99,7 +102,7 @@ def show(
 
         body = BodyScene.perform(performance, kit, load_note_map(performance.map_name))
     with open_window(options) as (glfw, window, ctx):
-        _loop(glfw, window, ctx, performance, body, options, clock)
+        _loop(glfw, window, ctx, performance, body, options, clock, avatar)
 
 
 @contextmanager
@@ -145,6 +148,7 @@ def _loop(
     body: BodyScene,
     options: WindowOptions,
     clock: Callable[[], float],
+    avatar: Avatar | None = None,
 ) -> None:
     kit = body.kit
     transport = Transport(performance.duration_s + 1.0)
@@ -152,7 +156,7 @@ def _loop(
     move = CameraMove(cameras[options.camera], cameras[options.camera], 0.0, 0.0)
     mesh = build_kit_mesh(kit)
     size = glfw.get_framebuffer_size(window)
-    renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False)
+    renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False, avatar=avatar)
     models = OverlayModels(body, transport.duration_s)
     shown = frozenset(options.overlays)
     strips = overlay_image(size, shown, models)
