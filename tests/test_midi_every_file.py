@@ -459,3 +459,31 @@ def test_a_chart_plays_its_expert_drums_with_tom_markers(tmp_path: Path) -> None
     assert sum(perf.stats.ignored_notes.values()) == 24  # Hard gems and animation notes
     assert perf.notices == ("rhythm-game chart: track 'PART DRUMS' read, Expert gems played, "
                             "1 tom markers applied; 12 notes on its other tracks ignored",)  # fmt: skip
+
+
+# ---- 4. the percussion extension --------------------------------------------------------------
+
+
+def test_percussion_extension_plays_gm_percussion_notes(tmp_path: Path) -> None:
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.sticking.result import NOT_PLAYED
+    from livedrummer.sticking.strategy import stick_performance
+
+    notes = [36, 54, 38, 56, 36, 76, 38, 63]  # kick, tambourine, snare, cowbell, woodblock, conga
+    messages = [m for i, n in enumerate(notes) for m in note(n, 0 if i == 0 else 230)]
+    path = save(tmp_path / "perc.mid", messages)
+    perf = read_midi_file(path, GM)
+    assert perf.onsets.size == len(notes)
+    plain = stick_performance(perf, load_kit("rock5"), "optimal")
+    extended = stick_performance(perf, load_kit("rock5+percussion"), "optimal")
+    percussion = [i for i, n in enumerate(notes) if n not in (36, 38)]
+    assert all(plain.limb[i] == NOT_PLAYED for i in percussion)
+    assert all(extended.limb[i] != NOT_PLAYED for i in range(len(notes)))
+    kit = load_kit("rock5-left+percussion")  # mirrored with its kit
+    assert kit.piece("cowbell").position_m[0] == -load_kit("rock5+percussion").piece(
+        "cowbell").position_m[0]  # fmt: skip
+    proc = cli("check", str(path), "--kit", "rock5+percussion", "--json", "--summary")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["notes"] == len(notes) and out["not_played"] == 0
+    assert out["contact_error_mm"]["max"] < 5.0

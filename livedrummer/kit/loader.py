@@ -27,11 +27,18 @@ File layout (every key is checked; unknown keys are errors naming file, table an
     [[pair]]
     pieces = ["ride", "hihat"]    # pair(ride, hihat) ...
     value = 1.0                   # ... = +1: ride right hand, hi-hat left hand
+
+Extensions. ``KIT+EXT`` (``rock5+percussion``) is kit KIT with the pieces of
+``kits/extensions/EXT.toml`` added: a ``[extension]`` table (``name``, ``description``, the
+``handedness`` its positions are for) and ``[[piece]]`` tables as above. Like ``-left``, an
+extended kit is derived when it is named, never copied into a file; the extension's pieces are
+mirrored when the kit is of the other hand, and a piece name the kit already has is an error.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 from livedrummer.config import Table, read_toml
@@ -160,9 +167,16 @@ def load_kit_file(path: Path) -> Kit:
 
 
 def load_kit(spec: str) -> Kit:
-    """A kit by path or name; ``NAME-left`` / ``NAME-right`` mirror kit NAME."""
+    """A kit by path or name; ``NAME-left`` / ``NAME-right`` mirror kit NAME; ``KIT+EXT`` adds
+    the extension EXT's pieces (see the module docstring)."""
     if looks_like_path(spec):
         return load_kit_file(Path(spec))
+    if "+" in spec:
+        base, *extensions = spec.split("+")
+        kit = load_kit(base)
+        for name in extensions:
+            kit = extend_kit(kit, name)
+        return replace(kit, name=spec)
     found = entries("kits")
     if spec in found:
         return load_kit_file(found[spec].path)
@@ -175,6 +189,49 @@ def load_kit(spec: str) -> Kit:
             return kit.mirrored(spec)
     known = ", ".join(kit_names()) or "(none)"
     raise KitError(f"unknown kit {spec!r}; known kits: {known}")
+
+
+def load_extension(name: str) -> tuple[str, tuple[Piece, ...]]:
+    """An extension's handedness and pieces (``kits/extensions/NAME.toml``)."""
+    found = entries("kits/extensions")
+    if name not in found:
+        known = ", ".join(sorted(found)) or "(none)"
+        raise KitError(f"unknown kit extension {name!r}; known extensions: {known}")
+    source = str(found[name].path)
+    root = Table(read_toml(found[name].path, KitError), source, "", KitError)
+    head = root.table("extension")
+    if head.text("name") != name:
+        raise head.fail("name", f"must equal the file name {name!r}", head.text("name"))
+    head.text("description", "")
+    hand = head.text("handedness", "right", choices=("right", "left"))
+    head.done()
+    tables = root.tables("piece", label="name")
+    if not tables:
+        raise root.fail("piece", "an extension needs at least one [[piece]]")
+    pieces = tuple(_parse_piece(t) for t in tables)
+    root.done()
+    return hand, pieces
+
+
+def extend_kit(kit: Kit, extension: str) -> Kit:
+    """``kit`` with the pieces of ``extension`` (mirrored for a kit of the other hand)."""
+    hand, pieces = load_extension(extension)
+    if hand != kit.handedness:
+        pieces = tuple(p.mirrored() for p in pieces)
+    have = {p.name for p in kit.pieces}
+    for p in pieces:
+        if p.name in have:
+            raise KitError(f"kit extension {extension!r}: kit {kit.name!r} already has a piece "
+                           f"named {p.name!r}")  # fmt: skip
+    return Kit(
+        name=f"{kit.name}+{extension}",
+        description=f"{kit.description}, with {extension}",
+        handedness=kit.handedness,
+        seat_height_m=kit.seat_height_m,
+        pieces=kit.pieces + pieces,
+        pairs=kit.pairs,
+        source=f"{kit.source} + extension {extension}",
+    )
 
 
 def kit_names() -> list[str]:

@@ -6,7 +6,7 @@ import argparse
 
 from livedrummer.errors import LivedrummerError
 from livedrummer.kit.catalog import entries
-from livedrummer.kit.loader import load_kit_file
+from livedrummer.kit.loader import load_extension, load_kit_file
 from livedrummer.midi.notemap import load_note_map_file
 
 from .common import Subparsers, add_command
@@ -27,7 +27,15 @@ def run(args: argparse.Namespace) -> int:
         mirror = f"{name}-{'left' if kit.handedness == 'right' else 'right'}"
         print(f"  {name:<16} {kit.description} [{entry.path}]")
         print(f"  {mirror:<16} {name} mirrored for a {mirror.rsplit('-', 1)[1]}-handed drummer")
-    print("note maps:")
+    print("kit extensions (KIT+NAME adds their pieces to any kit):")
+    for name, entry in sorted(entries("kits/extensions").items()):
+        try:
+            _, pieces = load_extension(name)
+        except LivedrummerError as exc:
+            print(f"  {name:<16} ERROR {exc}")
+            continue
+        print(f"  {'+' + name:<16} {', '.join(p.name for p in pieces)} [{entry.path}]")
+    print("note maps (auto: the one that knows the most of a file's notes):")
     for name, entry in sorted(entries("kits/maps").items()):
         try:
             nm = load_note_map_file(entry.path)
