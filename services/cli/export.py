@@ -1,9 +1,14 @@
-"""``livedrummer export FILE.mid -o out.bvh``: the drummer's motion as a BVH file.
+"""``livedrummer export FILE.mid -o out.bvh|out.glb``: the drummer's motion as BVH or glTF.
 
 Animates the file on the kit, with the limbs :func:`livedrummer.sticking.stick_performance`
 gives (``--sticking``, ``--score``: what ``livedrummer sticking`` prints), and samples it at
 ``--fps`` from the start of the file to its end plus ``--tail`` (default 1 s), the same span
 ``render`` and ``display`` show. A file with no drum notes writes nothing and says so.
+
+``--format gltf`` (the default for a ``.glb`` output) writes the avatar (``--avatar``, else
+the built-in character), its sticks and the motion as one binary glTF file with an animation
+(:mod:`livedrummer.avatar.gltf_export`); BVH has the skeleton only. Both have the avatar's
+proportions.
 """
 
 from __future__ import annotations
@@ -28,7 +33,10 @@ from .common import (
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "export", run)
     p.add_argument("file", help="Standard MIDI File")
-    p.add_argument("-o", "--output", required=True, help="output .bvh path")
+    p.add_argument("-o", "--output", required=True, help="output .bvh or .glb path")
+    p.add_argument("--format", choices=("bvh", "gltf"),
+                   help="bvh (skeleton and motion) or gltf (binary .glb: avatar, sticks and "
+                   "motion) (default: from the output's suffix, .glb is gltf)")  # fmt: skip
     p.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
     add_kit_option(p)
@@ -59,7 +67,8 @@ def run(args: argparse.Namespace) -> int:
     kit = load_kit(args.kit)
     from .common import avatar_of, rig_for
 
-    rig = rig_for(kit, avatar_of(args))
+    avatar = avatar_of(args)
+    rig = rig_for(kit, avatar)
     expression = load_expression(args.preset) if args.preset else None
     done = perform(
         performance,
@@ -74,8 +83,18 @@ def run(args: argparse.Namespace) -> int:
     times = np.arange(0.0, end, 1.0 / args.fps)
     local, root = done.animation.locals(times)
     out = Path(args.output)
+    fmt = args.format or ("gltf" if out.suffix.lower() == ".glb" else "bvh")
+    if fmt == "gltf" and out.suffix.lower() != ".glb":
+        raise LivedrummerError(f"{out}: --format gltf writes binary glTF: name the file .glb")
     try:
-        out.write_text(bvh_text(rig.skeleton, local, root, args.fps))
+        if fmt == "gltf":
+            from livedrummer.avatar.character import build_character
+            from livedrummer.avatar.gltf_export import performance_glb
+
+            who = avatar if avatar is not None else build_character(rig.skeleton.lengths)
+            out.write_bytes(performance_glb(who, rig.skeleton, times, local, root))
+        else:
+            out.write_text(bvh_text(rig.skeleton, local, root, args.fps))
     except OSError as exc:
         raise LivedrummerError(f"{out}: cannot write: {exc.strerror or exc}") from exc
     print(f"{out}: {times.size} frames at {args.fps:g} fps, {len(local[0])} joints")
