@@ -6,7 +6,15 @@
   (:class:`~livedrummer.body.skeleton.SegmentLengths`) the IK must use so that *this*
   avatar's stick tips land on the drums;
 * :mod:`~livedrummer.avatar.skinning`: linear blend skinning in numpy, the reference the GPU
-  vertex shader is tested against.
+  vertex shader is tested against;
+* :mod:`~livedrummer.avatar.character`: the built-in character;
+* a user's avatar, in three steps: :mod:`~livedrummer.avatar.gltf` reads a glTF/VRM file into
+  arrays (vertices as displayed, avatar bones, materials, textures),
+  :mod:`~livedrummer.avatar.bonemap` finds which node is which humanoid bone (VRM maps, known
+  rig names, a bone map file), :mod:`~livedrummer.avatar.retarget` binds it to our skeleton
+  with its own proportions; :mod:`~livedrummer.avatar.loader` is the front door
+  (``--avatar FILE|NAME``, ``avatar info``, ``avatars``);
+* :mod:`~livedrummer.avatar.gltf_export`: an avatar and a performance as a ``.glb``.
 
 The package is pure data and numpy; GPU buffers and shaders live in :mod:`services.display`.
 """

@@ -110,7 +110,7 @@ def from_vrm(ext: dict[str, Any], n_nodes: int, source: str) -> Humanoid | None:
         for item in human:
             if isinstance(item, dict) and isinstance(item.get("bone"), str):
                 name = _vrm0_name(item["bone"])
-                if name in HUMAN_BONES:
+                if name in HUMAN_BONES and item.get("node") != -1:  # -1: some exporters' "none"
                     bones[name] = node(item.get("node"), item["bone"], "VRM humanoid")
         return Humanoid(bones, "VRM 0.x")
     return None
