@@ -167,6 +167,9 @@ def test_fingers_are_curled_towards_the_palm(files: dict[str, Path], avatars: di
     wrist = joints[J["r_wrist"]]
     # straight, the middle finger would reach 0.18 * k below the wrist; curled it does not
     assert wrist[2] - fingers[:, 2].min() < 0.16 * k
+    # ... they close towards the palm, which hangs facing the thigh (-x for the right hand)
+    assert (fingers[:, 0] - wrist[0]).min() < -0.035 * k
+    assert (fingers[:, 0] - wrist[0]).max() < 0.04 * k  # the palm box, nothing outward
 
 
 def test_reach_error_names_piece_limb_and_shortfall(tmp_path: Path) -> None:
