@@ -13,7 +13,9 @@ the trousers), so a bent joint shows skin or cloth, never a hole.
 * Arms and legs: one tube each from shoulder to wrist and hip to ankle, so the elbow and knee
   bend one continuous surface; T-shirt sleeves and trouser legs are the cloth tubes over them.
 * Head: a tube of rings shaped to a skull with a narrower jaw, eyes (whites, irises, pupils),
-  brows, nose, lips and ears placed on its front surface, and a hair shell cut at a hairline.
+  brows, nose, lips and ears placed on its front surface, and a hair shell from a hairline to
+  the crown. It is modelled looking up a little with the eyes looking down
+  (:data:`FACE_TILT_RAD`), so a drummer watching his drums still shows the audience a face.
 * Hands: a palm and four fingers curled round the stick at the grip fulcrum (the ``*_stick``
   joint), a thumb along the stick; shoes with a light sole.
 
@@ -36,6 +38,11 @@ import numpy as np
 from livedrummer.avatar.model import Avatar, Material, Primitive, SkinnedMesh
 from livedrummer.body.skeleton import N_JOINTS, PARENTS, J, SegmentLengths, build_skeleton
 
+#: The head is modelled looking up by this much (radians), its eyes looking down by as much:
+#: the body pitches the head 25-40 degrees down towards the drums, and a face turned that far
+#: away shows the audience mostly hair; eyes that look down carry the gaze instead.
+FACE_TILT_RAD = np.radians(14.0)
+
 #: Material indices of the built-in character.
 SKIN, SHIRT, TROUSERS, SHOES, SOLE, HAIR, EYE_WHITE, IRIS, PUPIL, LIPS = range(10)
 MATERIALS: tuple[Material, ...] = (
@@ -50,6 +57,10 @@ MATERIALS: tuple[Material, ...] = (
     Material("pupil", (0.02, 0.02, 0.02, 1.0), roughness=0.3),
     Material("lips", (0.68, 0.36, 0.34, 1.0), roughness=0.6),
 )
+
+#: Primitives are drawn outer layers first (hair over the scalp, the shirt over the trousers'
+#: waist, sleeves over the arms), so the layers under them fail the depth test unshaded.
+DRAW_ORDER = (HAIR, EYE_WHITE, IRIS, PUPIL, LIPS, SHIRT, SHOES, SOLE, TROUSERS, SKIN)
 
 
 def _smooth(edge0: float, edge1: float, x: np.ndarray) -> np.ndarray:
@@ -108,7 +119,7 @@ class _Parts:
         positions, normals, weights, tris, prims = [], [], [], [], []
         base = 0
         first = 0
-        order = sorted(range(len(self.parts)), key=lambda n: self.parts[n][0])
+        order = sorted(range(len(self.parts)), key=lambda n: DRAW_ORDER.index(self.parts[n][0]))
         by_material: dict[int, int] = {}
         for n in order:
             material, pos, tri, w = self.parts[n]
@@ -118,7 +129,7 @@ class _Parts:
             tris.append(tri + base)
             base += pos.shape[0]
             by_material[material] = by_material.get(material, 0) + tri.size
-        for material in sorted(by_material):
+        for material in sorted(by_material, key=DRAW_ORDER.index):
             prims.append(Primitive(material, first, by_material[material]))
             first += by_material[material]
         dense = np.concatenate(weights)
@@ -206,8 +217,8 @@ def _sweep(
 
 
 def _ellipsoid(parts: _Parts, material: int, centre: np.ndarray, radii: tuple[float, float, float],
-               joint: int | np.ndarray, *, rot: np.ndarray | None = None, k: int = 12,
-               rings: int = 8) -> None:  # fmt: skip
+               joint: int | np.ndarray, *, rot: np.ndarray | None = None, k: int = 10,
+               rings: int = 6) -> None:  # fmt: skip
     """A closed ellipsoid (axes x, y, z scaled by ``radii``, turned by ``rot``) on one joint
     (an index) or on a dense weight row."""
     phi = np.linspace(-np.pi / 2, np.pi / 2, rings + 2)
@@ -266,7 +277,9 @@ def build_character(lengths: SegmentLengths | None = None) -> Avatar:
     p = rest_positions(s)
     parts = _Parts()
     _torso(parts, s, p)
+    first = len(parts.parts)
     _head(parts, s, p)
+    _tilt(parts, first, p[J["head"]], FACE_TILT_RAD)
     for side, sign in (("r", 1.0), ("l", -1.0)):
         _arm(parts, s, p, side, sign)
         _hand(parts, s, p, side, sign)
@@ -304,7 +317,7 @@ def _torso(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
         (0.09, hw + 0.045, 0.10, 0.0, 0.012),
         (0.12, hw + 0.035, 0.095, 0.0, 0.012),
     ]
-    rings, z = _sweep(trousers, pelvis, Z, X, Y, power=2.4, k=32, caps=(4, 0), depth=(0.35, 1.0))
+    rings, z = _sweep(trousers, pelvis, Z, X, Y, power=2.4, k=28, caps=(4, 0), depth=(0.35, 1.0))
     parts.tube(TROUSERS, rings, weights(z))
     f = top / 0.545
     shirt = [
@@ -319,10 +332,9 @@ def _torso(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
         (top + 0.022, sh + 0.01, 0.08, 0.0, 0.0),
         (top + 0.042, sh - 0.045, 0.07, 0.0, 0.0),
         (top + 0.058, 0.09, 0.064, 0.0, 0.002),
-        (top + 0.072, 0.07, 0.062, 0.0, 0.005),
-        (top + 0.082, 0.062, 0.058, 0.0, 0.006),
+        (top + 0.068, 0.068, 0.062, 0.0, 0.006),
     ]
-    rings, z = _sweep(shirt, pelvis, Z, X, Y, power=2.6, k=36, caps=(0, 0))
+    rings, z = _sweep(shirt, pelvis, Z, X, Y, power=2.6, k=30, caps=(0, 0))
     parts.tube(SHIRT, rings, _shoulder_blend(rings, weights(z), p, s))
     # the neck, from inside the collar to inside the skull
     head = p[J["head"]]
@@ -337,7 +349,7 @@ def _torso(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
         )
         for t in np.linspace(0, 1, 6)
     ]
-    rings, z = _sweep(neck_rows, pelvis, Z, X, Y, k=20, caps=(0, 2))
+    rings, z = _sweep(neck_rows, pelvis, Z, X, Y, k=16, caps=(0, 2))
     parts.tube(
         SKIN,
         rings,
@@ -374,17 +386,25 @@ def _head_ring(u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return a, b, y
 
 
+def _tilt(parts: _Parts, first: int, pivot: np.ndarray, angle: float) -> None:
+    """Turn the parts from index ``first`` on about the x axis through ``pivot``."""
+    rot = _rot_x(angle)
+    for n in range(first, len(parts.parts)):
+        material, pos, tri, w = parts.parts[n]
+        parts.parts[n] = (material, (pos - pivot) @ rot.T + pivot, tri, w)
+
+
 def _head(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
     h = J["head"]
     base, top = p[h], p[J["head_top"]]
     height = (top[2] - base[2]) + 0.095  # chin to crown
     zc = top[2] + 0.012 - height / 2
     half = height / 2
-    u = np.concatenate([[-1.0], np.linspace(-0.97, 0.97, 30), [1.0]])
+    u = np.concatenate([[-1.0], np.linspace(-0.97, 0.97, 24), [1.0]])
     a, b, y = _head_ring(u)
     rows = [(zc + half * ui, ai, bi, 0.0, yi) for ui, ai, bi, yi in zip(u, a, b, y, strict=True)]
     origin = np.array([base[0], base[1], 0.0])
-    rings, _ = _sweep(rows, origin, Z, X, Y, power=2.15, k=32, caps=(0, 0))
+    rings, _ = _sweep(rows, origin, Z, X, Y, power=2.15, k=26, caps=(0, 0))
     parts.tube(SKIN, rings, _one(h, rings.shape[0]))
 
     def front(uu: float, x: float) -> np.ndarray:
@@ -398,8 +418,12 @@ def _head(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
         x = 0.032 * sign
         c = front(eye_u, x) - np.array([0, 0.0085, 0])
         _ellipsoid(parts, EYE_WHITE, c, (0.0138, 0.011, 0.0098), h)
-        _ellipsoid(parts, IRIS, c + np.array([0, 0.0083, 0]), (0.0069, 0.0038, 0.0069), h)
-        _ellipsoid(parts, PUPIL, c + np.array([0, 0.0108, 0]), (0.0031, 0.0018, 0.0031), h)
+        # the eyes look down by the face's tilt (see FACE_TILT_RAD)
+        gaze = _rot_x(-FACE_TILT_RAD - 0.05)
+        _ellipsoid(parts, IRIS, c + gaze @ np.array([0, 0.0083, 0]), (0.0069, 0.0038, 0.0069),
+                   h, rot=gaze)  # fmt: skip
+        _ellipsoid(parts, PUPIL, c + gaze @ np.array([0, 0.0108, 0]), (0.0031, 0.0018, 0.0031),
+                   h, rot=gaze)  # fmt: skip
         brow = front(eye_u + 0.19, x * 1.05) - np.array([0, 0.002, 0])
         _ellipsoid(
             parts,
@@ -422,14 +446,14 @@ def _head(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
     tip = front(eye_u - 0.36, 0.0) + np.array([0, 0.005, 0.0])
     _ellipsoid(parts, SKIN, tip, (0.0095, 0.0075, 0.0075), h)
     mouth = front(eye_u - 0.53, 0.0) - np.array([0, 0.0035, 0])
-    _ellipsoid(parts, LIPS, mouth, (0.021, 0.0068, 0.0066), h)
+    _ellipsoid(parts, LIPS, mouth, (0.024, 0.0072, 0.0068), h)
     # hair: the skull pushed outward from its centre, from a hairline (low at the back, a
     # fringe in front) to the crown; each column of the grid starts at its own hairline
-    theta = np.linspace(0.0, 2.0 * np.pi, 40, endpoint=False)
+    theta = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False)
     sin_t, cos_t = np.sin(theta), np.cos(theta)
     line = np.where(sin_t > 0, 0.30 + 0.20 * sin_t**2 - 0.03 * np.cos(7 * theta) * sin_t,
                     0.30 + 0.85 * sin_t)  # fmt: skip
-    t = np.linspace(0.0, 1.0, 18)[:, None]
+    t = np.linspace(0.0, 1.0, 14)[:, None]
     uu = line[None, :] + (1.0 - line[None, :]) * (1.0 - (1.0 - t) ** 1.5)
     a, b, y = _head_ring(uu)
     e = 2.0 / 2.15
@@ -464,13 +488,13 @@ def _arm(parts: _Parts, s: SegmentLengths, p: np.ndarray, side: str, sign: float
     bounds = [(0.025, 0.06), (ua, 0.05), (ua + fa, 0.025)]
     joints = [J["chest"], sh, el, wr]
     # the bare arm starts inside the sleeve, so no skin shows at the shoulder
-    rings, t = _sweep(rows[2:], origin, -Z, X * sign, Y, k=20, caps=(3, 2), depth=(0.5, 1.0))
+    rings, t = _sweep(rows[2:], origin, -Z, X * sign, Y, k=16, caps=(3, 2), depth=(0.5, 1.0))
     parts.tube(SKIN, rings, chain_weights(t, joints, bounds))
     sleeve = [(r[0], r[1] + 0.007, r[2] + 0.008, r[3], r[4]) for r in rows[:3]]
     end = sleeve[-1]
     sleeve.append((end[0] + 0.01, end[1] + 0.002, end[2] + 0.002, 0.0, 0.0))
     sleeve.append((end[0] + 0.012, end[1] - 0.012, end[2] - 0.012, 0.0, 0.0))
-    rings, t = _sweep(sleeve, origin, -Z, X * sign, Y, k=20, caps=(3, 0), depth=(0.3, 1.0))
+    rings, t = _sweep(sleeve, origin, -Z, X * sign, Y, k=16, caps=(3, 0), depth=(0.3, 1.0))
     parts.tube(SHIRT, rings, chain_weights(t, joints, bounds))
 
 
@@ -485,7 +509,7 @@ def _hand(parts: _Parts, s: SegmentLengths, p: np.ndarray, side: str, sign: floa
     hand = wrist[2] - grip[2]
     palm = np.array([grip[0], grip[1] + 0.011, grip[2] + 0.52 * hand])
     _ellipsoid(parts, SKIN, palm - inner * 0.002, (0.027, 0.018, 0.5 * hand + 0.006), wr,
-               k=18, rings=10)  # fmt: skip
+               k=14, rings=8)  # fmt: skip
     for f in range(4):
         z = grip[2] + 0.006 + (hand - 0.026) * f / 3.0
         w = np.zeros(N_JOINTS)
@@ -494,8 +518,8 @@ def _hand(parts: _Parts, s: SegmentLengths, p: np.ndarray, side: str, sign: floa
         major, minor = 0.0158, 0.0089 - 0.0005 * f
         # from the back of the hand (+y) round the outer side, under the stick (-y) and up
         # the inner side: 1.5 turns of a half circle
-        ang = np.linspace(0.5 * np.pi, -0.85 * np.pi, 11) if sign > 0 else \
-            np.linspace(0.5 * np.pi, 1.85 * np.pi, 11)  # fmt: skip
+        ang = np.linspace(0.5 * np.pi, -0.85 * np.pi, 8) if sign > 0 else \
+            np.linspace(0.5 * np.pi, 1.85 * np.pi, 8)  # fmt: skip
         path = np.column_stack([grip[0] + major * np.cos(ang), grip[1] + major * np.sin(ang),
                                 np.full(ang.size, z)])  # fmt: skip
         path[0, 1] += 0.006
@@ -511,7 +535,7 @@ def _hand(parts: _Parts, s: SegmentLengths, p: np.ndarray, side: str, sign: floa
 
 
 def _tube_path(parts: _Parts, material: int, path: np.ndarray, radius: float,
-               weights: np.ndarray, k: int = 10) -> None:  # fmt: skip
+               weights: np.ndarray, k: int = 7) -> None:  # fmt: skip
     """A round tube of ``radius`` along a polyline, with rounded ends, on one weight row."""
     d = np.gradient(path, axis=0)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
@@ -546,7 +570,7 @@ def _leg(parts: _Parts, s: SegmentLengths, p: np.ndarray, side: str, sign: float
         (th + sn + 0.01, 0.052, 0.054, 0.0, 0.0),
     ]
     bounds = [(-0.06, 0.03), (th, 0.06), (th + sn, 0.03)]
-    rings, t = _sweep(rows, p[hip], -Z, X * sign, Y, k=22, caps=(5, 3))
+    rings, t = _sweep(rows, p[hip], -Z, X * sign, Y, k=18, caps=(5, 3))
     parts.tube(TROUSERS, rings, chain_weights(t, [J["pelvis"], hip, knee, ankle], bounds))
 
 
@@ -566,8 +590,8 @@ def _shoe(parts: _Parts, s: SegmentLengths, p: np.ndarray, side: str, sign: floa
         (0.19 * f, 0.040, 0.024, 0.0, 0.026),
     ]
     origin = np.array([ankle[0], ankle[1], sole_z])
-    rings, _ = _sweep(rows, origin, Y, X * sign, Z, power=3.0, k=24, caps=(3, 3))
+    rings, _ = _sweep(rows, origin, Y, X * sign, Z, power=3.0, k=18, caps=(3, 3))
     parts.tube(SHOES, rings, _one(a, rings.shape[0]))
     sole = [(r[0], r[1] + 0.004, 0.009, 0.0, 0.008) for r in rows]
-    rings, _ = _sweep(sole, origin, Y, X * sign, Z, power=4.0, k=24, caps=(3, 3))
+    rings, _ = _sweep(sole, origin, Y, X * sign, Z, power=4.0, k=18, caps=(2, 2))
     parts.tube(SOLE, rings, _one(a, rings.shape[0]))

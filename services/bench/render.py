@@ -2,7 +2,9 @@
 
 Draws the demo groove as the body model performs it (optimal sticking), from the ``stage``
 camera; ``body`` is the time to sample the body's poses and map them to scene frames (per
-frame, vectorized over all frames).
+frame, vectorized over all frames); ``avatar`` the time to generate the built-in character
+(:func:`livedrummer.avatar.character.build_character`, median of 5), which every renderer
+draws and skins on the GPU.
 ``draw`` is draw + ``glFinish`` (what a window pays before swapping); ``draw+read`` adds the
 RGBA read-back of the frame into numpy, ``draw+i420`` the GPU conversion to YUV 4:2:0 and its
 read-back (what export pays before encoding); ``pipelined`` issues all the frames' draws and
@@ -21,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from livedrummer.avatar.character import build_character
 from livedrummer.kit.loader import load_kit
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
@@ -58,6 +61,14 @@ def main(argv: list[str]) -> int:
         f"body: perform {t1 - t0:.2f} s for {perf.duration_s:.0f} s of music; frames "
         f"{(t2 - t1) / all_times.size * 1e3:.3f} ms each ({all_times.size} at 60 fps)"
     )
+    builds = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        avatar = build_character()
+        builds.append(time.perf_counter() - t0)
+    print(f"avatar: built-in character {avatar.mesh.vertex_count} vertices, "
+          f"{avatar.mesh.triangle_count} triangles, built in "
+          f"{statistics.median(builds) * 1e3:.1f} ms")  # fmt: skip
     ctx = headless_context()
     print(f"render: {ctx.info['GL_RENDERER']} ({ctx.info['GL_VERSION']}), aa {args.aa}")
     cam = pick_camera(kit, "stage")
@@ -65,7 +76,8 @@ def main(argv: list[str]) -> int:
     frames = list(body.frames(times))
     for text in args.sizes.split(","):
         size = parse_size(text)
-        r = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=args.aa)
+        r = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=args.aa,
+                     avatar=avatar)  # fmt: skip
         r.draw(frames[0], cam)
         r.read_rgba()
         draw, read, i420 = [], [], []
