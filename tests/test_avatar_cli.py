@@ -155,3 +155,19 @@ def test_render_draws_the_avatar(files: dict[str, Path], tmp_path: Path) -> None
     # the box-limbed 1.95 m avatar is not the built-in character
     diff = np.abs(frames["default"].astype(int) - frames["tall.glb"].astype(int)).sum(axis=-1)
     assert (diff > 60).mean() > 0.02
+
+
+def test_up_gives_the_avatar_to_the_synth_and_the_display(files: dict[str, Path]) -> None:
+    from services.cli import build_parser
+    from services.cli.up import specs
+
+    argv = ["up", "--demo", "--headless", "--avatar", str(files["vrm1.vrm"])]
+    by_name = {s.name: s.argv for s in specs(build_parser(argv).parse_args(argv))}
+    for name in ("synth", "display"):
+        words = by_name[name]
+        assert words[words.index("--avatar") + 1] == str(files["vrm1.vrm"]), name
+    display = by_name["display"]
+    synth = by_name["synth"]
+    # the display asks the synth's control socket which avatar it plays
+    assert display[display.index("--synth-control") + 1] == synth[synth.index("--control") + 1]
+    assert "--avatar" not in by_name["input"]

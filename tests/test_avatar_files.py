@@ -251,6 +251,8 @@ def test_missing_bones_are_named(tmp_path: Path) -> None:
         (lambda d: d["extensions"]["VRMC_vrm"]["humanoid"]["humanBones"]["hips"].update(
             node=500), "names node 500"),
         (lambda d: d["bufferViews"][0].update(byteLength=30), "cannot decode the image"),
+        (lambda d: d.update(extensionsRequired=["KHR_draco_mesh_compression"]),
+         "compressed with KHR_draco_mesh_compression"),
     ],
 )  # fmt: skip
 def test_broken_buffers_accessors_textures(tmp_path: Path, change: object, problem: str) -> None:

@@ -19,7 +19,8 @@ dependency for video, so no imaging library is added.
 
 Limits: triangles, triangle strips and fans only (points and lines are skipped); one UV set
 (``TEXCOORD_0``); sparse accessors are applied; morph targets, animations, cameras and lights
-are ignored; KTX2/Basis textures are not decoded (the material keeps its colour factor).
+are ignored; KTX2/Basis textures are not decoded (the material keeps its colour factor);
+Draco- or meshopt-compressed files are refused by name.
 """
 
 from __future__ import annotations
@@ -49,6 +50,9 @@ _COMPONENTS: dict[int, type[np.generic]] = {
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 _GLB_MAGIC = b"glTF"
 MTOON = ("VRMC_materials_mtoon",)
+#: Required extensions whose buffers cannot be read as plain accessors.
+COMPRESSED = frozenset({"KHR_draco_mesh_compression", "EXT_meshopt_compression",
+                        "KHR_meshopt_compression"})  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -135,6 +139,10 @@ def _load(data: bytes, source: str) -> Any:
     version = str(getattr(gltf.asset, "version", "") or "")
     if not version.startswith("2."):
         raise AvatarError(f"{source}: glTF version {version or '?'} (only 2.x is read)")
+    unread = sorted(set(gltf.extensionsRequired or []) & COMPRESSED)
+    if unread:
+        raise AvatarError(f"{source}: compressed with {', '.join(unread)}, which is not read "
+                          "(export it uncompressed)")  # fmt: skip
     return gltf
 
 
