@@ -89,6 +89,36 @@ def test_exported_skin_matches_our_skinning(tmp_path: Path) -> None:
     assert len(g.images) == 1 and g.materials[1].extensions == {"KHR_materials_unlit": {}}
 
 
+def test_kit_moves_as_the_renderer_moves_it(tmp_path: Path) -> None:
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.render.kitmesh import build_kit_mesh
+
+    avatar = load_avatar_file(af.write(tmp_path, "short.glb"))
+    sk = build_skeleton(avatar.lengths)
+    kit = build_kit_mesh(load_kit("rock5"), floor=False)
+    rng = np.random.default_rng(9)
+    t = 4
+    channels = rng.uniform(-0.2, 0.2, (t, kit.pieces, 4))
+    local = np.tile([1.0, 0, 0, 0], (t, N_JOINTS, 1))
+    root = np.tile(sk.root_m, (t, 1))
+    data = performance_glb(avatar, sk, np.arange(t) / 10.0, local, root, kit, channels)
+    g = pygltflib.GLTF2.load_from_bytes(data)
+    anim = g.animations[0]
+    k = 2
+    values = {(c.target.node, c.target.path): read(g, anim.samplers[c.sampler].output)[k]
+              for c in anim.channels}  # fmt: skip
+    movers = [i for i, n in enumerate(g.nodes) if n.name.endswith(" motion")]
+    assert movers
+    expect = kit.instances(channels[k])[:, :16].reshape(-1, 4, 4).transpose(0, 2, 1)
+    for n in movers:
+        node = g.nodes[n]
+        placed = g.nodes[node.children[0]]
+        index = int(placed.name.split()[1])
+        motion = trs(node, values[(n, "translation")], values[(n, "rotation")])
+        model = motion @ np.asarray(placed.matrix).reshape(4, 4).T
+        assert np.abs(model - expect[index]).max() < 1e-5, placed.name
+
+
 def test_export_cli_writes_a_glb_a_player_can_read(groove_dir: Path, tmp_path: Path) -> None:
     out = tmp_path / "show.glb"
     proc = subprocess.run(
@@ -104,6 +134,8 @@ def test_export_cli_writes_a_glb_a_player_can_read(groove_dir: Path, tmp_path: P
     clock = g.accessors[g.animations[0].samplers[0].input]
     assert clock.count == frames and clock.max[0] == pytest.approx((frames - 1) / 30, abs=1e-4)
     assert g.meshes[0].primitives and {n.name for n in g.nodes} >= {"r_stick_geo", "pelvis"}
+    assert any(n.name.startswith("kit ") and n.mesh is not None for n in g.nodes)
+    assert len(g.animations[0].channels) > N_JOINTS - len(LEAVES) + 1  # cymbals, hi-hat, beater
     bad = subprocess.run(
         [sys.executable, "-m", "services", "export",
          str(groove_dir / "drummer1/session1/1_funk_80_beat_4-4.mid"), "-o",

@@ -11,8 +11,14 @@ Everything is written in the kit frame under one root node whose rotation turns 
 glTF's (+Y up, the drummer facing +Z), rather than converting every array. Each stick is a
 thin box on its grip joint, from its tail behind the hand to the tip.
 
-Limits: the drum kit itself and its channels (cymbal swing, hi-hat lift, beater) are not
-written; textures are re-encoded as PNG (uncompressed filter, zlib); one animation, sampled at
+The kit is the renderer's own (:class:`~livedrummer.render.kitmesh.KitMesh`): every instance
+of a unit mesh is a node with its placement matrix; an instance that moves (a cymbal's swing,
+the hi-hat's lift, the kick beater) hangs under a node animated with the rotation and
+translation that :meth:`KitMesh.instances` gives it frame by frame, so the file's cymbals move
+exactly as the video's.
+
+Limits: the hit highlight and the stage floor are not written; kit colours are plain
+metallic-roughness factors; textures are re-encoded as PNG (zlib); one animation, sampled at
 the times given (no key reduction).
 """
 
@@ -26,6 +32,7 @@ import numpy as np
 
 from livedrummer.avatar.model import Avatar, Material
 from livedrummer.body.skeleton import JOINTS, LEAVES, N_JOINTS, PARENTS, J, Skeleton
+from livedrummer.render.kitmesh import MOTION_STATIC, KitMesh
 
 #: kit frame (+x right, +y forward, +z up) -> glTF (+Y up, front +Z: the drummer's right is -X)
 KIT_TO_GLTF = np.array([[-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
@@ -120,10 +127,65 @@ def _box(length_from: float, length_to: float, r: float) -> tuple[np.ndarray, np
     return corners, faces
 
 
+def _matrix(m: np.ndarray) -> list[float]:
+    return [float(v) for v in np.asarray(m, np.float64).T.reshape(16)]
+
+
+def _kit(d: _Doc, kit: KitMesh, channels: np.ndarray, clock: int
+         ) -> tuple[list[int], list[Any], list[Any]]:  # fmt: skip
+    """Nodes of the kit's instances, and the animation samplers/channels of those that move."""
+    from livedrummer.body import quat
+    from livedrummer.render.geometry import all_meshes
+
+    lib, g = d.lib, d.g
+    units = all_meshes()
+    meshes: dict[tuple[str, tuple[float, float, float, float]], int] = {}
+    nodes: list[int] = []
+    samplers: list[Any] = []
+    anim: list[Any] = []
+    rest_inv = np.linalg.inv(kit.model)
+    moves_at = set(np.flatnonzero(kit.motion != MOTION_STATIC).tolist())
+    frames = np.stack([kit.instances(c)[:, :16] for c in channels])  # (T, N, 16)
+    world = frames.reshape(len(channels), -1, 4, 4).transpose(0, 1, 3, 2).astype(np.float64)
+    for i, name in enumerate(kit.mesh.tolist()):
+        r, gr, b = (float(c) for c in kit.color[i])
+        colour = (r, gr, b, 1.0)
+        key = (name, colour)
+        if key not in meshes:
+            unit = units[name]
+            v = np.ascontiguousarray(unit.vertices, np.float32)
+            attrs = lib.Attributes(
+                POSITION=d.accessor(v[:, :3], "VEC3", _FLOAT, _ARRAY, True),
+                NORMAL=d.accessor(v[:, 3:6], "VEC3", _FLOAT, _ARRAY),
+            )
+            metal = float(kit.material[i, 0])
+            mat = d.material(Material(f"kit {name}", colour, roughness=1.0 - 0.6 * metal))
+            index = d.accessor(np.asarray(unit.indices, np.uint32), "SCALAR", _UINT, _ELEMENTS)
+            g.meshes.append(lib.Mesh(name=f"kit {name}", primitives=[
+                lib.Primitive(attributes=attrs, material=mat, indices=index)]))  # fmt: skip
+            meshes[key] = len(g.meshes) - 1
+        placed = d.node(name=f"kit {i} {name}", mesh=meshes[key], matrix=_matrix(kit.model[i]))
+        if i not in moves_at:
+            nodes.append(placed)
+            continue
+        motion = world[:, i] @ rest_inv[i]  # (T, 4, 4): what the channels do to it
+        rot = _xyzw(quat.from_matrix(motion[:, :3, :3]))
+        mover = d.node(name=f"kit {i} motion", children=[placed])
+        nodes.append(mover)
+        shift = motion[:, :3, 3].astype(np.float32)
+        for path, values, kind in (("rotation", rot, "VEC4"), ("translation", shift, "VEC3")):
+            out = d.accessor(np.ascontiguousarray(values), kind, _FLOAT)
+            samplers.append(lib.AnimationSampler(input=clock, output=out, interpolation="LINEAR"))
+            anim.append((mover, path, len(samplers) - 1))
+    return nodes, samplers, anim
+
+
 def performance_glb(avatar: Avatar, skeleton: Skeleton, times: np.ndarray, local_q: np.ndarray,
-                    root_m: np.ndarray) -> bytes:  # fmt: skip
+                    root_m: np.ndarray, kit: KitMesh | None = None,
+                    kit_channels: np.ndarray | None = None) -> bytes:  # fmt: skip
     """GLB bytes of ``avatar`` playing ``local_q`` (T, 24, 4; w x y z) and ``root_m`` (T, 3) at
-    ``times`` (T,) seconds, on the skeleton the motion was made for."""
+    ``times`` (T,) seconds, on the skeleton the motion was made for; with ``kit`` and its
+    scene channels ``kit_channels`` (T, P, 4), the kit too."""
     times = np.asarray(times, np.float32)
     if times.ndim != 1 or times.size == 0 or local_q.shape != (times.size, N_JOINTS, 4):
         raise ValueError(f"times {times.shape} and rotations {local_q.shape} do not match")
@@ -174,19 +236,28 @@ def performance_glb(avatar: Avatar, skeleton: Skeleton, times: np.ndarray, local
     g.scene = 0
     # the motion: one time input, a rotation channel per joint with one, the pelvis' position
     clock = d.accessor(times[:, None], "SCALAR", _FLOAT, bounds=True)
-    samplers, channels = [], []
+    samplers: list[Any] = []
+    anim_channels: list[Any] = []
+    if kit is not None and kit_channels is not None:
+        kit_nodes, samplers, moves = _kit(d, kit, kit_channels, clock)
+        g.nodes[root].children = [*g.nodes[root].children, *kit_nodes]
+        for node, path, sampler in moves:
+            target = lib.AnimationChannelTarget(node=node, path=path)
+            anim_channels.append(lib.AnimationChannel(sampler=sampler, target=target))
     for j in range(N_JOINTS):
         if j in LEAVES:
             continue
         out = d.accessor(_xyzw(local_q[:, j]), "VEC4", _FLOAT)
         samplers.append(lib.AnimationSampler(input=clock, output=out, interpolation="LINEAR"))
         target = lib.AnimationChannelTarget(node=joint_node[j], path="rotation")
-        channels.append(lib.AnimationChannel(sampler=len(samplers) - 1, target=target))
+        anim_channels.append(lib.AnimationChannel(sampler=len(samplers) - 1, target=target))
     out = d.accessor(np.asarray(root_m, np.float32), "VEC3", _FLOAT)
     samplers.append(lib.AnimationSampler(input=clock, output=out, interpolation="LINEAR"))
     target = lib.AnimationChannelTarget(node=joint_node[0], path="translation")
-    channels.append(lib.AnimationChannel(sampler=len(samplers) - 1, target=target))
-    g.animations.append(lib.Animation(name="performance", samplers=samplers, channels=channels))
+    anim_channels.append(lib.AnimationChannel(sampler=len(samplers) - 1, target=target))
+    g.animations.append(
+        lib.Animation(name="performance", samplers=samplers, channels=anim_channels)
+    )
     if any(m.shading == "toon" for m in mesh.materials):
         g.extensionsUsed = ["KHR_materials_unlit"]
     g.buffers = [lib.Buffer(byteLength=len(d.blob))]

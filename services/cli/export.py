@@ -7,8 +7,8 @@ gives (``--sticking``, ``--score``: what ``livedrummer sticking`` prints), and s
 
 ``--format gltf`` (the default for a ``.glb`` output) writes the avatar (``--avatar``, else
 the built-in character), its sticks and the motion as one binary glTF file with an animation
-(:mod:`livedrummer.avatar.gltf_export`); BVH has the skeleton only. Both have the avatar's
-proportions.
+and the kit with its cymbals, hi-hat and beater moving (:mod:`livedrummer.avatar.gltf_export`);
+BVH has the skeleton only. Both have the avatar's proportions.
 """
 
 from __future__ import annotations
@@ -90,9 +90,14 @@ def run(args: argparse.Namespace) -> int:
         if fmt == "gltf":
             from livedrummer.avatar.character import build_character
             from livedrummer.avatar.gltf_export import performance_glb
+            from livedrummer.render.body_scene import BodyScene, scene_channels
+            from livedrummer.render.kitmesh import build_kit_mesh
 
             who = avatar if avatar is not None else build_character(rig.skeleton.lengths)
-            out.write_bytes(performance_glb(who, rig.skeleton, times, local, root))
+            channels = scene_channels(BodyScene(kit, done).poses(times), kit)
+            kit_mesh = build_kit_mesh(kit, floor=False)
+            data = performance_glb(who, rig.skeleton, times, local, root, kit_mesh, channels)
+            out.write_bytes(data)
         else:
             out.write_text(bvh_text(rig.skeleton, local, root, args.fps))
     except OSError as exc:
