@@ -210,7 +210,9 @@ def performance_glb(avatar: Avatar, skeleton: Skeleton, times: np.ndarray, local
         POSITION=d.accessor(mesh.positions, "VEC3", _FLOAT, _ARRAY, bounds=True),
         NORMAL=d.accessor(mesh.normals, "VEC3", _FLOAT, _ARRAY),
         TEXCOORD_0=d.accessor(mesh.uv, "VEC2", _FLOAT, _ARRAY),
-        JOINTS_0=d.accessor(mesh.joints.astype(np.uint16), "VEC4", _USHORT, _ARRAY),
+        JOINTS_0=d.accessor(
+            np.where(mesh.weights > 0, mesh.joints, 0).astype(np.uint16), "VEC4", _USHORT, _ARRAY
+        ),  # an unused influence names joint 0
         WEIGHTS_0=d.accessor(mesh.weights, "VEC4", _FLOAT, _ARRAY),
     )
     prims = []
@@ -231,8 +233,8 @@ def performance_glb(avatar: Avatar, skeleton: Skeleton, times: np.ndarray, local
         grip = g.nodes[joint_node[J[f"{side}_stick"]]]
         stick = d.node(name=f"{side}_stick_geo", mesh=len(g.meshes) - 1)
         grip.children = [*(grip.children or []), stick]
-    g.nodes[root].children = [joint_node[0], body]
-    g.scenes = [lib.Scene(nodes=[root])]
+    g.nodes[root].children = [joint_node[0]]
+    g.scenes = [lib.Scene(nodes=[root, body])]  # a skinned mesh's own node is not transformed
     g.scene = 0
     # the motion: one time input, a rotation channel per joint with one, the pelvis' position
     clock = d.accessor(times[:, None], "SCALAR", _FLOAT, bounds=True)

@@ -397,4 +397,5 @@ def _remap(bones: np.ndarray, weights: np.ndarray, node_joint: np.ndarray
     w[empty] = (1.0, 0.0, 0.0, 0.0)
     top[empty] = J["pelvis"]
     w /= np.maximum(w.sum(axis=1, keepdims=True), 1e-12)
+    top = np.where(w > 0, top, 0)  # an unused influence names joint 0, as glTF asks
     return top.astype(np.uint16), w.astype(np.float32)
