@@ -7,6 +7,12 @@ Every option's help states its default: :class:`Parser` appends ``(default X)`` 
 does not say it already, so the stated default cannot drift from the real one; an option whose
 default is ``None`` says in its own words what happens without it.
 
+One front door for files: every command that reads a MIDI file calls :func:`read_performance`
+(``--map``, ``auto`` by default; ``--channel``), which prints the file's report on stderr
+(:meth:`~livedrummer.timeline.performance.Performance.report_lines`: warnings, channels left
+out, the map ``auto`` chose, unknown and ignored notes, no drum notes), and folders are searched
+by :func:`midi_files` for every MIDI suffix in any case.
+
 This module is imported to build the parser, so it imports nothing heavy (no numpy).
 """
 
