@@ -296,3 +296,14 @@ def test_json_gltf_with_external_buffer(tmp_path: Path) -> None:
     assert a.mesh.triangle_count == 420
     with pytest.raises(AvatarError, match="cannot read"):
         parse_gltf(path.read_bytes(), str(path), base_dir=tmp_path / "elsewhere")
+
+
+def test_a_mesh_that_stops_below_the_head_gets_a_skull_from_the_bones(tmp_path: Path) -> None:
+    def headless(doc: dict) -> None:  # type: ignore[type-arg]
+        face = next(i for i, n in enumerate(doc["nodes"]) if n.get("name") == "Face")
+        doc["scenes"][0]["nodes"].remove(face)  # the head and hair mesh is not in the scene
+
+    a = load_avatar_file(broken(tmp_path, headless, "headless.vrm"))
+    k = af.AVATARS["vrm1.vrm"].height_m / af.HEIGHT_M
+    # neither zero nor the mesh's (which ends at the head joint): the default skull, scaled
+    assert 0.1 * k < a.lengths.head_top < 0.3 * k

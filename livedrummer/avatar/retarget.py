@@ -115,7 +115,9 @@ def _frame(scene: GltfScene, human: Humanoid) -> tuple[np.ndarray, float, str, s
     right = np.cross(forward, up)
     rot = _snap(np.stack([right, forward, up]))
     z = (scene.positions @ rot.T)[:, 2]
-    height = float(z.max() - z.min())
+    bones = np.array([p @ rot[2] for p in at.values()])
+    # the mesh's extent, or the bones' (head to foot is ~85 % of a height) if it is only a prop
+    height = max(float(z.max() - z.min()), float(bones.max() - bones.min()) / 0.85)
     for lo, hi, unit in ((0.3, 3.5, 1.0), (30.0, 350.0, 0.01), (350.0, 3500.0, 0.001)):
         if lo <= height <= hi:
             return rot, unit, _axis_name(rot[1]), _axis_name(rot[2])
@@ -183,8 +185,15 @@ def _depth(parents: np.ndarray, i: int) -> int:
     return d
 
 
-def _mesh_top(z: np.ndarray) -> float:
-    return float(z.max())
+def _head_top(pos: np.ndarray, head_z: float, shoulder_z: float) -> float:
+    """The top of the head: the mesh's highest point, or, where the mesh does not reach above
+    the head bone (a prop, not a body), the default's skull scaled by the neck's length."""
+    top = float(pos[:, 2].max())
+    if top > head_z + 0.02:
+        return top
+    return head_z + _DEFAULT.head_top * (head_z - shoulder_z) / (
+        _DEFAULT.neck + _DEFAULT.head - _DEFAULT.chest_to_shoulder
+    )
 
 
 def retarget(scene: GltfScene, human: Humanoid, name: str) -> tuple[Avatar, Fitted]:
@@ -249,7 +258,7 @@ def _fit(scene: GltfScene, human: Humanoid, heads: np.ndarray, pos: np.ndarray,
     if chest_z >= shoulder_z:
         chest_z = sz + 0.52 * (shoulder_z - sz)
     neck_z = at("neck")[2] if "neck" in b else shoulder_z + 0.25 * (head_z - shoulder_z)
-    top_z = _mesh_top(pos[:, 2])
+    top_z = _head_top(pos, head_z, shoulder_z)
     torso = {
         "lower_back": sz - hz, "upper_back": chest_z - sz,
         "chest_to_shoulder": shoulder_z - chest_z,
