@@ -1,6 +1,8 @@
 #version 330
 // The stage floor, cheaper than lit.frag because it covers most of the frame: planks, and a
-// pool of key light around the kit that fades into the dark hall (no specular, no rim).
+// pool of key light around the kit that fades into the dark hall (no specular, no rim), in
+// which the drummer and the kit cast the key light's shadow.
+#include "shadow.glsl"
 uniform vec3 u_stage_centre;
 uniform float u_stage_radius;
 
@@ -15,6 +17,7 @@ out vec4 f_color;
 void main() {
     float d = length(v_pos.xy - u_stage_centre.xy);
     float pool = 1.0 - smoothstep(0.4, u_stage_radius, d);
+    pool *= mix(0.45, 1.0, key_shadow(v_pos, vec3(0.0, 0.0, 1.0)));
     float plank = 0.88 + 0.12 * step(0.5, fract(v_pos.x * 6.0));
     vec3 c = v_color.rgb * plank * (0.12 + 1.25 * pool * pool) * vec3(1.05, 0.95, 0.85);
     f_color = vec4(c, 1.0);

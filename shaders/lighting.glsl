@@ -1,6 +1,8 @@
 // Stage lighting shared by every lit surface: a warm key spot from the front of house, a cool
 // rim light from behind and above (it draws the silhouette against the dark hall), a dim
-// hemisphere fill, metallic reflection of a fake overhead rig, and the hit highlight.
+// hemisphere fill, metallic reflection of a fake overhead rig, and the hit highlight. The key
+// light casts shadows (shadow.glsl); rim and fill do not.
+#include "shadow.glsl"
 uniform vec3 u_eye;
 uniform vec3 u_key_pos;
 uniform vec3 u_key_color;
@@ -30,7 +32,8 @@ vec3 shade(vec3 pos, vec3 n, vec3 base, vec4 material, float highlight, float ri
     float spec = ndh / (shininess - shininess * ndh + ndh) * step(0.0, ndl);
     vec3 spec_color = mix(vec3(0.25), base, metal);
     vec3 diffuse = base * (1.0 - 0.75 * metal);
-    vec3 color = diffuse * ndl * u_key_color + spec_color * spec * u_key_color * 1.2;
+    float lit = ndl > 0.0 ? key_shadow(pos, n) : 1.0;
+    vec3 color = (diffuse * ndl * u_key_color + spec_color * spec * u_key_color * 1.2) * lit;
     // Rim: strongest where the surface turns away from the viewer and faces the rim light.
     float edge = 1.0 - max(dot(n, v), 0.0);
     edge *= edge * edge;

@@ -35,7 +35,7 @@ void main() {
     vec3 c;
     if (u_shading == 1) {
         vec3 l = normalize(u_key_pos - v_pos);
-        float band = smoothstep(0.05, 0.12, dot(n, l));
+        float band = smoothstep(0.05, 0.12, dot(n, l)) * key_shadow(v_pos, n);
         vec3 v = normalize(u_eye - v_pos);
         float edge = pow(1.0 - max(dot(n, v), 0.0), 3.0);
         c = base.rgb * mix(vec3(0.35), u_key_color, band)

@@ -138,7 +138,7 @@ def test_the_silhouette_covers_the_skinned_mesh(ctx: Any, scene: BodyScene) -> N
     kit = scene.kit
     cam = kit_cameras(kit)["front"]
     frame = alone(scene.frame_at(2.05))
-    r = Renderer(ctx, empty_stage(), BODY_SKELETON, (W, H), samples=0)
+    r = Renderer(ctx, empty_stage(), BODY_SKELETON, (W, H), samples=0, shadows=False)
     r.draw(frame, cam)
     drawn = np.abs(r.read_rgb().astype(int) - empty_view(ctx, cam)).sum(-1) > 6
     pts = project(cam, reference(AVATAR, frame).astype(np.float64))
@@ -230,7 +230,7 @@ def test_front_and_stage_frame_drummer_and_kit(ctx: Any, scene: BodyScene, groov
     body = scene if kit_name == "rock5" else BodyScene.perform(groove, kit, load_note_map(DEMO_MAP))
     km = build_kit_mesh(kit)
     cam = kit_cameras(kit)[camera]
-    r = Renderer(ctx, km, BODY_SKELETON, (W, H), samples=0)
+    r = Renderer(ctx, km, BODY_SKELETON, (W, H), samples=0, shadows=False)  # objects, not shadows
     r.draw(body.frame_at(2.05), cam)
     img = r.read_rgb().astype(int)
     e = Renderer(ctx, floor_only(km), None, (W, H), samples=0)
@@ -259,6 +259,24 @@ def test_the_mannequin_stays_selectable(ctx: Any, scene: BodyScene) -> None:
     r = Renderer(ctx, empty_stage(), BODY_SKELETON, (W, H), samples=0)
     r.draw(dataclasses.replace(frame, rotations_q=None), cam)
     assert np.array_equal(r.read_rgb().astype(int), images[1])
+
+
+def test_the_drummer_casts_the_key_lights_shadow(ctx: Any, scene: BodyScene) -> None:
+    """Seen from above, the stage floor darkens beside the drummer, on the side away from the
+    key light (which hangs in front, to the drummer's right: the shadow falls back and left
+    in the picture's terms, +x and -y in the kit's)."""
+    cam = kit_cameras(scene.kit)["overhead"]
+    frame = alone(scene.frame_at(2.05))
+    images = {}
+    for on in (True, False):
+        r = Renderer(ctx, empty_stage(), BODY_SKELETON, (W, H), samples=0, shadows=on)
+        r.draw(frame, cam)
+        images[on] = r.read_rgb().astype(int)
+    dark = (images[False] - images[True]).sum(-1) > 15
+    assert dark.sum() > 0.01 * W * H
+    ys, xs = np.nonzero(dark)
+    px, py = project(cam, frame.joints_m[[J["pelvis"]]].astype(np.float64))[0]
+    assert xs.mean() > px and ys.mean() > py  # screen right is +x, screen down is -y
 
 
 def quad_avatar(materials: tuple[Material, ...], depth_y: tuple[float, ...]) -> Avatar:

@@ -24,6 +24,11 @@ PROGRAMS: dict[str, tuple[str, str]] = {
     "segment": ("segment.vert", "lit.frag"),
     "ball": ("ball.vert", "lit.frag"),
     "skin": ("skin.vert", "skin.frag"),
+    # depth-only twins of the casters, for the key light's shadow map
+    "depth_mesh": ("mesh.vert", "depth.frag"),
+    "depth_segment": ("segment.vert", "depth.frag"),
+    "depth_ball": ("ball.vert", "depth.frag"),
+    "depth_skin": ("skin.vert", "depth.frag"),
 }
 
 

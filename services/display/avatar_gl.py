@@ -75,6 +75,7 @@ class SkinnedDraw:
                        == "BLEND")  # fmt: skip
         self._order = [mesh.primitives[i] for i in order]
         self._feedback: tuple[Any, Any, Any] | None = None
+        self._depth: Any = None
 
     def _layout(self, program: Any) -> tuple[Any, ...]:
         names = ("in_pos", "in_normal", "in_uv", "in_joints", "in_weights")
@@ -126,6 +127,21 @@ class SkinnedDraw:
         if blending:
             fbo.depth_mask = True
             self.ctx.disable(moderngl.BLEND)
+
+    def draw_depth(self, program: Any, rotations_q: np.ndarray, joints_m: np.ndarray) -> None:
+        """Depth only, for the key light's shadow map: every primitive but the BLEND ones (a
+        MASK primitive casts its whole outline: the depth pass does not read textures)."""
+        import moderngl
+
+        if self._depth is None:
+            self._depth = self.ctx.vertex_array(
+                program, [self._layout(program)], index_buffer=self._ibo, index_element_size=4
+            )
+        self._write_skin(program, self.skin_matrices(rotations_q, joints_m))
+        materials = self.avatar.mesh.materials
+        for prim in self._order:
+            if materials[prim.material].alpha_mode != "BLEND":
+                self._depth.render(moderngl.TRIANGLES, vertices=prim.count, first=prim.first)
 
     def skinned_positions(self, rotations_q: np.ndarray, joints_m: np.ndarray) -> np.ndarray:
         """The vertex shader's skinned positions, float32 (V, 3), read back by transform

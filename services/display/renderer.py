@@ -19,8 +19,13 @@ one resolved into it (multisampling costs about 4x on llvmpipe, so export defaul
 and :meth:`Renderer.read_i420` converts the frame to the video encoder's planar YUV 4:2:0 on
 the GPU first (full-screen passes, ``shaders/i420_*.frag``), so the encoder gets 1.5 bytes a
 pixel, already top-down, and the CPU neither flips nor converts. A window passes its framebuffer to
-:meth:`Renderer.draw`. Limits: no shadows, no transparency; every surface is opaque and lit by
-the same rig; the window must set :attr:`Renderer.size` when its framebuffer is resized.
+:meth:`Renderer.draw`. The key light casts shadows (``shadows``, on by default): each frame the
+casters (kit pieces, the drummer, the sticks; not the floor) are drawn depth-only from the key
+spot into a :data:`SHADOW_SIZE` square depth texture, which every lit surface and the floor
+look up with a hardware-compared 2x2 filter (``shaders/shadow.glsl``). Limits: one shadowed
+light; the kit's surfaces are opaque (the avatar's BLEND parts cast no shadow); every surface
+is lit by the same rig; the window must set :attr:`Renderer.size` when its framebuffer is
+resized.
 :meth:`Renderer.draw_overlay` blends a 2D RGBA image (the score and joint-angle strips of
 :mod:`livedrummer.render.overlay_raster`) over the drawn frame (``shaders/overlay.frag``).
 """
@@ -33,7 +38,7 @@ import numpy as np
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.body.skeleton import N_JOINTS
-from livedrummer.render.camera import Camera
+from livedrummer.render.camera import Camera, look_at, perspective
 from livedrummer.render.geometry import Mesh, all_meshes
 from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
 from livedrummer.render.scene import SceneFrame, Skeleton, Tone
@@ -53,6 +58,9 @@ STICK_COLOR = (0.92, 0.78, 0.52)
 STICK_RADIUS_M = 0.0075
 SEGMENT_FLOATS = 15  # a xyz, b xyz, radius, colour rgba, material
 BALL_FLOATS = 12  # centre xyz radius, colour rgba, material
+SHADOW_SIZE = 1024  # texels a side: ~3 mm at the kit, from the key light 4.6 m away
+SHADOW_RADIUS_M = 1.8  # the sphere round the kit's centre that the shadow map covers
+SHADOW_UNIT = 1  # texture unit of the shadow map (unit 0 is the avatar's base colour)
 
 
 class Renderer:
@@ -68,6 +76,7 @@ class Renderer:
         samples: int = 4,
         offscreen: bool = True,
         avatar: Avatar | Literal["mannequin"] | None = None,
+        shadows: bool = True,
     ) -> None:
         self.ctx = ctx
         self.kit_mesh = kit_mesh
@@ -85,13 +94,28 @@ class Renderer:
         groups = kit_mesh.groups
         self._kit_groups = {k: groups[k] for k in sorted(groups, key=lambda k: k == "floor")}
         self._kit_vaos: list[tuple[Any, Any, np.ndarray]] = []
+        self._kit_depth: list[tuple[Any, np.ndarray]] = []
         for name, idx in self._kit_groups.items():
             buf = ctx.buffer(reserve=max(1, len(idx)) * INSTANCE_FLOATS * 4, dynamic=True)
             program = "floor" if name == "floor" else "mesh"
             vao = self._vao(program, meshes[name], buf, "16f 4f 4f/i",
                             "in_model", "in_color", "in_material")  # fmt: skip
             self._kit_vaos.append((vao, buf, idx))
+            if name != "floor":  # the floor receives shadows, it casts none
+                depth = self._vao("depth_mesh", meshes[name], buf, "16f 4f 4f/i",
+                                  "in_model", "in_color", "in_material")  # fmt: skip
+                self._kit_depth.append((depth, idx))
         self._body_setup(meshes)
+        self.shadows = shadows
+        side = SHADOW_SIZE if shadows else 1
+        self._shadow_map = ctx.depth_texture((side, side))
+        self._shadow_map.compare_func = "<="
+        self._shadow_map.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self._shadow_map.repeat_x = self._shadow_map.repeat_y = False
+        self._shadow_fbo = ctx.framebuffer(depth_attachment=self._shadow_map)
+        for prog in self.programs.values():
+            if "u_shadow_map" in prog:
+                prog["u_shadow_map"].value = SHADOW_UNIT
         self.skinned: SkinnedDraw | None = None
         if skeleton is not None and skeleton.size == N_JOINTS and avatar != "mannequin":
             if avatar is None:
@@ -162,6 +186,11 @@ class Renderer:
                                   "in_material")  # fmt: skip
         self._ball_vao = self._vao("ball", meshes["sphere"], self._ball_buf, "4f 4f 4f/i",
                                    "in_centre_radius", "in_color", "in_material")  # fmt: skip
+        self._seg_depth = self._vao("depth_segment", meshes["limb"], self._seg_buf,
+                                    "3f 3f 1f 4f 4f/i", "in_a", "in_b", "in_radius", "in_color",
+                                    "in_material")  # fmt: skip
+        self._ball_depth = self._vao("depth_ball", meshes["sphere"], self._ball_buf, "4f 4f 4f/i",
+                                     "in_centre_radius", "in_color", "in_material")  # fmt: skip
 
     def upload(self, frame: SceneFrame | None) -> None:
         """Copy one frame's kit channels, joints and sticks into the instance buffers."""
@@ -218,13 +247,22 @@ class Renderer:
             "u_stage_centre": (float(centre[0]), float(centre[1]), 0.0),
             "u_stage_radius": STAGE_RADIUS_M,
         }
+        key = np.array(uniforms["u_key_pos"])
+        light_vp = key_light_view_projection(key, np.array([centre[0], centre[1], 0.6]))
+        uniforms["u_light_vp"] = light_vp.T.tobytes()
+        uniforms["u_shadow_on"] = int(self.shadows)
         for prog in self.programs.values():
             for name, value in uniforms.items():
                 if name in prog:
-                    if name == "u_view_proj":
+                    if name in ("u_view_proj", "u_light_vp"):
                         prog[name].write(value)
                     else:
                         prog[name].value = value
+        if self.shadows:
+            self._shadow_pass(light_vp)
+            fbo.use()
+            self.ctx.viewport = (0, 0, w, h)
+        self._shadow_map.use(location=SHADOW_UNIT)
         # Nearest and largest first, the floor last: hidden fragments fail the depth test
         # before they are shaded (llvmpipe tests depth early for these shaders).
         if self._draw_body:
@@ -234,6 +272,23 @@ class Renderer:
             if self._ball_count:
                 self._ball_vao.render(instances=self._ball_count)
         for vao, _buf, idx in self._kit_vaos:
+            vao.render(instances=len(idx))
+
+    def _shadow_pass(self, light_vp: np.ndarray) -> None:
+        """Draw every caster depth-only from the key light into the shadow map."""
+        self._shadow_fbo.use()
+        self.ctx.viewport = (0, 0, SHADOW_SIZE, SHADOW_SIZE)
+        self._shadow_fbo.clear(depth=1.0)
+        vp = light_vp.T.tobytes()
+        for name in ("depth_mesh", "depth_segment", "depth_ball", "depth_skin"):
+            self.programs[name]["u_view_proj"].write(vp)
+        if self._draw_body:
+            if self._pose is not None and self.skinned is not None:
+                self.skinned.draw_depth(self.programs["depth_skin"], *self._pose)
+            self._seg_depth.render(instances=self._seg_count)
+            if self._ball_count:
+                self._ball_depth.render(instances=self._ball_count)
+        for vao, idx in self._kit_depth:
             vao.render(instances=len(idx))
 
     def draw_overlay(self, image: np.ndarray, rect: tuple[int, int, int, int],
@@ -347,6 +402,17 @@ class Renderer:
 
     def finish(self) -> None:
         self.ctx.finish()
+
+
+def key_light_view_projection(key: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The key spot's view-projection (row-major float32): from ``key`` at ``target``, a
+    frustum just wide enough for a sphere of :data:`SHADOW_RADIUS_M` round the target."""
+    dist = float(np.linalg.norm(target - key))
+    fov = float(np.degrees(2.0 * np.arcsin(min(SHADOW_RADIUS_M / dist, 0.95))))
+    near = max(dist - SHADOW_RADIUS_M - 0.5, 0.1)
+    vp: np.ndarray = (perspective(fov, 1.0, near, dist + SHADOW_RADIUS_M + 0.5)
+                      @ look_at(key, target)).astype(np.float32)  # fmt: skip
+    return vp
 
 
 def i420_ok(size: tuple[int, int]) -> bool:
