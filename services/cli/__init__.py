@@ -34,6 +34,7 @@ COMMANDS: dict[str, str] = {
     "bench": "run a benchmark and print its figures",
     "input": "capture a kit, trigger board, file or remote stream",
     "ports": "list MIDI input ports (for livedrummer input --midi)",
+    "monitor": "print what a kit sends and what each message means",
     "sessions": "list journaled live sessions or export one to MIDI",
     "check": "check contact, penetration and joint limits of the motion",
     "export": "export the drummer's motion as BVH",

@@ -12,7 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import Subparsers, add_api_option, add_channel_option, add_command, add_map_option
+from .common import DEMO_MAP, Subparsers, add_api_option, add_channel_option, add_command
 from .keys import add_curve_options, security_from_args
 
 
@@ -25,13 +25,20 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--serial", metavar="DEV", help="serial device sending raw MIDI bytes")
     src.add_argument("--file", metavar="F.mid", type=Path, help="play a MIDI file as if live")
     src.add_argument("--remote", metavar="ENDPOINT", help="another site's input daemon (pub)")
+    src.add_argument("--virtual", metavar="NAME",
+                     help="open a virtual MIDI input NAME for a keyboard or DAW")  # fmt: skip
+    p.add_argument("--wait", action="store_true",
+                   help="wait for a --midi port or --serial device that is not there yet "
+                        "(default: one line naming what exists, exit 2)")  # fmt: skip
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
     p.add_argument("--loop", action="store_true", help="--file: start again at the end")
     p.add_argument("--pub", default=DEFAULT_PUB, help=f"publish endpoint (default {DEFAULT_PUB})")
     p.add_argument("--control", default=DEFAULT_CONTROL,
                    help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
-    add_map_option(p, "general-midi")
+    p.add_argument("--map", default="auto",
+                   help="note map name or .toml path; auto: for --file the bundled map that "
+                        "knows most of its notes, roland-td for a kit (default auto)")  # fmt: skip
     add_channel_option(p, "all")  # live: the kit's channel; a keyboard on the port is not drums
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
     p.add_argument("--wait-subscribers", type=int, default=0, metavar="N",
@@ -73,7 +80,14 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError(f"--realtime: {exc}") from None
     clock = MonotonicClock()
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    note_map = load_note_map(args.map)
+    if args.map != "auto":
+        note_map = load_note_map(args.map)
+    elif args.file is not None:  # the file's own best map, said in one line as render says it
+        from .common import read_performance
+
+        note_map = read_performance(args, args.file, quiet=True)[1]
+    else:
+        note_map = load_note_map(DEMO_MAP)  # e-kits: the Roland layout most modules follow
     try:
         channel = parse_channel(args.channel)
     except ValueError as exc:
@@ -101,7 +115,11 @@ def run(args: argparse.Namespace) -> int:
         from ..input.midiport import MidiPortSource
 
         decoder = MessageDecoder(note_map, args.performer, channels)
-        source = MidiPortSource(args.midi, clock, decoder, api=args.api)
+        virtual = args.virtual is not None
+        source = MidiPortSource(args.virtual if virtual else args.midi, clock, decoder,
+                                api=args.api, virtual=virtual)  # fmt: skip
+    if not args.wait:
+        source.check()  # a device that is not there: one line naming what is, exit 2
     config = DaemonConfig(
         pub=args.pub,
         control=args.control,

@@ -60,6 +60,11 @@ def run(args: argparse.Namespace) -> int:
     from ..service import serve
     from ..synth.service import SynthConfig, SynthService
 
+    if not 0 <= args.lookahead_ms <= args.delay_ms:
+        raise ConfigError(
+            f"--lookahead-ms {args.lookahead_ms:g} must be between 0 and "
+            f"--delay-ms {args.delay_ms:g} (a note is decided before it shows)"
+        )
     try:
         params = SynthParams(
             lookahead_s=args.lookahead_ms / 1000.0,

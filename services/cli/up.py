@@ -99,6 +99,9 @@ def register(sub: Subparsers) -> None:
                    "(default: the built-in kit)")  # fmt: skip
     p.add_argument("--size", default="640x360", help="headless frame size (default 640x360)")
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
+    p.add_argument("--wait", action="store_true",
+                   help="wait for a --midi port or --serial device that is not there yet "
+                        "(default: one line naming what exists, exit 2)")  # fmt: skip
     p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
     add_curve_options(p, server=True, client=False)
 
@@ -165,6 +168,9 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         journal = ["--sessions-dir", str(sessions)]
     else:
         journal = ["--no-journal"] if args.no_journal or args.demo else []
+    # The input service waits for its device: one that vanishes mid-show (and the service
+    # restarted meanwhile) must be waited for, not refused; up checked it once at start.
+    source += [] if args.demo else ["--wait"]
     input_argv = [*me, "input", *source, "--map", map_name, "--pub", ep["in_pub"],
                   "--control", ep["in_ctl"], "--wait-subscribers", str(SYNTH_TOPICS),
                   *journal, *curve["input"]]  # fmt: skip
@@ -205,6 +211,7 @@ def run(args: argparse.Namespace) -> int:
 
         check_soundfont(args.soundfont)
     avatar_of(args)  # a bad --avatar is one line here, before three services start
+    check_before_start(args)
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None
         if args.video is not None:
@@ -217,6 +224,45 @@ def run(args: argparse.Namespace) -> int:
         if code == 0 and args.video is not None and sessions is not None:
             add_drum_track(args, sessions, started)
     return code
+
+
+def check_before_start(args: argparse.Namespace) -> None:
+    """Every option and the source checked here, in the options' units, before any process."""
+    from livedrummer.errors import ConfigError
+
+    from .render import parse_size
+
+    if not 0 < args.fps <= 1000:
+        raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps:g})")
+    parse_size(args.size)
+    if not 0 <= args.lookahead_ms <= args.delay_ms:
+        raise ConfigError(
+            f"--lookahead-ms {args.lookahead_ms:g} must be between 0 and "
+            f"--delay-ms {args.delay_ms:g} (a note is decided before it shows)"
+        )
+    if not 0 < args.port_base <= 65535 - 11:
+        raise ConfigError(f"--port-base: expected 1..65524 (got {args.port_base})")
+    if args.demo or args.wait:
+        return
+    from livedrummer.midi.decode import MessageDecoder
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.timeline.clock import MonotonicClock
+
+    from ..input.base import MidiSource
+
+    decoder = MessageDecoder(load_note_map(args.map or DEMO_MAP))
+    source: MidiSource
+    if args.serial:
+        from ..input.serialport import BAUD_RATES, SerialSource
+
+        if args.baud not in BAUD_RATES:
+            raise ConfigError(f"--baud: expected one of {BAUD_RATES} (got {args.baud})")
+        source = SerialSource(args.serial, MonotonicClock(), decoder, args.baud)
+    else:
+        from ..input.midiport import MidiPortSource
+
+        source = MidiPortSource(args.midi, MonotonicClock(), decoder, api=args.api)
+    source.check()
 
 
 def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:

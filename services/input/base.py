@@ -10,7 +10,12 @@ that delivered the bytes), decoded into :class:`Onset`, :class:`Control` or :cla
 
 Errors: a backend raises :class:`~livedrummer.errors.MidiInputError` when its device is absent
 or fails; the daemon then closes it, reports the problem once (with a count) and reopens it
-until it returns. Nothing a device sends can raise anything else.
+until it returns. Nothing a device sends can raise anything else. Before a show starts,
+:meth:`Source.check` says at once, in one line naming what exists, that a device is not
+there (the CLI exits 2 on it unless ``--wait`` asks to wait for the device).
+
+Watching. A :class:`MidiSource` calls its ``tap`` (when set) with every channel message as
+it arrives, before decoding: ``livedrummer monitor`` prints what the kit sends from there.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from __future__ import annotations
 import logging
 from abc import ABC, abstractmethod
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from livedrummer.midi.decode import DecodeStats, MessageDecoder
@@ -111,6 +117,9 @@ class Source(ABC):
     def close(self) -> None:
         """Release the device; safe to call twice."""
 
+    def check(self) -> None:  # noqa: B027 (optional hook: files and streams have no device)
+        """Raise MidiInputError naming the device and what exists if it is not there now."""
+
     def finished(self) -> bool:
         """True when the source has nothing more to give (a file played to its end)."""
         return False
@@ -128,6 +137,8 @@ class MidiSource(Source):
     ) -> None:
         super().__init__(name, clock, problems)
         self.decoder = decoder
+        #: Called with (stamp, message) for every channel message, before decoding.
+        self.tap: Callable[[float, RawMidi], None] | None = None
 
     def decode_stats(self) -> DecodeStats | None:
         return self.decoder.stats
@@ -136,6 +147,8 @@ class MidiSource(Source):
         raw = RawMidi.from_bytes(status, data)
         if raw is None:
             return
+        if self.tap is not None:
+            self.tap(time_s, raw)
         event = self.decoder.feed(time_s, raw)
         if event is not None:
             out.append(event)

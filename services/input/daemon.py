@@ -47,6 +47,7 @@ clients whose public keys are there (see :mod:`services.net`).
 from __future__ import annotations
 
 import logging
+import os
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -68,12 +69,16 @@ from livedrummer.protocol import (
 )
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, Control, Onset
+from livedrummer.timeline.journal import SUFFIX as JOURNAL_SUFFIX
 
-from ..journal import JournalWriter
+from ..journal import JournalWriter, new_session_id, sessions_dir
 from ..net import Security, bind, socket
 from ..service import OnReady, Service
 from .base import Event, Source
 from .remote import RemoteSource
+
+#: While the source is absent, one status line this often (seconds).
+STATUS_S = 5.0
 
 log = logging.getLogger("livedrummer.input")
 
@@ -135,6 +140,7 @@ class InputDaemon(Service):
         self._last_send = 0.0
         self._pub: Any = None
         self._unknown_seen = 0
+        self._session: str | None = None  # the journal's name, planned at start
 
     # ---------------------------------------------------------------- lifecycle
 
@@ -144,17 +150,29 @@ class InputDaemon(Service):
         self._pub = socket(self.ctx, zmq.XPUB)
         self._pub.setsockopt(zmq.XPUB_VERBOSE, 1)
         self.endpoints["pub"] = bind(self._pub, cfg.pub, "pub endpoint", cfg.security)
-        if cfg.journal:
-            meta = {
-                "performer": cfg.performer,
-                "source": self.source.name,
-                "protocol_endpoints": dict(self.endpoints),
-                **cfg.meta,
-            }
-            self.journal = JournalWriter.create(
-                meta, self.clock, cfg.sessions_dir, fsync_interval_s=cfg.fsync_interval_s
-            )
-            self.endpoints["journal"] = str(self.journal.path)
+        if cfg.journal:  # named now, created once the source has opened (no empty sessions)
+            folder = cfg.sessions_dir if cfg.sessions_dir is not None else sessions_dir()
+            try:
+                folder.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise JournalError(f"{folder}: cannot create journal: "
+                                   f"{exc.strerror or exc}") from None  # fmt: skip
+            if not os.access(folder, os.W_OK):
+                raise JournalError(f"{folder}: cannot create journal: folder not writable")
+            self._session = new_session_id(cfg.performer)
+            self.endpoints["journal"] = str(folder / f"{self._session}{JOURNAL_SUFFIX}")
+
+    def _open_journal(self) -> None:
+        cfg = self.config
+        meta = {
+            "performer": cfg.performer,
+            "source": self.source.name,
+            "protocol_endpoints": {k: v for k, v in self.endpoints.items() if k != "journal"},
+            **cfg.meta,
+        }
+        self.journal = JournalWriter.create(meta, self.clock, cfg.sessions_dir,
+                                            session_id=self._session,
+                                            fsync_interval_s=cfg.fsync_interval_s)  # fmt: skip
 
     def hello(self) -> Hello:
         return Hello(self.name, "source", self.config.performer, dict(self.endpoints))
@@ -164,6 +182,8 @@ class InputDaemon(Service):
         cfg = self.config
         src = self.source
         lost_at: float | None = None
+        waiting_since: float | None = None  # the source is absent since (status every 5 s)
+        next_status = 0.0
         if on_ready is not None:
             on_ready()  # serving: subscribers get every event from their subscription on
         try:
@@ -179,9 +199,22 @@ class InputDaemon(Service):
                         src.open()
                     except MidiInputError as exc:
                         self.problems.report("source unavailable", str(exc))
+                        now = self.clock.now()
+                        waiting_since = now if waiting_since is None else waiting_since
+                        if now >= next_status:
+                            if now > waiting_since:  # the first failure was logged just now
+                                log.warning("%s: still waiting (%.0f s): %s", src.name,
+                                            now - waiting_since, exc)  # fmt: skip
+                            next_status = now + STATUS_S
                         stop.wait(cfg.reconnect_s)
                         continue
+                    if waiting_since is not None:
+                        log.warning("%s: connected after %.1f s", src.name,
+                                    self.clock.now() - waiting_since)  # fmt: skip
+                        waiting_since = None
                     log.info("%s: connected", src.name)
+                    if self.journal is None and self._session is not None:
+                        self._open_journal()
                     if lost_at is not None:
                         self.publish([Gap(0, lost_at, self.clock.now(), GapReason.SOURCE_LOST)])
                         lost_at = None

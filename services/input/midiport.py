@@ -54,6 +54,7 @@ from livedrummer.midi.drivertime import DeltaStamper
 from livedrummer.timeline.clock import Clock
 
 from .base import Event, MidiSource, Problems
+from .cnoise import c_stderr_to_log
 
 log = logging.getLogger("livedrummer.input")
 
@@ -81,7 +82,8 @@ def midi_in(api: str, client: str = "livedrummer") -> Any:
     if api not in APIS:
         raise MidiInputError(f"MIDI API {api!r}: expected one of {', '.join(APIS)}")
     try:
-        return rtmidi.MidiIn(APIS[api], client, queue_size_limit=QUEUE_LIMIT)
+        with c_stderr_to_log(f"MIDI API {api}"):  # libasound/libjack noise: one line, ours
+            return rtmidi.MidiIn(APIS[api], client, queue_size_limit=QUEUE_LIMIT)
     except (rtmidi.RtMidiError, RuntimeError) as exc:
         raise MidiInputError(f"MIDI API {api}: cannot start a client ({exc})") from None
 
@@ -130,10 +132,13 @@ class MidiPortSource(MidiSource):
         decoder: MessageDecoder,
         api: str = "auto",
         problems: Problems | None = None,
+        *,
+        virtual: bool = False,
     ) -> None:
-        super().__init__(f"midi:{spec}", clock, decoder, problems)
+        super().__init__(f"{'virtual' if virtual else 'midi'}:{spec}", clock, decoder, problems)
         self.spec = spec
         self.api = api
+        self.virtual = virtual
         self.api_used = ""
         self.port_name = ""
         self.stamper = DeltaStamper()
@@ -142,7 +147,49 @@ class MidiPortSource(MidiSource):
         self._next_probe = 0.0
         _api_names(api)  # a bad name fails here, not at the first retry
 
+    def check(self) -> None:
+        """The port is there now (or, virtual, a MIDI system to open it on); else one line."""
+        if self.virtual:
+            self._virtual_client().delete()
+            return
+        names = [name for _, name in list_ports_by_api(self.api)]
+        try:
+            choose_port(self.spec, names)
+        except MidiInputError as exc:
+            raise MidiInputError(f"{exc}; --wait waits for it") from None
+
+    def _virtual_client(self) -> Any:
+        problems: list[str] = []
+        for name in _api_names(self.api):
+            try:
+                m = midi_in(name)
+            except MidiInputError as exc:
+                problems.append(str(exc))
+                continue
+            self.api_used = name
+            return m
+        raise MidiInputError(f"{self.name}: {'; '.join(problems) or 'no MIDI system'}")
+
+    def _open_virtual(self) -> None:
+        m = self._virtual_client()
+        try:
+            m.ignore_types(sysex=False, timing=False, active_sense=False)
+            m.open_virtual_port(self.spec)
+        except rtmidi.RtMidiError as exc:
+            m.delete()
+            raise MidiInputError(f"{self.name}: {exc}") from exc
+        self._in = m
+        self.port_name = self.spec
+        log.warning("%s: virtual input port %r open on %s", self.name, self.spec,
+                    self.api_used.upper())  # fmt: skip
+        self.stamper.reset()
+        self._next_probe = float("inf")  # our own port: it cannot disappear
+        self.is_open = True
+
     def open(self) -> None:
+        if self.virtual:
+            self._open_virtual()
+            return
         ports: list[tuple[str, str, int]] = []  # (system, name, index on that system)
         problems: list[str] = []
         for name in _api_names(self.api):
@@ -201,7 +248,7 @@ class MidiPortSource(MidiSource):
             if msg and msg[0] < 0xF0:  # channel messages only; system ones gave their delta
                 self.decode(t, msg[0], msg[1:], out)
         t = now()
-        if t >= self._next_probe:
+        if t >= self._next_probe and not self.virtual:
             self._next_probe = t + PROBE_S
             try:
                 present = self.port_name in [str(p) for p in self._in.get_ports()]

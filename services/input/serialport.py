@@ -29,6 +29,8 @@ the parser skipped are counted in the problems report.
 
 from __future__ import annotations
 
+import glob
+import os
 from typing import Any
 
 import serial
@@ -48,6 +50,14 @@ CHUNK_SPACING_S = 1e-6
 BAUD_RATES = (31_250, 38_400, 57_600, 115_200, 230_400, 250_000, 500_000, 1_000_000)
 
 
+def serial_devices() -> list[str]:
+    """Serial devices a trigger board is likely on: USB serial, CDC-ACM, stable by-id names."""
+    found: list[str] = []
+    for pattern in ("/dev/serial/by-id/*", "/dev/ttyUSB*", "/dev/ttyACM*", "/dev/ttyAMA*"):
+        found += sorted(glob.glob(pattern))
+    return found
+
+
 class SerialSource(MidiSource):
     def __init__(
         self,
@@ -64,6 +74,12 @@ class SerialSource(MidiSource):
         self._port: Any = None
         self._garbage_seen = 0
         self._last_read_s = float("-inf")
+
+    def check(self) -> None:
+        if not os.path.exists(self.device):
+            found = ", ".join(serial_devices()) or "none"
+            raise MidiInputError(f"{self.name}: no such device (serial devices here: {found}; "
+                                 "--wait waits for it)")  # fmt: skip
 
     def open(self) -> None:
         try:

@@ -1,0 +1,191 @@
+"""The first ten minutes on a real JACK server: a virtual port, the monitor, failing loudly.
+
+Everything runs as a user would run it (``python -m services ...`` subprocesses) against a
+real ``jackd -d dummy`` (no sound card): a virtual input port that a keyboard or a DAW plays
+into, ``monitor`` printing what arrives and what it means, a port that is not there refused
+in one line naming what is (exit 2, no journal written), and ``--wait`` waiting visibly and
+creating the session's journal only once the port has opened.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+import zmq
+
+from livedrummer import protocol as p
+
+rtmidi = pytest.importorskip("rtmidi")
+
+
+def cli(*args: str, env: dict[str, str] | None = None) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, "-m", "services", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)  # fmt: skip
+
+
+def wait_port(name: str, timeout_s: float = 20.0) -> str:
+    """The full name of a JACK MIDI *input* port ending in ``name`` (an output's destination)."""
+    probe = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "probe")
+    try:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            hits = [q for q in probe.get_ports() if q.endswith(f":{name}")]
+            if hits:
+                return str(hits[0])
+            time.sleep(0.05)
+        raise AssertionError(f"no JACK input port {name!r} within {timeout_s} s: "
+                             f"{probe.get_ports()}")  # fmt: skip
+    finally:
+        probe.delete()
+
+
+def player(port: str) -> Any:
+    """A MIDI output of the test, connected to ``port`` (a virtual input of ours)."""
+    out = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "player")
+    names = out.get_ports()
+    out.open_port(names.index(port))
+    time.sleep(0.2)  # the connection reaches the JACK graph within a cycle or two
+    return out
+
+
+@pytest.fixture
+def home(tmp_path: Path) -> Iterator[dict[str, str]]:
+    yield {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
+
+
+def test_a_virtual_port_feeds_the_input_daemon(jack_server: str, tmp_path: Path,
+                                               home: dict[str, str]) -> None:  # fmt: skip
+    proc = cli("input", "--virtual", "pads", "--api", "jack", "--map", "roland-td",
+               "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
+               "--sessions-dir", str(tmp_path / "sessions"), env=home)  # fmt: skip
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    sub = ctx.socket(zmq.SUB)
+    try:
+        assert proc.stdout is not None
+        info = json.loads(proc.stdout.readline())
+        sub.setsockopt(zmq.LINGER, 0)
+        sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
+        sub.connect(info["pub"])
+        out = player(wait_port("pads"))
+        notes = [(38, 100), (48, 80), (36, 120), (42, 64)]
+        seen: list[tuple[int, int]] = []
+        deadline = time.monotonic() + 10
+        sent = False
+        while len(seen) < len(notes) and time.monotonic() < deadline:
+            if not sent:
+                for note, velocity in notes:
+                    out.send_message([0x99, note, velocity])
+                    time.sleep(0.01)
+                sent = True
+            if sub.poll(200):
+                msg = p.decode(sub.recv_multipart())
+                seen += [(int(r["note"]), int(r["velocity"])) for r in msg.body]
+        out.close_port()
+        assert seen == notes
+        assert Path(info["journal"]).exists()  # the port opened at once: the journal is there
+    finally:
+        sub.close(0)
+        ctx.term()
+        proc.terminate()
+        proc.communicate(timeout=20)
+
+
+def test_monitor_prints_each_message_and_its_meaning(jack_server: str,
+                                                     home: dict[str, str]) -> None:  # fmt: skip
+    proc = cli("monitor", "--virtual", "watch", "--api", "jack", "--map", "roland-td",
+               "--json", "--seconds", "6", env=home)  # fmt: skip
+    out = player(wait_port("watch"))
+    for message in ([0x99, 38, 100], [0x99, 99, 50], [0xB9, 4, 90], [0xA9, 49, 127],
+                    [0x89, 38, 0]):  # fmt: skip
+        out.send_message(message)
+        time.sleep(0.02)
+    out.close_port()
+    stdout, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 0, stderr
+    lines = [json.loads(line) for line in stdout.splitlines()]
+    assert [(r["type"], r["number"], r["value"]) for r in lines] == [
+        ("note_on", 38, 100), ("note_on", 99, 50), ("control_change", 4, 90),
+        ("polytouch", 49, 127), ("note_off", 38, 0)]  # fmt: skip
+    assert all(r["channel"] == 10 for r in lines)
+    assert "snare" in lines[0]["meaning"].lower() and lines[0]["known"]
+    assert lines[1]["meaning"].startswith("unknown note") and not lines[1]["known"]
+    assert "hi-hat pedal" in lines[2]["meaning"]
+    assert lines[3]["meaning"].startswith("choke")
+    assert lines == sorted(lines, key=lambda r: r["time_s"])
+    assert "5 messages, 1 unknown" in stderr
+
+
+def test_a_missing_port_is_one_line_naming_what_exists_and_leaves_no_journal(
+    jack_server: str, tmp_path: Path, home: dict[str, str]
+) -> None:
+    kit = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
+    kit.open_virtual_port("pads")
+    try:
+        run = subprocess.run([sys.executable, "-m", "services", "input", "--midi", "TD-17",
+                              "--api", "jack", "--map", "roland-td", "--sessions-dir",
+                              str(tmp_path / "sessions")], capture_output=True, text=True,
+                             timeout=60, env=home)  # fmt: skip
+    finally:
+        kit.close_port()
+    assert run.returncode == 2
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1, run.stderr
+    assert "'TD-17': not found" in lines[0] and "kit:pads" in lines[0] and "--wait" in lines[0]
+    assert not list((tmp_path / "sessions").glob("*"))
+
+
+def test_wait_says_it_is_waiting_and_journals_only_once_the_port_opens(
+    jack_server: str, tmp_path: Path, home: dict[str, str]
+) -> None:
+    sessions = tmp_path / "sessions"
+    proc = cli("input", "--midi", "late", "--wait", "--api", "jack", "--map", "roland-td",
+               "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
+               "--sessions-dir", str(sessions), env=home)  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        info = json.loads(proc.stdout.readline())
+        time.sleep(6.5)  # one status line every 5 s while the port is absent
+        assert not Path(info["journal"]).exists()
+        kit = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
+        kit.open_virtual_port("late")
+        deadline = time.monotonic() + 10
+        while not Path(info["journal"]).exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert Path(info["journal"]).exists()
+        kit.close_port()
+    finally:
+        proc.terminate()
+        _, stderr = proc.communicate(timeout=20)
+    assert "source unavailable" in stderr and "still waiting (5 s)" in stderr
+    assert "connected after" in stderr
+    assert len(list(sessions.glob("*"))) == 1
+
+
+@pytest.mark.parametrize(
+    ("args", "expect"),
+    [
+        (["--demo", "--fps", "0"], "--fps: expected 0 < fps <= 1000 (got 0)"),
+        (["--demo", "--size", "abc"], "--size 'abc'"),
+        (["--demo", "--delay-ms", "-5"], "--lookahead-ms 30 must be between 0 and --delay-ms -5"),
+        (["--serial", "/dev/ttyNOPE9"], "serial:/dev/ttyNOPE9: no such device"),
+    ],
+)
+def test_up_checks_every_option_before_starting_anything(
+    args: list[str], expect: str, home: dict[str, str]
+) -> None:
+    run = subprocess.run([sys.executable, "-m", "services", "up", *args, "--headless",
+                          "--seconds", "1", "--map", "roland-td"], capture_output=True,
+                         text=True, timeout=60, env=home)  # fmt: skip
+    assert run.returncode == 2
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("livedrummer: error: "), run.stderr
+    assert expect in run.stderr
+    assert "running" not in run.stdout  # no service was started
