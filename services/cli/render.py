@@ -152,9 +152,10 @@ class ProgressBar:
 def run(args: argparse.Namespace) -> int:
     from livedrummer.kit.loader import load_kit
     from livedrummer.render.overlay import OVERLAYS, parse_overlays
+    from livedrummer.sticking.strategy import get_strategy
 
     from ..display.export import export
-    from ..display.video import VideoSettings
+    from ..display.video import VideoSettings, check_video_target
 
     size = parse_size(args.size)
     overlays = parse_overlays(args.overlay)
@@ -165,16 +166,21 @@ def run(args: argparse.Namespace) -> int:
 
         check_soundfont(args.soundfont)
     source = Path(args.file) if args.file else demo_groove()
-    performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
-    if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
-        return 0
+    # Every option is checked before the file is read (and its report printed): a mistyped
+    # option is the one line on stderr.
     kit = load_kit(args.kit)
     avatar = avatar_of(args)
-    body = body_scene(args, performance, kit, note_map, avatar)
+    get_strategy(args.sticking)
     out = args.output
     if out is None and args.frames_dir is None:
         out = Path(source.stem + ".mp4")
     settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset)
+    if out is not None:
+        check_video_target(out, settings)
+    performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
+    if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
+        return 0
+    body = body_scene(args, performance, kit, note_map, avatar)
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,

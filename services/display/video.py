@@ -114,6 +114,19 @@ class _Encoder:
         self.container.close()
 
 
+def check_video_target(path: Path, settings: VideoSettings) -> None:
+    """A named DisplayError unless ``path`` and ``settings`` can be written (no file opened)."""
+    w, h = settings.size
+    if w % 2 or h % 2:
+        raise DisplayError(f"video size {w}x{h}: width and height must be even")
+    if path.suffix.lower() not in CONTAINERS:
+        raise DisplayError(
+            f"video file {path}: unknown type {path.suffix!r}; use {', '.join(CONTAINERS)}"
+        )
+    if not path.parent.is_dir():
+        raise DisplayError(f"video file {path}: folder {path.parent} does not exist")
+
+
 class VideoWriter:
     """Writes video frames and one stereo track to an MP4, encoding on a thread.
 
@@ -123,16 +136,8 @@ class VideoWriter:
     """
 
     def __init__(self, path: Path, settings: VideoSettings) -> None:
-        w, h = settings.size
-        if w % 2 or h % 2:
-            raise DisplayError(f"video size {w}x{h}: width and height must be even")
         path = Path(path)
-        if path.suffix.lower() not in CONTAINERS:
-            raise DisplayError(
-                f"video file {path}: unknown type {path.suffix!r}; use {', '.join(CONTAINERS)}"
-            )
-        if not path.parent.is_dir():
-            raise DisplayError(f"video file {path}: folder {path.parent} does not exist")
+        check_video_target(path, settings)
         try:
             self._enc = _Encoder(str(path), settings)
         except (OSError, ValueError) as exc:  # PyAV's errors are OSError subclasses
