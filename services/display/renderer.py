@@ -58,7 +58,7 @@ STICK_COLOR = (0.92, 0.78, 0.52)
 STICK_RADIUS_M = 0.0075
 SEGMENT_FLOATS = 15  # a xyz, b xyz, radius, colour rgba, material
 BALL_FLOATS = 12  # centre xyz radius, colour rgba, material
-SHADOW_SIZE = 1024  # texels a side: ~3 mm at the kit, from the key light 4.6 m away
+SHADOW_SIZE = 512  # texels a side: ~7 mm at the kit, from the key light 4.6 m away
 SHADOW_RADIUS_M = 1.8  # the sphere round the kit's centre that the shadow map covers
 SHADOW_UNIT = 1  # texture unit of the shadow map (unit 0 is the avatar's base colour)
 
