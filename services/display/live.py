@@ -227,6 +227,10 @@ class LiveDisplay(Service):
             # --seconds: from the start until the first pose is drawn, then from that frame
             end = math.inf if cfg.seconds is None else self.clock.now() + cfg.seconds
             drawn = False
+            # ... measured in show time once the drummer is drawn: a recording spans show time,
+            # and render-ahead's lead grows after the first frames, so a wall-clock end would
+            # record a frame or two more than asked
+            show_end = math.inf
             while not stop.is_set() and (cfg.frames is None or self.stats.frames < cfg.frames):
                 wait_ms = max(0, int((next_frame - self.clock.now()) * 1000))
                 if self._sub.poll(wait_ms):
@@ -239,6 +243,8 @@ class LiveDisplay(Service):
                 self._drain()
                 lead = ahead.seconds if cfg.render_ahead else 0.0
                 show = now + self.clock.latency_s() + lead + cfg.display_offset_s
+                if show >= show_end:
+                    break
                 got = self.track.at(show)
                 record: dict[str, Any] = {"frame": self.stats.frames, "render_s": now,
                                           "show_s": show, "pose_s": None,
@@ -276,7 +282,8 @@ class LiveDisplay(Service):
                 next_frame = max(next_frame + period, now)
                 if got is not None and not drawn:
                     drawn = True
-                    end = end if cfg.seconds is None else now + cfg.seconds
+                    end = end if cfg.seconds is None else now + cfg.seconds + 1.0  # a backstop
+                    show_end = show_end if cfg.seconds is None else show + cfg.seconds
                 if on_ready is not None and got is not None:
                     on_ready()
                     on_ready = None
