@@ -189,3 +189,27 @@ def test_up_checks_every_option_before_starting_anything(
     assert len(lines) == 1 and lines[0].startswith("livedrummer: error: "), run.stderr
     assert expect in run.stderr
     assert "running" not in run.stdout  # no service was started
+
+
+def test_render_checks_aa_and_writes_the_target_only_when_whole(tmp_path: Path,
+                                                                  home: dict[str, str]) -> None:  # fmt: skip
+    groove = Path(__file__).resolve().parent.parent / "kits" / "grooves"
+    song = next(groove.glob("*.mid"))
+    bad = subprocess.run([sys.executable, "-m", "services", "render", str(song), "--aa", "3",
+                          "-o", str(tmp_path / "x.mp4")], capture_output=True, text=True,
+                         timeout=60, env=home)  # fmt: skip
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines()[-1].startswith(
+        "livedrummer: error: --aa 3: expected one of")  # fmt: skip
+    out = tmp_path / "song.mp4"
+    proc = subprocess.Popen([sys.executable, "-m", "services", "render", str(song), "-o",
+                             str(out), "--size", "160x90", "--fps", "10"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=home)  # fmt: skip
+    part = tmp_path / "song.part.mp4"
+    deadline = time.monotonic() + 60
+    while not part.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert part.exists() and not out.exists()  # while rendering, only the part file
+    proc.communicate(timeout=300)
+    assert proc.returncode == 0
+    assert out.exists() and not part.exists()

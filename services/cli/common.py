@@ -307,3 +307,16 @@ def sticking_of(args: argparse.Namespace, performance: Performance, kit: Kit) ->
     from livedrummer.sticking.strategy import stick_performance
 
     return stick_performance(performance, kit, args.sticking, score=args.score)
+
+
+#: Multisample counts a GL context accepts (powers of two; Mesa's llvmpipe offers up to 8).
+AA_SAMPLES = (0, 1, 2, 4, 8, 16)
+
+
+def check_aa(samples: int) -> None:
+    """``--aa N``: one line naming the counts allowed, before any GL context is made."""
+    from livedrummer.errors import ConfigError
+
+    if samples not in AA_SAMPLES:
+        allowed = ", ".join(str(n) for n in AA_SAMPLES)
+        raise ConfigError(f"--aa {samples}: expected one of {allowed} (0: no multisampling)")

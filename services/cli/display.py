@@ -30,6 +30,7 @@ from .common import (
     add_motion_options,
     add_renamed,
     avatar_of,
+    check_aa,
     demo_groove,
     read_performance,
 )
@@ -48,7 +49,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--size", default="1280x720", help="window size WIDTHxHEIGHT")
     p.add_argument("--fullscreen", action="store_true", help="full screen (projectors)")
     p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
-    p.add_argument("--aa", type=int, default=4, metavar="N", help="multisample N (default 4)")
+    p.add_argument("--aa", type=int, default=4, metavar="N",
+                   help="multisample N: 0, 2, 4 or 8 (default 4)")  # fmt: skip
     add_renamed(p, "--quit-after", p.add_argument(
         "--seconds", type=float, metavar="S",
         help="stop after S seconds; --live: S seconds after the first frame with the drummer "
@@ -91,6 +93,7 @@ def register(sub: Subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_aa(args.aa)
     if args.live:
         return run_live(args)
     from livedrummer.kit.loader import load_kit

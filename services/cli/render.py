@@ -35,6 +35,7 @@ from .common import (
     add_motion_options,
     add_renamed,
     avatar_of,
+    check_aa,
     demo_groove,
     read_performance,
     rig_for,
@@ -69,7 +70,8 @@ def register(sub: Subparsers) -> None:
                    "that knows the most of the file's notes; roland-td for the demo)")  # fmt: skip
     add_channel_option(p)
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
-    p.add_argument("--aa", type=int, default=0, metavar="N", help="multisample N (slow on CPU)")
+    p.add_argument("--aa", type=int, default=0, metavar="N",
+                   help="multisample N: 0, 2, 4 or 8 (slow on CPU; default 0)")  # fmt: skip
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
     p.add_argument("--x264-preset", default="veryfast", help="x264 speed")
     p.add_argument("--overlay", default="", metavar="LIST",
@@ -158,6 +160,7 @@ def run(args: argparse.Namespace) -> int:
     from ..display.video import VideoSettings, check_video_target
 
     size = parse_size(args.size)
+    check_aa(args.aa)
     overlays = parse_overlays(args.overlay)
     if not 1 <= args.fps <= 240:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")

@@ -16,13 +16,20 @@ file.
 The frame count is ``ceil((performance.duration_s + tail_s) * fps)`` and the audio track is
 exactly that many frames long, so video and audio durations agree to the sample.
 
+The video is written as ``NAME.part.EXT`` and renamed to ``NAME.EXT`` once the last frame is
+in, so the target name only ever holds a whole render; an interrupted render (Ctrl-C, an
+error) closes the part file properly, so what was rendered stays watchable there, and says
+so. A kill -9 leaves the part file unfinished, never the target.
+
 Overlays (SMED's scrolling score, the joint-angle graph; :mod:`livedrummer.render.overlay`) are
 painted with numpy per frame and blended over the drawn frame before it is read back.
 """
 
 from __future__ import annotations
 
+import logging
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -44,7 +51,9 @@ from .context import DisplayError, headless_context
 from .png import write_png
 from .record import spooled_track
 from .renderer import Renderer, i420_ok
-from .video import VideoSettings, VideoWriter
+from .video import VideoSettings, VideoWriter, check_video_target
+
+log = logging.getLogger("livedrummer.render")
 
 Progress = Callable[[int, int], None]
 DEFAULT_SETTINGS = VideoSettings()
@@ -60,6 +69,11 @@ class ExportReport:
     def realtime(self) -> float:
         """Seconds of video made per second of wall-clock time."""
         return self.duration_s / self.wall_s if self.wall_s > 0 else math.inf
+
+
+def partial_path(out: Path) -> Path:
+    """Where a render is written until it is whole: ``NAME.part.EXT`` beside ``NAME.EXT``."""
+    return out.with_name(f"{out.stem}.part{out.suffix}")
 
 
 def frame_count(duration_s: float, fps: int) -> int:
@@ -106,9 +120,11 @@ def export(
         else:
             audio = mix_onsets(performance.onsets, n / fps, kit, settings.sample_rate,
                                body.performed.chokes, track)  # fmt: skip
-        writer = VideoWriter(out, settings)
+        check_video_target(out, settings)
+        writer = VideoWriter(partial_path(out), settings)
         writer.write_audio(audio)
     ctx = None
+    done = False
     try:
         ctx = headless_context()
         renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
@@ -126,9 +142,15 @@ def export(
                 write_png(frames_dir / f"frame_{i:06d}.png", renderer.read_rgb())
             if progress is not None:
                 progress(i + 1, n)
+        done = True
     finally:
         if writer is not None:
-            writer.close()  # also on Ctrl-C: what was rendered stays watchable
+            writer.close()  # also on Ctrl-C: what was rendered stays watchable, as .part
+            if done and out is not None:
+                os.replace(writer.path, out)  # the target name only ever holds a whole render
+            else:
+                log.warning("render stopped after %d of %d frames: they are in %s",
+                            writer.frames, n, writer.path)  # fmt: skip
         if ctx is not None:
             ctx.release()
     return ExportReport(n, n / fps, time.perf_counter() - start)
