@@ -59,6 +59,7 @@ from livedrummer.body.skeleton import J
 from livedrummer.errors import ProtocolError
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
+from livedrummer.live.behind import BehindCounter
 from livedrummer.live.track import PoseTrack
 from livedrummer.protocol import Hello, Pose, PoseFormat, SeqStatus, SequenceTracker, decode
 from livedrummer.render.body_scene import frame_from_pose
@@ -183,6 +184,10 @@ class LiveDisplay(Service):
         self.stats = LiveStats()
         self.bad = BadMessages("display pose stream", log)
         self._sub: Any = None
+        self._last_show = -math.inf  # show time of the last frame drawn
+        self.late = BehindCounter("pose samples arrived after their frame was drawn",
+                                  "the avatar is behind: raise the synth's --delay-ms")  # fmt: skip
+        self.held = BehindCounter("frames drawn with a stale pose (the pose stream stalled)")
 
     def open(self) -> None:
         """Connect to the synth's poses (the base binds the control socket, if one is asked)."""
@@ -257,6 +262,7 @@ class LiveDisplay(Service):
                     )
                     if show - pose_s > period:
                         self.stats.held += 1
+                        self._say(self.held.add(1, now))
                     if surface is not None:
                         surface.draw(frame_from_pose(row, show, self.kit), now)
                 elif surface is not None:
@@ -280,6 +286,8 @@ class LiveDisplay(Service):
                     log_file.write(json.dumps(record) + "\n")
                 self.stats.frames += 1
                 next_frame = max(next_frame + period, now)
+                self._last_show = show
+                self._say(self.late.poll(now))
                 if got is not None and not drawn:
                     drawn = True
                     end = end if cfg.seconds is None else now + cfg.seconds + 1.0  # a backstop
@@ -292,6 +300,11 @@ class LiveDisplay(Service):
                 log_file.close()
             if recorder is not None:
                 recorder.close()
+                if recorder.frames and recorder.repeated > 0.05 * recorder.frames:
+                    log.warning("display: the recording repeats %d of its %d frames (%.0f %%): "
+                                "this machine drew fewer frames than --fps asked",
+                                recorder.repeated, recorder.frames,
+                                100 * recorder.repeated / recorder.frames)  # fmt: skip
             if surface is not None:
                 surface.close()
             self.shutdown()
@@ -318,12 +331,20 @@ class LiveDisplay(Service):
                 self.stats.missing += report.missing
             rows = msg.body.rows
             show = msg.body.time_s + rows["time_s"].astype(np.float64)
+            # samples for show times already drawn came too late to be seen
+            late = int(np.count_nonzero(show < self._last_show))
+            self._say(self.late.first(late, self.clock.now()))
             self.track.add(show, rows)
             self.stats.pose_messages += 1
             self.stats.pose_samples += rows.size
+
+    def _say(self, line: str | None) -> None:
+        if line is not None:
+            log.warning("display: %s", line)
 
     def summary(self) -> dict[str, Any]:
         s = self.stats
         return {"frames": s.frames, "pose_messages": s.pose_messages,
                 "pose_samples": s.pose_samples, "missing": s.missing, "bad": s.bad,
-                "held": s.held, "bad_messages": self.bad.summary()}  # fmt: skip
+                "held": s.held, "late_samples": self.late.total,
+                "bad_messages": self.bad.summary()}  # fmt: skip

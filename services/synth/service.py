@@ -45,6 +45,7 @@ import numpy as np
 import zmq
 
 from livedrummer.errors import ProtocolError
+from livedrummer.live.behind import BehindCounter
 from livedrummer.live.synth import LiveSynth, PoseBatch
 from livedrummer.protocol import (
     Hello,
@@ -129,6 +130,10 @@ class SynthService(Service):
         self._sub: Any = None
         self._pub: Any = None
         self._seq = 0
+        self.late = BehindCounter(
+            "contacts published after their show time",
+            "the avatar is behind the sound: raise --delay-ms or lighten the machine",
+        )
         self._ticked = 0  # onsets heard when the last tick began
 
     def open(self) -> None:
@@ -177,9 +182,14 @@ class SynthService(Service):
             self.shutdown()
         return 0
 
+    def _say(self, line: str | None) -> None:
+        if line is not None:
+            log.warning("synth: %s", line)
+
     def tick(self, now: float) -> None:
         # hits that arrive while the synth re-animates are answered between its steps
         self._publish(self.synth.poses_until(now, answer=self._answer_hits))
+        self._say(self.late.poll(now))
 
     def _answer_hits(self) -> None:
         """Passed to ``LiveSynth.poses_until`` as ``answer`` (see :meth:`tick`): called
@@ -218,9 +228,14 @@ class SynthService(Service):
                 if rows is not None:
                     onsets.append(rows)
             if onsets:
-                self.synth.process(np.concatenate(onsets))
+                rows = np.concatenate(onsets)
+                self.synth.process(rows)
                 self._publish(self.synth.take_quick())
-                self.stats.answer_s.append(self.clock.now() - read_at)
+                done = self.clock.now()
+                self.stats.answer_s.append(done - read_at)
+                # a contact published after its show time reaches every display too late
+                shown = rows["time_s"].astype(np.float64) + self.synth.params.delay_s
+                self._say(self.late.first(int(np.count_nonzero(shown < done)), done))
             if got < DRAIN_BATCH:
                 return
 
@@ -280,6 +295,7 @@ class SynthService(Service):
             "pose_samples": s.pose_samples,
             "animations": self.synth.animations,
             "quick_contacts": self.synth.quick_contacts,
+            "late_contacts": self.late.total,
             "answer_ms": [
                 round(float(np.percentile(s.answer_s, q)) * 1000, 2) if s.answer_s else None
                 for q in (50, 99)
