@@ -213,3 +213,18 @@ def test_render_checks_aa_and_writes_the_target_only_when_whole(tmp_path: Path,
     proc.communicate(timeout=300)
     assert proc.returncode == 0
     assert out.exists() and not part.exists()
+
+
+def test_a_late_avatar_is_reported_live_and_in_the_summary(tmp_path: Path,
+                                                           home: dict[str, str]) -> None:  # fmt: skip
+    # D = 1 ms: no synth answers a hit within a millisecond, so every contact is late.
+    base = 20_000 + (os.getpid() % 1000) * 20
+    run = subprocess.run([sys.executable, "-m", "services", "up", "--demo", "--headless",
+                          "--seconds", "4", "--delay-ms", "1", "--lookahead-ms", "0",
+                          "--port-base", str(base), "--frames-dir", str(tmp_path / "f")],
+                         capture_output=True, text=True, timeout=120, env=home)  # fmt: skip
+    out = run.stdout + run.stderr
+    assert run.returncode == 0, out[-2000:]
+    assert "synth: " in out and "contacts published after their show time (the first" in out
+    late = int(out.split(" contacts late")[0].rsplit(", ", 1)[1])
+    assert late > 0
