@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -228,3 +229,55 @@ def test_a_late_avatar_is_reported_live_and_in_the_summary(tmp_path: Path,
     assert "synth: " in out and "contacts published after their show time (the first" in out
     late = int(out.split(" contacts late")[0].rsplit(", ", 1)[1])
     assert late > 0
+
+
+def write_rig(path: Path, port_base: int) -> Path:
+    path.write_text(
+        "[source]\ndemo = true\n"
+        '[show]\nkit = "rock5"\ncamera = "front"\nfps = 20\nsize = "160x90"\nheadless = true\n'
+        f"[network]\nport_base = {port_base}\n"
+    )
+    return path
+
+
+def test_up_runs_the_rig_profile_and_refuses_a_bad_one(tmp_path: Path,
+                                                        home: dict[str, str]) -> None:  # fmt: skip
+    base = 30_000 + (os.getpid() % 1000) * 20
+    rig = write_rig(tmp_path / "rig.toml", base)
+    frames = tmp_path / "frames"
+    run = subprocess.run([sys.executable, "-m", "services", "up", "--rig", str(rig),
+                          "--seconds", "3", "--frames-dir", str(frames)],
+                         capture_output=True, text=True, timeout=120, env=home)  # fmt: skip
+    assert run.returncode == 0, (run.stdout + run.stderr)[-2000:]
+    assert f"tcp://127.0.0.1:{base}" in run.stdout  # the profile's port base was used
+    records = [json.loads(line) for line in (frames / "frames.jsonl").read_text().splitlines()]
+    assert records and any(r["pose_s"] for r in records)
+    (tmp_path / "bad.toml").write_text('[show]\ncamra = "front"\n')
+    bad = subprocess.run([sys.executable, "-m", "services", "up", "--rig",
+                          str(tmp_path / "bad.toml")], capture_output=True, text=True,
+                         timeout=60, env=home)  # fmt: skip
+    assert bad.returncode == 2
+    lines = bad.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].endswith("bad.toml: [show] camra: unknown key"), lines
+    none = subprocess.run([sys.executable, "-m", "services", "up"], capture_output=True,
+                          text=True, timeout=60, env=home)  # fmt: skip
+    assert none.returncode == 2 and "give --midi PORT, --serial DEV or --demo" in none.stderr
+
+
+def test_deploy_writes_a_unit_systemd_accepts(tmp_path: Path, home: dict[str, str]) -> None:
+    rig = write_rig(tmp_path / "rig.toml", 5710)
+    units = tmp_path / "units"
+    run = subprocess.run([sys.executable, "-m", "services", "deploy", "systemd", "--unit-dir",
+                          str(units), "--rig", str(rig)], capture_output=True, text=True,
+                         timeout=60, env=home)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    unit = (units / "livedrummer-rig.service").read_text()
+    assert f"ExecStart={sys.executable} -m services up --rig {rig.resolve()} --wait" in unit
+    assert "RestartPreventExitStatus=2" in unit and "Restart=on-failure" in unit
+    assert "systemctl --user enable --now livedrummer-rig.service" in run.stdout
+    assert "loginctl enable-linger" in run.stdout
+    analyze = shutil.which("systemd-analyze")
+    if analyze is not None:
+        verify = subprocess.run([analyze, "verify", str(units / "livedrummer-rig.service")],
+                                capture_output=True, text=True, timeout=60)  # fmt: skip
+        assert verify.returncode == 0, verify.stderr

@@ -62,9 +62,11 @@ SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscr
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "up", run, "run the live pipeline: input, synth and display")
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--midi", metavar="PORT", help="MIDI input port of the kit")
-    src.add_argument("--serial", metavar="DEV", help="serial trigger board")
+    src = p.add_mutually_exclusive_group()  # or the [source] of the rig profile
+    src.add_argument("--midi", metavar="PORT",
+                     help="MIDI port of the kit (default: the rig profile's source)")  # fmt: skip
+    src.add_argument("--serial", metavar="DEV",
+                     help="serial trigger board (default: the rig profile's source)")  # fmt: skip
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
     add_kit_option(p)
     add_avatar_option(p)
@@ -99,11 +101,17 @@ def register(sub: Subparsers) -> None:
                    "(default: the built-in kit)")  # fmt: skip
     p.add_argument("--size", default="640x360", help="headless frame size (default 640x360)")
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
+    p.add_argument("--camera", default="stage", help="display camera (default stage)")
+    p.add_argument("--rig", type=Path, metavar="FILE",
+                   help="rig profile whose values are the defaults of these options "
+                        "(default $LIVEDRUMMER_HOME/rig.toml when it exists)")  # fmt: skip
     p.add_argument("--wait", action="store_true",
                    help="wait for a --midi port or --serial device that is not there yet "
                         "(default: one line naming what exists, exit 2)")  # fmt: skip
     p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
     add_curve_options(p, server=True, client=False)
+    # what "left at its default" means for the rig profile (see apply_profile)
+    p.set_defaults(up_defaults={a.dest: a.default for a in p._actions})
 
 
 def curve_argv(args: argparse.Namespace) -> dict[str, list[str]]:
@@ -180,6 +188,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
                   "--delay-ms", str(args.delay_ms), *avatar_argv(args),
                   *curve["synth"]]  # fmt: skip
     display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], "--kit", args.kit,
+                    "--camera", args.camera,
                     "--fps", str(args.fps), "--size", args.size, *avatar_argv(args),
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
     if windowed(args):
@@ -197,10 +206,36 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     ]
 
 
+def apply_profile(args: argparse.Namespace, defaults: dict[str, object]) -> Path | None:
+    """Values of the rig profile for every option the command line left at its default; the
+    profile's path (None when there is none). Raises ConfigError without any source."""
+    from livedrummer.errors import ConfigError
+    from livedrummer.live.profile import RigProfile, default_path
+
+    path = args.rig if args.rig is not None else default_path()
+    used: Path | None = None
+    if args.rig is not None or path.exists():
+        profile = RigProfile.load(path)
+        source_given = bool(args.midi or args.serial or args.demo)
+        for key, value in profile.options.items():
+            if key in ("midi", "serial", "demo") and source_given:
+                continue
+            if getattr(args, key) == defaults.get(key):
+                setattr(args, key, value)
+        used = path
+    if not (args.midi or args.serial or args.demo):
+        where = f" (none in {used})" if used is not None else ""
+        raise ConfigError(f"up: give --midi PORT, --serial DEV or --demo, or a [source] in "
+                          f"rig.toml{where}")  # fmt: skip
+    return used
+
+
 def run(args: argparse.Namespace) -> int:
     from livedrummer.errors import ConfigError
 
     from ..supervisor import Supervisor
+
+    apply_profile(args, args.up_defaults)
 
     if args.seconds is not None and not args.seconds > 0:
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
@@ -235,6 +270,10 @@ def check_before_start(args: argparse.Namespace) -> None:
     if not 0 < args.fps <= 1000:
         raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps:g})")
     parse_size(args.size)
+    from livedrummer.render.camera import CAMERA_NAMES
+
+    if args.camera not in CAMERA_NAMES:
+        raise ConfigError(f"--camera {args.camera!r}: expected one of {', '.join(CAMERA_NAMES)}")
     if not 0 <= args.lookahead_ms <= args.delay_ms:
         raise ConfigError(
             f"--lookahead-ms {args.lookahead_ms:g} must be between 0 and "
