@@ -281,3 +281,92 @@ def test_deploy_writes_a_unit_systemd_accepts(tmp_path: Path, home: dict[str, st
         verify = subprocess.run([analyze, "verify", str(units / "livedrummer-rig.service")],
                                 capture_output=True, text=True, timeout=60)  # fmt: skip
         assert verify.returncode == 0, verify.stderr
+
+
+def test_map_learn_writes_a_map_from_hits_that_the_file_commands_load(
+    jack_server: str, tmp_path: Path, home: dict[str, str]
+) -> None:
+    out = tmp_path / "mymodule.toml"
+    proc = subprocess.Popen([sys.executable, "-m", "services", "map", "learn", "--virtual",
+                             "learnpads", "--api", "jack", "-o", str(out)],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=home)  # fmt: skip
+    assert proc.stdin is not None and proc.stdout is not None
+    kit = player(wait_port("learnpads"))
+    # What this (imaginary) module sends for each prompt; None = the drummer skips it.
+    answers: dict[str, list[list[int]] | None] = {
+        "Kick": [[0x99, 35, 100]],
+        "Snare head": [[0x99, 37, 90]],
+        "Snare rim (rim shot)": [[0x99, 37, 80], [0x99, 39, 110]],  # 37 is taken: refused
+        "Snare cross stick": None,
+        "Hi-hat closed (bow)": [[0x99, 41, 70]],
+        "Hi-hat closed (edge)": None,
+        "Hi-hat open (bow)": [[0x99, 43, 70]],
+        "Hi-hat open (edge)": None,
+        "Hi-hat pedal (close it, open it, close it)": [
+            [0xB9, 4, 120],
+            [0xB9, 4, 0],
+            [0xB9, 4, 120],
+            [0x99, 44, 60],
+        ],
+        "Tom 1": [[0x99, 48, 100]],
+        "Tom 1 rim": None,
+        "Tom 2": [[0x99, 45, 100]],
+    }
+    seen: list[str] = []
+    try:
+        while True:
+            line = proc.stdout.readline()
+            if not line.startswith("hit: "):
+                seen.append(line.strip())
+                if not line or line.startswith("wrote"):
+                    break
+                continue
+            label = line[len("hit: ") :].split("   (")[0]
+            seen.append(label)
+            if label not in answers:
+                proc.stdin.write("q\n")
+                proc.stdin.flush()
+                continue
+            messages = answers[label]
+            if messages is None:
+                proc.stdin.write("\n")
+                proc.stdin.flush()
+            else:
+                for m in messages:
+                    kit.send_message(m)
+                    time.sleep(0.05)
+        proc.wait(timeout=30)
+    finally:
+        kit.close_port()
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, proc.stderr.read() if proc.stderr else ""
+    assert any("note 37 is already Snare head" in s for s in seen)
+    from livedrummer.midi.notemap import load_note_map
+
+    learned = load_note_map(str(out))
+    assert {n: (s.instrument, s.zone.value) for n, s in learned.notes.items()} == {
+        35: ("kick", "head"), 37: ("snare", "head"), 39: ("snare", "rim"),
+        41: ("hihat", "bow"), 43: ("hihat", "bow"), 44: ("hihat", "pedal"),
+        48: ("tom1", "head"), 45: ("tom2", "head")}  # fmt: skip
+    assert learned.hihat_cc == 4 and learned.hihat_cc_closed == 120
+    assert learned.notes[43].hihat.value == "open" and learned.notes[41].hihat.value == "closed"
+    # The file commands play a file recorded on this module with the learned map.
+    import mido
+
+    song = tmp_path / "played.mid"
+    mid = mido.MidiFile()
+    track = mido.MidiTrack()
+    mid.tracks.append(track)
+    for note in (35, 37, 39, 48, 45):
+        track.append(mido.Message("note_on", channel=9, note=note, velocity=100, time=120))
+    mid.save(song)
+    shown = subprocess.run([sys.executable, "-m", "services", "inspect", str(song), "--map",
+                            str(out), "--json"], capture_output=True, text=True, timeout=60,
+                           env=home)  # fmt: skip
+    assert shown.returncode == 0, shown.stderr
+    summary = json.loads(shown.stdout)
+    assert summary["onsets"] == 5 and summary["unknown_notes"] == {}
+    assert summary["by_piece"] == {"kick": {"head": 1}, "snare": {"head": 1, "rim": 1},
+                                   "tom1": {"head": 1}, "tom2": {"head": 1}}  # fmt: skip
