@@ -370,3 +370,37 @@ def test_map_learn_writes_a_map_from_hits_that_the_file_commands_load(
     assert summary["onsets"] == 5 and summary["unknown_notes"] == {}
     assert summary["by_piece"] == {"kick": {"head": 1}, "snare": {"head": 1, "rim": 1},
                                    "tom1": {"head": 1}, "tom2": {"head": 1}}  # fmt: skip
+
+
+def test_calibrate_recovers_a_players_offset_through_a_real_pty(tmp_path: Path,
+                                                                 home: dict[str, str]) -> None:  # fmt: skip
+    """A scripted player hits 23 ms after each click, through a real pseudo-terminal."""
+    master, slave = os.openpty()
+    tty = os.ttyname(slave)
+    proc = subprocess.Popen([sys.executable, "-m", "services", "calibrate", "--serial", tty,
+                             "--no-sound", "--json", "--clicks", "12", "--bpm", "240"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=home)  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        clicks = json.loads(proc.stdout.readline())["clicks_s"]
+        for i, click in enumerate(clicks):
+            if i == 5:
+                continue  # a missed click
+            while time.monotonic() < click + 0.023:
+                time.sleep(0.0002)
+            os.write(master, bytes([0x99, 38, 100]))
+        os.write(master, bytes([0x99, 38, 90]))  # a stray hit after the last click
+        out, err = proc.communicate(timeout=60)
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert proc.returncode == 0, err
+    result = json.loads(out.strip().splitlines()[-1])
+    assert abs(result["lag_ms"] - 23.0) < 1.0, result
+    assert result["hits_used"] == 11 and result["hits_dropped"] == 1
+    written = Path(home["LIVEDRUMMER_HOME"]) / "calibration.toml"
+    assert result["written"] == str(written)
+    from livedrummer.live.calibration import Calibration
+
+    assert abs(Calibration.load(written).input_ms + result["lag_ms"]) < 0.01
