@@ -5,8 +5,9 @@ set -euo pipefail
 # jackd2: MIDI through a real JACK server in tests; EGL + Mesa: headless rendering; libportaudio2:
 # sounddevice (audio clock); xvfb + xauth: the window smoke test on a virtual screen;
 # libfluidsynth3: pyfluidsynth (render --soundfont); libjack-jackd2-dev: the C reference client
-# of `livedrummer bench input_load` (compiled for the run with cc).
-packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3 libjack-jackd2-dev)
+# of `livedrummer bench input_load` (compiled for the run with cc); xdotool: keys pressed in the
+# window test.
+packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3 libjack-jackd2-dev xdotool)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")

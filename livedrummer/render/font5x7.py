@@ -1,4 +1,4 @@
-"""A 5x7 bitmap font (upper-case letters, digits, space, ``-`` and ``+``) for overlay labels.
+"""A 5x7 bitmap font (upper-case letters, digits, space and ``-+:./()[]=,``) for labels.
 
 The overlays label lanes and legends with two or three characters; a font renderer (FreeType)
 would be a dependency for that, so the glyphs are written here, one string of ``#`` and ``.``
@@ -57,6 +57,15 @@ _ROWS: dict[str, str] = {
     "-": "..... ..... ..... ##### ..... ..... .....",
     "+": "..... ..#.. ..#.. ##### ..#.. ..#.. .....",
     " ": "..... ..... ..... ..... ..... ..... .....",
+    ":": "..... ..#.. ..#.. ..... ..#.. ..#.. .....",
+    ".": "..... ..... ..... ..... ..... .##.. .##..",
+    "/": "....# ...#. ...#. ..#.. .#... .#... #....",
+    "(": "...#. ..#.. .#... .#... .#... ..#.. ...#.",
+    ")": ".#... ..#.. ...#. ...#. ...#. ..#.. .#...",
+    "[": ".###. .#... .#... .#... .#... .#... .###.",
+    "]": ".###. ...#. ...#. ...#. ...#. ...#. .###.",
+    "=": "..... ..... ##### ..... ##### ..... .....",
+    ",": "..... ..... ..... ..... .##.. ..#.. .#...",
 }
 
 #: character -> bool (7, 5) bitmap

@@ -48,6 +48,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="first viewpoint")
     p.add_argument("--size", default="1280x720", help="window size WIDTHxHEIGHT")
     p.add_argument("--fullscreen", action="store_true", help="full screen (projectors)")
+    p.add_argument("--screenshot", type=Path, metavar="PNG",
+                   help="file window: its last frame as PNG at close (default none)")  # fmt: skip
     p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
     p.add_argument("--aa", type=int, default=4, metavar="N",
                    help="multisample N: 0, 2, 4 or 8 (default 4)")  # fmt: skip
@@ -108,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     options = WindowOptions(
         size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
         camera=args.camera, samples=args.aa, quit_after_s=args.seconds,
-        overlays=parse_overlays(args.overlay),
+        overlays=parse_overlays(args.overlay), screenshot=args.screenshot,
     )  # fmt: skip
     kit = load_kit(args.kit)
     avatar = avatar_of(args)

@@ -99,7 +99,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--soundfont", type=Path, metavar="SF2",
                    help="--video: drum track from this General MIDI SoundFont "
                    "(default: the built-in kit)")  # fmt: skip
-    p.add_argument("--size", default="640x360", help="headless frame size (default 640x360)")
+    p.add_argument("--size", help="frame size WIDTHxHEIGHT (default 1280x720 in a window, "
+                                  "640x360 headless)")  # fmt: skip
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
     p.add_argument("--camera", default="stage", help="display camera (default stage)")
     p.add_argument("--rig", type=Path, metavar="FILE",
@@ -142,6 +143,11 @@ def curve_argv(args: argparse.Namespace) -> dict[str, list[str]]:
     serve = ["--curve-secret", secret, *allow, *insecure]
     return {"input": serve, "synth": [*serve, "--server-key", secret],
             "display": ["--curve-secret", secret, "--server-key", secret]}  # fmt: skip
+
+
+def frame_size(args: argparse.Namespace) -> str:
+    """--size, or the default for where the frames go: a 720p window, a small headless frame."""
+    return args.size or ("1280x720" if windowed(args) else "640x360")
 
 
 def windowed(args: argparse.Namespace) -> bool:
@@ -189,7 +195,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
                   *curve["synth"]]  # fmt: skip
     display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], "--kit", args.kit,
                     "--camera", args.camera,
-                    "--fps", str(args.fps), "--size", args.size, *avatar_argv(args),
+                    "--fps", str(args.fps), "--size", frame_size(args), *avatar_argv(args),
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
@@ -269,7 +275,7 @@ def check_before_start(args: argparse.Namespace) -> None:
 
     if not 0 < args.fps <= 1000:
         raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps:g})")
-    parse_size(args.size)
+    parse_size(frame_size(args))
     from livedrummer.render.camera import CAMERA_NAMES
 
     if args.camera not in CAMERA_NAMES:

@@ -7,8 +7,12 @@ window's framebuffer. Each frame the loop asks its clock how much time passed, a
 position (the body model, :class:`~livedrummer.render.body_scene.BodyScene`, sampled at that
 one time) and swaps; keys go through :data:`~livedrummer.render.transport.KEYS` (transport),
 1..8 (cameras, with a smooth move), O and G (show or hide the score and the joint-angle
-overlays, :data:`OVERLAY_KEYS`), F (full screen) and Q/Esc (quit). The clock is injected
-(default ``time.monotonic``) as the style guide asks; with sound it would be the audio stream's.
+overlays, :data:`OVERLAY_KEYS`), F (full screen on and off), H (key help), I (the readout)
+and Q/Esc (quit). A readout in the top-left corner (:mod:`livedrummer.render.hud`) shows the
+position and length, speed, playing/paused/reversed, the camera and a clear end-of-file line;
+``WindowOptions.screenshot`` writes the last frame drawn as a PNG when the window closes. The clock
+is injected (default ``time.monotonic``) as the style guide asks; with sound it would be the audio
+stream's.
 
 Limits: no sound in the window yet; resizing keeps the
 aspect ratio of the new size but not the pixel density of a HiDPI monitor.
@@ -21,6 +25,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from livedrummer.avatar.model import Avatar
@@ -49,11 +54,56 @@ class WindowOptions:
     vsync: bool = True
     quit_after_s: float | None = None  # close by itself (demos, smoke tests)
     overlays: frozenset[str] = frozenset()  # strips shown first: "score", "joints"
+    screenshot: Path | None = None  # the last frame drawn, written as a PNG when it closes
 
 
 DEFAULT_OPTIONS = WindowOptions()
 #: window key -> the overlay it shows or hides (keys the transport does not use)
 OVERLAY_KEYS: dict[str, str] = {"o": "score", "g": "joints"}
+HUD_AT = (8, 8)  # the readout's top-left corner, pixels from the window's top-left
+
+
+def toggle_fullscreen(glfw: Any, window: Any, options: WindowOptions) -> None:
+    """F: full screen on the options' monitor, or back to a window of the options' size."""
+    if glfw.get_window_monitor(window):
+        w, h = options.size
+        glfw.set_window_monitor(window, None, 40, 40, w, h, 0)
+        return
+    monitors = glfw.get_monitors()
+    if not monitors:
+        return
+    monitor = monitors[options.monitor] if 0 <= options.monitor < len(monitors) else monitors[0]
+    mode = glfw.get_video_mode(monitor)
+    glfw.set_window_monitor(window, monitor, 0, 0, mode.size.width, mode.size.height,
+                            mode.refresh_rate)  # fmt: skip
+
+
+class Readout:
+    """The HUD texture of a window: repainted only when its lines change."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] | None = None
+        self.image: Any = None
+
+    def draw(self, renderer: Renderer, lines: list[str], target: Any) -> None:
+        from livedrummer.render.hud import hud_image
+
+        if lines != self.lines:
+            self.lines, self.image = lines, hud_image(lines)
+        h, w = self.image.shape[:2]
+        fb_w, fb_h = renderer.size
+        if w + HUD_AT[0] <= fb_w and h + HUD_AT[1] <= fb_h:  # a tiny window shows none
+            renderer.draw_overlay(self.image, (*HUD_AT, w, h), target)
+
+
+def save_screenshot(data: bytes, size: tuple[int, int], path: Path) -> None:
+    """A frame read from the window's framebuffer (RGB, bottom row first) as a PNG."""
+    import numpy as np
+
+    from .png import write_png
+
+    w, h = size
+    write_png(path, np.ascontiguousarray(np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1]))
 
 
 def key_name(glfw: Any, key: int, mods: int) -> str:
@@ -170,6 +220,9 @@ def _loop(
     transport.apply("play_pause")
     last = started = clock()
     frames = 0
+    readout, show_readout, show_help = Readout(), True, False
+    shot: tuple[tuple[int, int], bytes] | None = None
+    camera = options.camera
     while not glfw.window_should_close(window):
         if options.quit_after_s is not None and last - started >= options.quit_after_s:
             break
@@ -182,8 +235,16 @@ def _loop(
                 transport.apply(KEYS[name])
             elif name in OVERLAY_KEYS:
                 shown = shown ^ {OVERLAY_KEYS[name]}
+            elif name == "h":
+                show_help = not show_help
+            elif name == "i":
+                show_readout = not show_readout
+            elif name == "f":
+                toggle_fullscreen(glfw, window, options)
             else:
                 move = camera_key(name, move, cameras, now)
+                if name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
+                    camera = CAMERA_NAMES[int(name) - 1]
         pending.clear()
         t = transport.advance(now - last)
         last = now
@@ -196,7 +257,17 @@ def _loop(
         if not strips.empty:
             r = strips.rect
             renderer.draw_overlay(strips.paint(t), (r.x, r.y, r.width, r.height), ctx.screen)
+        if show_readout or show_help:
+            from livedrummer.render.hud import hud_lines
+
+            readout.draw(renderer, hud_lines(t, transport.duration_s, transport.speed,
+                                             transport.playing, transport.reverse, camera,
+                                             show_help), ctx.screen)  # fmt: skip
+        if options.screenshot is not None:  # read before the swap: the back buffer is defined
+            shot = (renderer.size, ctx.screen.read(viewport=(0, 0, *renderer.size), components=3))
         glfw.swap_buffers(window)
         frames += 1
+    if shot is not None and options.screenshot is not None:
+        save_screenshot(shot[1], shot[0], options.screenshot)
     elapsed = clock() - started
     log.info("window: %d frames in %.2f s (%.1f fps)", frames, elapsed, frames / max(elapsed, 1e-9))
