@@ -73,6 +73,8 @@ from .video import VideoSettings
 from .window import WindowOptions
 
 log = logging.getLogger("livedrummer.display")
+#: A window says the stream stalled once its newest pose is this old (the live readout).
+STALLED_S = 0.5
 
 DEFAULT_SUB = "tcp://127.0.0.1:5720"
 
@@ -263,9 +265,15 @@ class LiveDisplay(Service):
                     if show - pose_s > period:
                         self.stats.held += 1
                         self._say(self.held.add(1, now))
+                    if isinstance(surface, WindowSurface):
+                        stalled = show - pose_s > STALLED_S
+                        surface.state = "stream stalled: last pose held" if stalled else "playing"
                     if surface is not None:
                         surface.draw(frame_from_pose(row, show, self.kit), now)
                 elif surface is not None:
+                    if isinstance(surface, WindowSurface):
+                        surface.state = "no poses: is the synth running?" if drawn else (
+                            "waiting for poses")  # fmt: skip
                     surface.draw(None, now)
                 if (
                     recorder is not None

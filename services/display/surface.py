@@ -5,7 +5,10 @@ live loop the same three calls: :meth:`draw` a scene frame (or the empty kit), :
 it (a window swaps and handles its keys; headless does nothing) and :meth:`close`. The window
 is the file window's (:func:`~services.display.window.open_window`: windowed or full screen on
 a chosen monitor, for projectors) with the camera keys 1..8 (a smooth move between stored
-viewpoints) and Q/Esc to quit; a live show has no transport, since the drummer sets the time.
+viewpoints), H (key help), I (hide the readout), F (full screen) and Q/Esc to quit; a live
+show has no transport, since the drummer sets the time. The window's readout says what the
+show is doing: waiting for poses, playing, or holding the last pose while the stream is
+stalled (:attr:`WindowSurface.state`, set by the live loop), and the camera.
 
 Limits: a window draws to its own framebuffer, so recording and PNG frames are headless only.
 """
@@ -18,12 +21,19 @@ from typing import Any
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
 from livedrummer.render.body_scene import BODY_SKELETON
-from livedrummer.render.camera import CameraMove, kit_cameras
+from livedrummer.render.camera import CAMERA_NAMES, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.scene import SceneFrame
 
 from .renderer import Renderer
-from .window import WindowOptions, camera_key, key_name, open_window
+from .window import (
+    Readout,
+    WindowOptions,
+    camera_key,
+    key_name,
+    open_window,
+    toggle_fullscreen,
+)
 
 
 class HeadlessSurface:
@@ -69,6 +79,11 @@ class WindowSurface:
         self._move = CameraMove(start, start, 0.0, 0.0)
         self._keys: list[str] = []
         self._now = 0.0
+        self._options = options
+        self.camera = options.camera
+        self.state = "waiting for poses"  # set by the live loop each frame
+        self._readout = Readout()
+        self._show_readout, self._show_help = True, False
 
         def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
             if action in (glfw.PRESS, glfw.REPEAT):
@@ -82,6 +97,11 @@ class WindowSurface:
         if fb != self.renderer.size and fb[0] > 0 and fb[1] > 0:
             self.renderer.size = fb
         self.renderer.draw(frame, self._move.at(now_s), target=self._ctx.screen)
+        if self._show_readout or self._show_help:
+            from livedrummer.render.hud import live_lines
+
+            self._readout.draw(self.renderer, live_lines(self.state, self.camera, self._show_help),
+                               self._ctx.screen)  # fmt: skip
 
     def present(self) -> bool:
         glfw = self._glfw
@@ -90,8 +110,16 @@ class WindowSurface:
         for name in self._keys:
             if name in ("q", "escape"):
                 glfw.set_window_should_close(self._window, True)
+            elif name == "h":
+                self._show_help = not self._show_help
+            elif name == "i":
+                self._show_readout = not self._show_readout
+            elif name == "f":
+                toggle_fullscreen(glfw, self._window, self._options)
             else:
                 self._move = camera_key(name, self._move, self._cameras, self._now)
+                if name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
+                    self.camera = CAMERA_NAMES[int(name) - 1]
         self._keys.clear()
         return not glfw.window_should_close(self._window)
 
