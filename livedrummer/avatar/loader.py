@@ -15,35 +15,18 @@ into memory; nothing is cached between calls (a CLI command loads its avatar onc
 
 from __future__ import annotations
 
+__all__ = ["DEFAULT", "SUFFIXES", "avatar_dirs", "list_avatars", "load_avatar", "resolve_avatar"]
+
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from livedrummer.avatar.bonemap import REQUIRED, Humanoid, find_humanoid, sidecar
+from livedrummer.avatar.catalog import DEFAULT, SUFFIXES, avatar_dirs, list_avatars
 from livedrummer.avatar.gltf import GltfScene, read_gltf_file
 from livedrummer.avatar.model import Avatar, AvatarError
 from livedrummer.avatar.retarget import Fitted, retarget
-from livedrummer.resources import data_dir, user_home
-
-SUFFIXES = (".vrm", ".glb", ".gltf")
-DEFAULT = "default"
-
-
-def avatar_dirs() -> list[tuple[str, Path]]:
-    """(kind, folder) searched for avatar names, bundled first (later folders win)."""
-    return [("bundled", data_dir("kits") / "avatars"), ("user", user_home() / "avatars")]
-
-
-def list_avatars() -> list[tuple[str, str, str]]:
-    """(name, kind, path) of every avatar a NAME can pick, the built-in character first."""
-    found: dict[str, tuple[str, str, str]] = {DEFAULT: (DEFAULT, "built-in", "")}
-    for kind, folder in avatar_dirs():
-        if not folder.is_dir():
-            continue
-        for path in sorted(folder.iterdir()):
-            if path.suffix.lower() in SUFFIXES and path.is_file():
-                found[path.stem] = (path.stem, kind, str(path))
-    return list(found.values())
+from livedrummer.resources import user_home
 
 
 def resolve_avatar(spec: str) -> Path | None:

@@ -29,7 +29,7 @@ EXIT_USAGE = 2
 COMMANDS: dict[str, str] = {
     "demo": "run the pipeline on the bundled demo groove and show it",
     "inspect": "summarize a MIDI file: tempo, meter, onsets per piece",
-    "kits": "list kits and note maps",
+    "kits": "list kits, note maps, presets and avatars",
     "sticking": "which limb plays each note of a MIDI file",
     "bench": "run a benchmark and print its figures",
     "input": "capture a kit, trigger board, file or remote stream",

@@ -20,7 +20,7 @@ def register(sub: Subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from livedrummer.avatar.loader import avatar_dirs, list_avatars
+    from livedrummer.avatar.catalog import avatar_dirs, list_avatars
 
     found = list_avatars()
     if args.json:

@@ -1,9 +1,12 @@
-"""``livedrummer kits``: every kit and note map on the search path, with any file's error."""
+"""``livedrummer kits``: every kit, extension, note map, preset and avatar a name can pick, with
+any file's error (listing reads no avatar file: see :mod:`livedrummer.avatar.catalog`)."""
 
 from __future__ import annotations
 
 import argparse
 
+from livedrummer.avatar.catalog import list_avatars
+from livedrummer.body.expression import load_expression
 from livedrummer.errors import LivedrummerError
 from livedrummer.kit.catalog import entries
 from livedrummer.kit.loader import load_extension, load_kit_file
@@ -13,7 +16,7 @@ from .common import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:
-    add_command(sub, "kits", run, "list kits and note maps")
+    add_command(sub, "kits", run, "list kits, note maps, presets and avatars")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,4 +46,15 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {name:<16} ERROR {exc}")
             continue
         print(f"  {name:<16} {nm.description} ({len(nm.notes)} notes) [{entry.path}]")
+    print("expression presets (--preset NAME):")
+    for name, entry in sorted(entries("kits/presets").items()):
+        try:
+            load_expression(str(entry.path))
+        except LivedrummerError as exc:
+            print(f"  {name:<16} ERROR {exc}")
+            continue
+        print(f"  {name:<16} [{entry.path}]")
+    print("avatars (--avatar NAME; livedrummer avatar info NAME):")
+    for name, kind, path in list_avatars():
+        print(f"  {name:<16} {kind:<8} [{path or 'drawn from the body proportions'}]")
     return 0
