@@ -119,6 +119,8 @@ def test_up_records_the_show_with_its_drum_track_on_show_time(gl_ok: None, tmp_p
             proc.kill()
     assert proc.returncode == 0, out[-2000:]
     assert "wrote" in out and "hits in its drum track" in out, out[-2000:]
+    # a set-length recording is drawn after the show, every frame (none repeated for lack of CPU)
+    assert "display: drawing the recording" in out and "recording repeats" not in out
     timing = Timing.load(video)
     with av.open(str(video)) as c:
         frames = len(list(c.decode(c.streams.video[0])))

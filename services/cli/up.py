@@ -324,7 +324,8 @@ def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
         print(f"up: input, synth and display running; {where}", flush=True)
         # A set-length recording ends when the display has recorded it (a minute's grace
         # for a display that never gets a pose); otherwise --seconds ends the rig itself.
-        grace = RECORD_GRACE_S if recorded(args) else 0.0
+        # (the display draws a set-length recording after the show: up to a few times its length)
+        grace = RECORD_GRACE_S + 4.0 * args.seconds if recorded(args) else 0.0
         deadline = None if args.seconds is None else time.monotonic() + args.seconds + grace
         while not stopping:
             left = 0.5 if deadline is None else min(0.5, deadline - time.monotonic())

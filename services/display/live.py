@@ -33,6 +33,15 @@ from the first frame that draws the drummer
 (``config.video``, :mod:`~services.display.record`). A remote display sets
 ``config.security`` (our key pair and the synth's public key) to subscribe over CURVE.
 
+A set-length headless recording (``config.video`` with ``config.seconds``: ``up --video
+--seconds``, the demo) is not drawn during the show: every pose message is spooled to a
+temporary file with its arrival time, and each frame's render and show times are kept; after
+the show the frames are drawn from the spool exactly as an infinitely fast display would have
+drawn them, so the video has every frame even where the machine could not draw 30 a second
+live (on 2 cores with llvmpipe a 720p frame of the character takes 60-120 ms), and the live
+run does not compete with the synth for the CPU. It costs the drawing time after the show
+(about 90 s for the 30 s demo here). Open-ended recordings are still drawn live.
+
 Life cycle: the service base's (:mod:`services.service`); readiness comes after the first
 frame that drew the drummer, and a control socket answering HELLO with READY (service
 "display", role "frames", the pose format) is bound only when ``config.control`` names one,
@@ -44,8 +53,12 @@ from __future__ import annotations
 import json
 import logging
 import math
+import struct
+import sys
+import tempfile
 import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any, Protocol
@@ -73,6 +86,8 @@ from .video import VideoSettings
 from .window import WindowOptions
 
 log = logging.getLogger("livedrummer.display")
+#: One pose message in a deferred recording's spool: arrival time (s), sample count.
+SPOOL_HEAD = struct.Struct("<dI")
 #: A window says the stream stalled once its newest pose is this old (the live readout).
 STALLED_S = 0.5
 
@@ -187,7 +202,8 @@ class LiveDisplay(Service):
         self.bad = BadMessages("display pose stream", log)
         self._sub: Any = None
         self._last_show = -math.inf  # show time of the last frame drawn
-        self.late = BehindCounter("pose samples arrived after their frame was drawn",
+        self._spool: IO[bytes] | None = None  # pose messages of a deferred recording
+        self.late = BehindCounter("pose messages arrived after every frame they cover",
                                   "the avatar is behind: raise the synth's --delay-ms")  # fmt: skip
         self.held = BehindCounter("frames drawn with a stale pose (the pose stream stalled)")
 
@@ -221,7 +237,14 @@ class LiveDisplay(Service):
                 surface = WindowSurface(self.kit, cfg.window, cfg.avatar)
             elif cfg.render:
                 surface = HeadlessSurface(self.kit, cfg.size, cfg.camera, cfg.avatar)
-            if cfg.video is not None and isinstance(surface, HeadlessSurface):
+            # A set-length headless recording is drawn after the show from what arrived (see
+            # the module docstring): every frame at full rate, and no drawing during the show.
+            deferred = (cfg.video is not None and isinstance(surface, HeadlessSurface)
+                        and cfg.seconds is not None)  # fmt: skip
+            schedule: list[tuple[float, float]] = []  # (render_s, show_s) of each frame
+            if deferred:
+                self._spool = tempfile.TemporaryFile()
+            elif cfg.video is not None and isinstance(surface, HeadlessSurface):
                 settings = VideoSettings(size=cfg.size, fps=round(cfg.fps))
                 recorder = LiveRecorder(cfg.video, settings)
             if cfg.out is not None:
@@ -268,9 +291,9 @@ class LiveDisplay(Service):
                     if isinstance(surface, WindowSurface):
                         stalled = show - pose_s > STALLED_S
                         surface.state = "stream stalled: last pose held" if stalled else "playing"
-                    if surface is not None:
+                    if surface is not None and not deferred:
                         surface.draw(frame_from_pose(row, show, self.kit), now)
-                elif surface is not None:
+                elif surface is not None and not deferred:
                     if isinstance(surface, WindowSurface):
                         surface.state = "no poses: is the synth running?" if drawn else (
                             "waiting for poses")  # fmt: skip
@@ -281,7 +304,10 @@ class LiveDisplay(Service):
                     and (got is not None or recorder.frames)
                 ):
                     recorder.add(surface.renderer, show)  # from the first frame with a pose
-                if isinstance(surface, HeadlessSurface) and cfg.out is not None and cfg.png:
+                if deferred and (got is not None or schedule):
+                    schedule.append((now, show))
+                if (isinstance(surface, HeadlessSurface) and cfg.out is not None and cfg.png
+                        and not deferred):  # fmt: skip
                     from .png import write_png
 
                     write_png(cfg.out / f"frame_{self.stats.frames:06d}.png",
@@ -303,7 +329,12 @@ class LiveDisplay(Service):
                 if on_ready is not None and got is not None:
                     on_ready()
                     on_ready = None
+            if deferred and isinstance(surface, HeadlessSurface):
+                recorder = self._replay(surface, schedule)
         finally:
+            if self._spool is not None:
+                self._spool.close()
+                self._spool = None
             if log_file is not None:
                 log_file.close()
             if recorder is not None:
@@ -317,6 +348,47 @@ class LiveDisplay(Service):
                 surface.close()
             self.shutdown()
         return 0
+
+    def _replay(self, surface: HeadlessSurface, schedule: list[tuple[float, float]]
+                ) -> LiveRecorder:  # fmt: skip
+        """Draw the recording of a show from its spool: each frame of ``schedule`` from the
+        pose messages that had arrived by its render time, as the loop would have drawn it."""
+        cfg = self.config
+        spool, video = self._spool, cfg.video
+        if spool is None or video is None:
+            raise RuntimeError("_replay needs the spool of a --video recording")
+        recorder = LiveRecorder(video, VideoSettings(size=cfg.size, fps=round(cfg.fps)))
+        track = PoseTrack()
+        dtype = pose_dtype(len(self.kit.pieces))
+        spool.seek(0)
+
+        def messages() -> Iterator[tuple[float, np.ndarray, np.ndarray]]:
+            while head := spool.read(SPOOL_HEAD.size):
+                arrival, n = SPOOL_HEAD.unpack(head)
+                show = np.frombuffer(spool.read(8 * n), np.float64)
+                rows = np.frombuffer(spool.read(n * dtype.itemsize), dtype)
+                yield arrival, show, rows
+
+        pending = messages()
+        nxt = next(pending, None)
+        started = time.monotonic()
+        print(f"display: drawing the recording, {len(schedule)} frames at {cfg.fps:g} fps "
+              f"({cfg.size[0]}x{cfg.size[1]}) ...", file=sys.stderr, flush=True)  # fmt: skip
+        try:
+            for render_s, show_s in schedule:
+                while nxt is not None and nxt[0] <= render_s:
+                    track.add(nxt[1], nxt[2])
+                    nxt = next(pending, None)
+                got = track.at(show_s)
+                frame = None if got is None else frame_from_pose(got[1], show_s, self.kit)
+                surface.draw(frame, render_s)
+                recorder.add(surface.renderer, show_s)
+        except BaseException:
+            recorder.close()
+            raise
+        print(f"display: recording drawn in {time.monotonic() - started:.1f} s", file=sys.stderr,
+              flush=True)  # fmt: skip
+        return recorder
 
     def _drain(self) -> None:
         while True:
@@ -339,10 +411,15 @@ class LiveDisplay(Service):
                 self.stats.missing += report.missing
             rows = msg.body.rows
             show = msg.body.time_s + rows["time_s"].astype(np.float64)
-            # samples for show times already drawn came too late to be seen
-            late = int(np.count_nonzero(show < self._last_show))
+            # a message whose every sample is for a frame already drawn came too late to be
+            # seen (re-animations also resend recent past samples; those are not counted)
+            late = int(show.size > 0 and float(show.max()) < self._last_show)
             self._say(self.late.first(late, self.clock.now()))
             self.track.add(show, rows)
+            if self._spool is not None:
+                self._spool.write(SPOOL_HEAD.pack(self.clock.now(), rows.size))
+                self._spool.write(np.ascontiguousarray(show, np.float64).tobytes())
+                self._spool.write(np.ascontiguousarray(rows).tobytes())
             self.stats.pose_messages += 1
             self.stats.pose_samples += rows.size
 
