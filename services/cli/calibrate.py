@@ -24,7 +24,7 @@ import sys
 import time
 from typing import Any
 
-from .common import Subparsers, add_api_option, add_command
+from .common import Subparsers, add_api_option, add_command, kit_source
 
 
 def register(sub: Subparsers) -> None:
@@ -97,18 +97,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--bpm {args.bpm:g}: expected 20..400")
     clock = MonotonicClock()
     decoder = MessageDecoder(load_note_map("general-midi"))  # unused: the tap is read
-    source: MidiSource
-    if args.serial is not None:
-        from ..input.serialport import SerialSource
-
-        source = SerialSource(args.serial, clock, decoder, args.baud)
-    else:
-        from ..input.midiport import MidiPortSource
-
-        virtual = args.virtual is not None
-        source = MidiPortSource(args.virtual if virtual else args.midi, clock, decoder,
-                                api=args.api, virtual=virtual)  # fmt: skip
-    source.check()
+    source: MidiSource = kit_source(args, clock, decoder)
     hits: list[float] = []
 
     def heard(time_s: float, msg: RawMidi) -> None:

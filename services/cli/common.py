@@ -320,3 +320,26 @@ def check_aa(samples: int) -> None:
     if samples not in AA_SAMPLES:
         allowed = ", ".join(str(n) for n in AA_SAMPLES)
         raise ConfigError(f"--aa {samples}: expected one of {allowed} (0: no multisampling)")
+
+
+def kit_source(args: argparse.Namespace, clock: Any, decoder: Any) -> Any:
+    """The ``--midi PORT | --virtual NAME | --serial DEV`` source of ``monitor``, ``map learn``
+    and ``calibrate`` (a ``services.input.base.MidiSource``), checked unless ``--wait``: a
+    device that is not there is one line naming what is."""
+    from livedrummer.errors import ConfigError
+
+    if args.serial is not None:
+        from ..input.serialport import BAUD_RATES, SerialSource
+
+        if args.baud not in BAUD_RATES:
+            raise ConfigError(f"--baud: expected one of {BAUD_RATES} (got {args.baud})")
+        source: Any = SerialSource(args.serial, clock, decoder, args.baud)
+    else:
+        from ..input.midiport import MidiPortSource
+
+        virtual = args.virtual is not None
+        source = MidiPortSource(args.virtual if virtual else args.midi, clock, decoder,
+                                api=args.api, virtual=virtual)  # fmt: skip
+    if not getattr(args, "wait", False):
+        source.check()
+    return source

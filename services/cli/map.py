@@ -14,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import Subparsers, add_api_option, add_command
+from .common import Subparsers, add_api_option, add_command, kit_source
 
 
 def register(sub: Subparsers) -> None:
@@ -55,18 +55,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--hihat-cc {args.hihat_cc}: expected 0..127")
     clock = MonotonicClock()
     decoder = MessageDecoder(load_note_map("general-midi"))  # unused: only the tap is read
-    source: MidiSource
-    if args.serial is not None:
-        from ..input.serialport import SerialSource
-
-        source = SerialSource(args.serial, clock, decoder, args.baud)
-    else:
-        from ..input.midiport import MidiPortSource
-
-        virtual = args.virtual is not None
-        source = MidiPortSource(args.virtual if virtual else args.midi, clock, decoder,
-                                api=args.api, virtual=virtual)  # fmt: skip
-    source.check()
+    source: MidiSource = kit_source(args, clock, decoder)
     learner = MapLearner(out.stem, source.name, args.hihat_cc)
     said: list[str] = []
 

@@ -17,7 +17,7 @@ import argparse
 import json
 import sys
 
-from .common import Subparsers, add_api_option, add_command
+from .common import Subparsers, add_api_option, add_command, kit_source
 
 
 def register(sub: Subparsers) -> None:
@@ -56,21 +56,7 @@ def run(args: argparse.Namespace) -> int:
     note_map = load_note_map(args.map)
     clock = MonotonicClock()
     decoder = MessageDecoder(note_map)
-    source: MidiSource
-    if args.serial is not None:
-        from ..input.serialport import BAUD_RATES, SerialSource
-
-        if args.baud not in BAUD_RATES:
-            raise ConfigError(f"--baud: expected one of {BAUD_RATES} (got {args.baud})")
-        source = SerialSource(args.serial, clock, decoder, args.baud)
-    else:
-        from ..input.midiport import MidiPortSource
-
-        virtual = args.virtual is not None
-        source = MidiPortSource(args.virtual if virtual else args.midi, clock, decoder,
-                                api=args.api, virtual=virtual)  # fmt: skip
-    if not args.wait:
-        source.check()
+    source: MidiSource = kit_source(args, clock, decoder)
     start = clock.now()
     counts: Counter[str] = Counter()
 
