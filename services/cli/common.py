@@ -323,9 +323,10 @@ def check_aa(samples: int) -> None:
 
 
 def kit_source(args: argparse.Namespace, clock: Any, decoder: Any) -> Any:
-    """The ``--midi PORT | --virtual NAME | --serial DEV`` source of ``monitor``, ``map learn``
-    and ``calibrate`` (a ``services.input.base.MidiSource``), checked unless ``--wait``: a
-    device that is not there is one line naming what is."""
+    """The ``--midi PORT | --virtual NAME | --serial DEV`` source (a
+    ``services.input.base.MidiSource``) of ``monitor``, ``map learn``, ``calibrate`` and
+    ``up``'s check before it starts anything; checked unless ``--wait``: a device that is not
+    there is one line naming what is."""
     from livedrummer.errors import ConfigError
 
     if args.serial is not None:
@@ -337,9 +338,9 @@ def kit_source(args: argparse.Namespace, clock: Any, decoder: Any) -> Any:
     else:
         from ..input.midiport import MidiPortSource
 
-        virtual = args.virtual is not None
-        source = MidiPortSource(args.virtual if virtual else args.midi, clock, decoder,
-                                api=args.api, virtual=virtual)  # fmt: skip
+        virtual = getattr(args, "virtual", None)  # up has no --virtual
+        source = MidiPortSource(virtual or args.midi, clock, decoder, api=args.api,
+                                virtual=virtual is not None)  # fmt: skip
     if not getattr(args, "wait", False):
         source.check()
     return source

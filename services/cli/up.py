@@ -50,6 +50,7 @@ from .common import (
     avatar_of,
     demo_groove,
     has_screen,
+    kit_source,
 )
 from .keys import add_curve_options
 
@@ -293,21 +294,7 @@ def check_before_start(args: argparse.Namespace) -> None:
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.timeline.clock import MonotonicClock
 
-    from ..input.base import MidiSource
-
-    decoder = MessageDecoder(load_note_map(args.map or DEMO_MAP))
-    source: MidiSource
-    if args.serial:
-        from ..input.serialport import BAUD_RATES, SerialSource
-
-        if args.baud not in BAUD_RATES:
-            raise ConfigError(f"--baud: expected one of {BAUD_RATES} (got {args.baud})")
-        source = SerialSource(args.serial, MonotonicClock(), decoder, args.baud)
-    else:
-        from ..input.midiport import MidiPortSource
-
-        source = MidiPortSource(args.midi, MonotonicClock(), decoder, api=args.api)
-    source.check()
+    kit_source(args, MonotonicClock(), MessageDecoder(load_note_map(args.map or DEMO_MAP)))
 
 
 def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
