@@ -119,3 +119,19 @@ class Grid:
         i = np.clip(np.searchsorted(beats, t, side="right") - 1, 0, beats.size - 2)
         out: np.ndarray = i + (t - beats[i]) / (beats[i + 1] - beats[i])
         return out
+
+    @property
+    def bars(self) -> int:
+        """How many bars the grid spans (0 for an empty grid)."""
+        return int(self.bar[-1]) + 1 if self.bar.size else 0
+
+    def bar_start_s(self, bar: int) -> float:
+        """Seconds at the downbeat of ``bar`` (0-based); ``bar == bars`` is the end of the last
+        bar (one beat past its last beat). Raises ValueError outside ``0..bars``."""
+        if not 0 <= bar <= self.bars:
+            raise ValueError(f"bar {bar + 1} is outside the piece's {self.bars} bars")
+        if bar < self.bars:
+            return float(self.beat_s[np.searchsorted(self.bar, bar)])
+        last = self.beat_s[-1]
+        step = float(last - self.beat_s[-2]) if self.beat_s.size > 1 else 0.5
+        return float(last + step)

@@ -89,7 +89,7 @@ class Performance:
             "tempos_bpm": [[round(t, 6), round(b, 3)] for t, b in self.tempo.bpm_changes()],
             "meters": [[round(t, 6), n, d] for t, n, d in self.grid.meters],
             "beats": int(self.grid.beat_s.size),
-            "bars": int(self.grid.bar[-1]) + 1 if self.grid.bar.size else 0,
+            "bars": self.grid.bars,
             "onsets": int(self.onsets.size),
             "by_piece": self.counts_by_piece_zone(),
             "by_note": {str(k): v for k, v in sorted(self.stats.note_ons.items())},

@@ -7,6 +7,7 @@ gives, as ``livedrummer sticking`` prints them; ``--sticking``, ``--score``, ``-
 ``--preset`` mean what they mean for ``livedrummer check`` (the x264 speed preset is
 ``--x264-preset``). ``--frames-dir DIR`` writes PNG frames instead of the video. The progress
 bar goes to stderr and only when stderr is a terminal; the summary line goes to stdout.
+``--start``/``--end`` render a part, in seconds or bars (:mod:`livedrummer.timeline.span`).
 ``--overlay score,joints`` adds SMED's scrolling score and the joint-angle graph as strips at
 the bottom of the frame. ``--soundfont FILE.sf2`` plays the drum track with that General MIDI
 SoundFont's kit (FluidSynth, :mod:`livedrummer.audio.soundfont`) instead of the built-in one.
@@ -24,6 +25,7 @@ from typing import TYPE_CHECKING
 
 from livedrummer.errors import LivedrummerError
 from livedrummer.render.camera import CAMERA_NAMES
+from livedrummer.timeline.span import Position, parse_position, span_seconds
 
 from .common import (
     DEMO_MAP,
@@ -70,6 +72,12 @@ def register(sub: Subparsers) -> None:
                    "that knows the most of the file's notes; roland-td for the demo)")  # fmt: skip
     add_channel_option(p)
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
+    p.add_argument("--start", metavar="POS",
+                   help="render from POS: seconds (12.5) or a bar's downbeat (bar5) "
+                   "(default: the beginning)")  # fmt: skip
+    p.add_argument("--end", metavar="POS",
+                   help="render up to POS: seconds (40) or the end of a bar (bar8) "
+                   "(default: the last event plus --tail)")  # fmt: skip
     p.add_argument("--aa", type=int, default=0, metavar="N",
                    help="multisample N: 0, 2, 4 or 8 (slow on CPU; default 0)")  # fmt: skip
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
@@ -109,6 +117,16 @@ def first_seconds(performance: Performance, seconds: float) -> Performance:
         onsets=performance.onsets[performance.onsets["time_s"] < seconds],
         controls=performance.controls[performance.controls["time_s"] < seconds],
     )
+
+
+def position_option(option: str, text: str | None) -> Position | None:
+    """``--start``/``--end``'s text as a :class:`Position` (checked before the file is read)."""
+    if text is None:
+        return None
+    try:
+        return parse_position(text)
+    except ValueError as exc:
+        raise RenderOptionError(f"{option} {exc}") from None
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -164,6 +182,7 @@ def run(args: argparse.Namespace) -> int:
     overlays = parse_overlays(args.overlay)
     if not 1 <= args.fps <= 240:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
+    start_pos, end_pos = position_option("--start", args.start), position_option("--end", args.end)
     if args.soundfont is not None:
         from livedrummer.audio.soundfont import check_soundfont
 
@@ -183,16 +202,24 @@ def run(args: argparse.Namespace) -> int:
     performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
     if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
         return 0
+    span = None
+    if start_pos is not None or end_pos is not None:
+        try:
+            span = span_seconds(start_pos, end_pos, performance.grid,
+                                performance.duration_s + args.tail)  # fmt: skip
+        except ValueError as exc:
+            raise RenderOptionError(f"{source}: --start/--end: {exc}") from None
     body = body_scene(args, performance, kit, note_map, avatar)
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar, overlays=overlays,
-        soundfont=args.soundfont, avatar=avatar,
+        soundfont=args.soundfont, avatar=avatar, span=span,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
-        f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s, "
+        f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
+        f"{f' (from {span[0]:.2f} s to {span[1]:.2f} s)' if span else ''}, "
         f"{size[0]}x{size[1]} @ {args.fps} fps, camera {args.camera}, kit {kit.name}, "
         f"sticking {args.sticking}"
         f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"

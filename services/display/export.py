@@ -94,16 +94,23 @@ def export(
     overlays: frozenset[str] = frozenset(),
     soundfont: Path | None = None,
     avatar: Avatar | None = None,
+    span: tuple[float, float] | None = None,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
-    drum track from the SoundFont ``soundfont`` when given, else the built-in kit."""
+    drum track from the SoundFont ``soundfont`` when given, else the built-in kit.
+
+    ``span`` = (start_s, end_s) renders only that part (``render --start/--end``): frame ``i``
+    shows ``start_s + i / fps``, the motion is the whole performance's (strokes that begin
+    before the cut are already in the air), and the track is the whole mix's slice, so a
+    cymbal struck before the cut still rings into it."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
     start = time.perf_counter()
     fps = settings.fps
-    n = frame_count(performance.duration_s + tail_s, fps)
-    times = np.arange(n) / fps
+    first_s, end_s = span if span is not None else (0.0, performance.duration_s + tail_s)
+    n = frame_count(end_s - first_s, fps)
+    times = first_s + np.arange(n) / fps
     kit = body.kit
     cam = pick_camera(kit, camera)
     if frames_dir is not None:
@@ -113,16 +120,19 @@ def export(
             raise DisplayError(f"cannot make frames folder {frames_dir}: {exc.strerror}") from None
     writer: VideoWriter | None = None
     if out is not None:
-        track = spooled_track(round(n / fps * settings.sample_rate))
+        lead = round(first_s * settings.sample_rate)
+        length = round(n / fps * settings.sample_rate)
+        track = spooled_track(lead + length)
+        mixed_s = (lead + length) / settings.sample_rate
         if soundfont is not None:  # before the writer: a bad file leaves no empty video
-            audio = render_soundfont(performance.onsets, n / fps, soundfont, settings.sample_rate,
+            audio = render_soundfont(performance.onsets, mixed_s, soundfont, settings.sample_rate,
                                      kit, body.performed.chokes, track)  # fmt: skip
         else:
-            audio = mix_onsets(performance.onsets, n / fps, kit, settings.sample_rate,
+            audio = mix_onsets(performance.onsets, mixed_s, kit, settings.sample_rate,
                                body.performed.chokes, track)  # fmt: skip
         check_video_target(out, settings)
         writer = VideoWriter(partial_path(out), settings)
-        writer.write_audio(audio)
+        writer.write_audio(audio[lead:])
     ctx = None
     done = False
     try:
@@ -130,7 +140,7 @@ def export(
         renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
                             samples=samples, avatar=avatar)  # fmt: skip
         gpu_yuv = i420_ok(settings.size)
-        strips = overlay_image(settings.size, overlays, OverlayModels(body, n / fps))
+        strips = overlay_image(settings.size, overlays, OverlayModels(body, first_s + n / fps))
         for i, frame in enumerate(body.frames(times)):
             renderer.draw(frame, cam)
             if not strips.empty:
