@@ -44,6 +44,7 @@ COMMANDS: dict[str, str] = {
     "display": "play a MIDI file in a window with transport keys",
     "synth": "turn live onsets into drummer poses (online)",
     "up": "run the live pipeline: input, synth and display",
+    "relay": "fan a synth's poses out to many displays (and to other relays)",
     "deploy": "write a systemd user unit that starts the rig at boot",
     "keys": "make and list CURVE key pairs for remote streams",
     "avatar": "describe an avatar file: bones, proportions, triangles, textures",

@@ -1,0 +1,51 @@
+"""``livedrummer relay``: fan a synth's pose stream out to many displays (see services.relay).
+
+Once bound it prints one JSON line on stdout (``{"service": "relay", "pub": ..., "control":
+..., "upstream": ...}``), tells a launcher or systemd it is ready, and forwards until Ctrl-C /
+SIGTERM; at exit it prints a one-line summary on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .common import Subparsers, add_command
+from .keys import add_curve_options, security_from_args
+
+
+def register(sub: Subparsers) -> None:
+    from ..relay import DEFAULT_CONTROL, DEFAULT_PUB
+
+    p = add_command(sub, "relay", run)
+    p.add_argument("--upstream", required=True, metavar="ENDPOINT",
+                   help="the pose endpoint of the synth (or of another relay) to forward, "
+                   "e.g. tcp://10.0.0.5:5720")  # fmt: skip
+    p.add_argument("--upstream-control", metavar="ENDPOINT",
+                   help="its control endpoint: the relay's READY then carries the synth's pose "
+                   "format and avatar (default: not asked)")  # fmt: skip
+    p.add_argument("--pub", default=DEFAULT_PUB,
+                   help=f"where displays subscribe (default {DEFAULT_PUB})")  # fmt: skip
+    p.add_argument("--control", default=DEFAULT_CONTROL,
+                   help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
+    add_curve_options(p, server=True, client=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    import zmq
+
+    from livedrummer.timeline.clock import MonotonicClock
+
+    from ..relay import RelayConfig, RelayService
+    from ..service import serve
+
+    config = RelayConfig(upstream=args.upstream, upstream_control=args.upstream_control,
+                         pub=args.pub, control=args.control,
+                         security=security_from_args(args))  # fmt: skip
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    service = RelayService(config, MonotonicClock(), ctx)
+    code = serve(service, lambda endpoints: endpoints["pub"])
+    s = service.summary()
+    print(f"relay: {s['messages']} messages ({s['bytes']:,} bytes) forwarded, "
+          f"{s['subscriptions']} subscriptions", file=sys.stderr)  # fmt: skip
+    return code
