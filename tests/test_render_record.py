@@ -172,3 +172,13 @@ def test_a_recordings_track_is_mixed_on_disk_not_in_memory() -> None:
     shifted = hits.copy()
     shifted["time_s"] += 0.03 - 10.0
     np.testing.assert_array_equal(track, mix_onsets(shifted, 2.0, kit))
+
+
+def test_ticks_a_loaded_loop_missed_are_scheduled_for_the_recording() -> None:
+    from services.display.live import missed_ticks
+
+    assert missed_ticks([], 1.0, 0.05, 0.04) == []
+    assert missed_ticks([(1.0, 1.05)], 1.04, 0.05, 0.04) == []  # on time: nothing missed
+    ticks = missed_ticks([(1.0, 1.05)], 1.161, 0.05, 0.04)  # three ticks late
+    assert [round(r, 3) for r, _ in ticks] == [1.04, 1.08, 1.12]
+    assert all(abs(s - r - 0.05) < 1e-12 for r, s in ticks)

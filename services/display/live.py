@@ -39,8 +39,11 @@ temporary file with its arrival time, and each frame's render and show times are
 the show the frames are drawn from the spool exactly as an infinitely fast display would have
 drawn them, so the video has every frame even where the machine could not draw 30 a second
 live (on 2 cores with llvmpipe a 720p frame of the character takes 60-120 ms), and the live
-run does not compete with the synth for the CPU. It costs the drawing time after the show
-(about 90 s for the 30 s demo here). Open-ended recordings are still drawn live.
+run does not compete with the synth for the CPU. Where even the loop without drawing missed
+ticks (a machine loaded by other work), the missed frames are scheduled too, ``1/fps`` apart
+(:func:`missed_ticks`), each drawn from what had arrived by its own render time. It costs the
+drawing time after the show (about 90 s for the 30 s demo here). Open-ended recordings are
+still drawn live.
 
 Life cycle: the service base's (:mod:`services.service`); readiness comes after the first
 frame that drew the drummer, and a control socket answering HELLO with READY (service
@@ -179,6 +182,18 @@ class LiveStats:
     held: int = 0  # frames drawn with no pose at or after their show time - 1 frame
 
 
+def missed_ticks(schedule: list[tuple[float, float]], now: float, lead_s: float,
+                 period: float) -> list[tuple[float, float]]:  # fmt: skip
+    """(render_s, show_s) of the frames a loaded machine's loop had no time to tick since the
+    last one in ``schedule``: an infinitely fast display would have drawn them, ``period``
+    apart, each ``lead_s`` ahead of its render time as this frame is."""
+    if not schedule:
+        return []
+    last = schedule[-1][0]
+    count = max(0, round((now - last) / period) - 1)
+    return [(last + k * period, last + k * period + lead_s) for k in range(1, count + 1)]
+
+
 class LiveDisplay(Service):
     """See the module docstring."""
 
@@ -305,6 +320,7 @@ class LiveDisplay(Service):
                 ):
                     recorder.add(surface.renderer, show)  # from the first frame with a pose
                 if deferred and (got is not None or schedule):
+                    schedule.extend(missed_ticks(schedule, now, show - now, period))
                     schedule.append((now, show))
                 if (isinstance(surface, HeadlessSurface) and cfg.out is not None and cfg.png
                         and not deferred):  # fmt: skip
