@@ -12,7 +12,9 @@ Why injected. Code that needs "now" or "wait until" takes a :class:`Clock`; prod
 deadline at once, so a 30-second MIDI file "plays in real time" in microseconds, deterministically.
 
 Limits: the clock is per machine. Times from another machine (a remote jam) are on *its*
-clock and are restamped on arrival here; the offset between machines is not estimated.
+clock: a remote source that can reach the other site's control socket maps them onto ours
+with an estimated offset and drift (:mod:`livedrummer.live.clocksync`); one that cannot
+restamps them on arrival.
 """
 
 from __future__ import annotations

@@ -30,6 +30,10 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--wait", action="store_true",
                    help="wait for a --midi port or --serial device that is not there yet "
                         "(default: one line naming what exists, exit 2)")  # fmt: skip
+    p.add_argument("--remote-control", metavar="ENDPOINT",
+                   help="--remote: the other site's control endpoint; keeps the remote "
+                   "drummer's timing (clock offset and jitter buffer) instead of stamping "
+                   "hits on arrival (default: stamped on arrival)")  # fmt: skip
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
     p.add_argument("--loop", action="store_true", help="--file: start again at the end")
@@ -103,7 +107,8 @@ def run(args: argparse.Namespace) -> int:
     elif args.remote is not None:
         from ..input.remote import RemoteSource
 
-        source = RemoteSource(args.remote, clock, ctx, security=security)
+        source = RemoteSource(args.remote, clock, ctx, security=security,
+                              control=args.remote_control)  # fmt: skip
     elif args.serial is not None:
         from ..input.serialport import BAUD_RATES, SerialSource
 
@@ -135,6 +140,12 @@ def run(args: argparse.Namespace) -> int:
     daemon = InputDaemon(source, config, clock, ctx)
     code = serve(daemon, lambda endpoints: endpoints["pub"])
     summary = daemon.summary()
+    timing = summary.get("remote_timing")
     print(f"input: {summary['onsets']} onsets, {summary['controls']} controls, "
-          f"{summary['gaps']} gaps published", file=sys.stderr)  # fmt: skip
+          f"{summary['gaps']} gaps published"
+          + ("" if timing is None else
+             f"; remote clock {timing['offset_ms']:+.3f} ms (+/- {timing['uncertainty_ms']:.3f}),"
+             f" drift {timing['drift_ppm']:+.1f} ppm, played {timing['delay_ms']:.1f} ms behind"
+             f" the remote drummer, {timing['late']:.0f} hits late"),
+          file=sys.stderr)  # fmt: skip
     return code

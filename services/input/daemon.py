@@ -259,6 +259,8 @@ class InputDaemon(Service):
             "problems": self.problems.summary(),
             "bad_messages": self.bad_messages(),
         }
+        if isinstance(self.source, RemoteSource) and (timing := self.source.timing()):
+            out["remote_timing"] = timing
         d = self.source.decode_stats()
         if d is not None:
             out["unknown_notes"] = {str(k): v for k, v in sorted(d.unknown_notes.items())}

@@ -16,19 +16,47 @@ Security: with a :class:`~services.net.Security` holding our key pair and the re
 daemon's public key, the SUB socket is a CURVE client (encrypted; refused by a daemon whose
 allow folder lacks our key, which looks like silence here).
 
-Limits: no clock-offset estimation between sites. The remote daemon going away looks like silence
-(ZeroMQ reconnects by itself); heartbeats let a caller notice it.
+Timing. Without ``control`` every event is restamped on arrival here, so network jitter shows
+in the remote drummer's intervals. With ``control`` (the remote daemon's control endpoint,
+``input --remote-control``) the source keeps the sender's timing: it asks that socket for READY
+every :data:`PROBE_S` (faster while it starts) and reads the remote clock off the answer's
+header, an NTP-style exchange whose offset and drift :class:`~livedrummer.live.clocksync.ClockSync`
+estimates with minimum-RTT filtering; every message's transit (arrival minus its send time
+mapped onto our clock) feeds a :class:`~livedrummer.live.clocksync.JitterBuffer`, and each event
+is held until its own time on the sender's clock, mapped onto ours, plus the buffer's delay,
+then released stamped with that time. The intervals between the remote drummer's hits are
+kept; the delay (network plus buffer) is logged when it settles or moves by more than
+:data:`REPORT_STEP_S`, and summarised at exit (:meth:`RemoteSource.timing`). Until the first
+exchange has come back events are restamped on arrival, as without ``control``.
+
+Limits: the remote daemon going away looks like silence (ZeroMQ reconnects by itself);
+heartbeats let a caller notice it. An exchange not answered within :data:`PROBE_TIMEOUT_S`
+is abandoned with its socket (so a late answer is never taken for the next one's).
 """
 
 from __future__ import annotations
 
+import heapq
+import itertools
 import logging
 from typing import Any
 
 import zmq
 
 from livedrummer.errors import KeyFileError, MidiInputError, ProtocolError
-from livedrummer.protocol import Gap, GapReason, Kind, SeqStatus, SequenceTracker, decode
+from livedrummer.live.clocksync import ClockSync, JitterBuffer, SyncSample
+from livedrummer.protocol import (
+    Gap,
+    GapReason,
+    Hello,
+    Kind,
+    Message,
+    SeqStatus,
+    SequenceTracker,
+    Stream,
+    decode,
+    encode,
+)
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import Control, ControlKind, Onset
 
@@ -40,6 +68,11 @@ log = logging.getLogger("livedrummer.input")
 
 MAX_BATCH = 1000
 EVENT_KINDS = (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT)
+PROBE_S = 1.0  # one clock exchange a second once started ...
+FAST_PROBE_S = 0.05  # ... and twenty a second for the first FAST_PROBES
+FAST_PROBES = 40
+PROBE_TIMEOUT_S = 1.0
+REPORT_STEP_S = 0.005
 
 
 class RemoteSource(Source):
@@ -52,14 +85,26 @@ class RemoteSource(Source):
         ctx: zmq.Context[zmq.Socket[bytes]],
         problems: Problems | None = None,
         security: Security | None = None,
+        control: str | None = None,
+        buffer: JitterBuffer | None = None,
     ) -> None:
         super().__init__(f"remote:{endpoint}", clock, problems)
         self.endpoint = check_endpoint(endpoint, "remote endpoint")
+        self.control = None if control is None else check_endpoint(control, "remote control")
         self.ctx = ctx
         self.security = security
         self.tracker = SequenceTracker()
         self.bad = BadMessages(f"remote {endpoint}", log)
+        self.sync = ClockSync()
+        self.buffer = buffer if buffer is not None else JitterBuffer()
         self._sock: Any = None
+        self._probe: Any = None  # DEALER on the remote control socket
+        self._probe_sent: float | None = None
+        self._probes = 0
+        self._next_probe = 0.0
+        self._held: list[tuple[float, int, Event]] = []  # (playout time, order, event)
+        self._order = itertools.count()
+        self._reported: float | None = None
 
     def open(self) -> None:
         sock = socket(self.ctx, zmq.SUB)
@@ -72,10 +117,115 @@ class RemoteSource(Source):
         self._sock = sock
         self.is_open = True
 
+    # ------------------------------------------------------------ clock exchanges
+
+    def _send_probe(self, now: float) -> None:
+        if self.control is None:
+            return
+        if self._probe is not None and self._probe_sent is not None:
+            if now - self._probe_sent < PROBE_TIMEOUT_S:
+                return
+            self._probe.close(0)  # unanswered: a late answer must not pair with the next one
+            self._probe = None
+            self.problems.counts["unanswered clock exchange"] += 1
+        if self._probe is None:
+            sock = socket(self.ctx, zmq.DEALER)
+            try:
+                connect(sock, self.control, "remote control", self.security)
+            except (ProtocolError, KeyFileError) as exc:
+                sock.close(0)
+                raise MidiInputError(str(exc)) from exc
+            self._probe = sock
+        hello = Message(Kind.HELLO, Hello("input", "clock"), stream=Stream.CONTROL)
+        self._probe_sent = self.clock.now()
+        self._probe.send_multipart([b"", *encode(hello)])
+        self._probes += 1
+        self._next_probe = now + (FAST_PROBE_S if self._probes < FAST_PROBES else PROBE_S)
+
+    def _take_answer(self) -> None:
+        frames = self._probe.recv_multipart()
+        received = self.clock.now()
+        sent, self._probe_sent = self._probe_sent, None
+        try:
+            msg = decode(frames[1:] if frames and frames[0] == b"" else frames)
+        except ProtocolError as exc:
+            self.bad.drop(exc)
+            return
+        if msg.kind is not Kind.READY or sent is None:
+            self.bad.unexpected(msg.kind.name)
+            return
+        first = not self.sync.ready
+        self.sync.add(SyncSample(sent, msg.send_time_s, received))
+        if first:
+            log.info("%s: remote clock %+.3f ms from ours (first exchange, round trip %.2f ms)",
+                     self.name, 1000 * self.sync.offset_at(received),
+                     1000 * (received - sent))  # fmt: skip
+
+    def timing(self) -> dict[str, float] | None:
+        """Offset, its uncertainty, drift and the playout delay (None before an exchange)."""
+        if not self.sync.ready:
+            return None
+        now = self.clock.now()
+        return {
+            "offset_ms": 1000 * self.sync.offset_at(now),
+            "uncertainty_ms": 1000 * self.sync.uncertainty_s,
+            "drift_ppm": 1e6 * self.sync.drift,
+            "delay_ms": 1000 * (self.buffer.delay_s or 0.0),
+            "late": float(self.buffer.late),
+        }
+
+    def _report_delay(self) -> None:
+        delay = self.buffer.delay_s
+        if delay is None or (self._reported is not None
+                             and abs(delay - self._reported) < REPORT_STEP_S):  # fmt: skip
+            return
+        self._reported = delay
+        log.warning("%s: playing the remote drummer %.1f ms behind their clock (network and "
+                    "jitter buffer; clock offset %+.3f ms +/- %.3f)", self.name, 1000 * delay,
+                    1000 * self.sync.offset_at(self.clock.now()),
+                    1000 * self.sync.uncertainty_s)  # fmt: skip
+
+    # ------------------------------------------------------------ reading
+
     def read(self, timeout_s: float) -> list[Event]:
-        out: list[Event] = []
-        if not self._sock.poll(int(timeout_s * 1000)):
+        now = self.clock.now()
+        if self.control is not None and now >= self._next_probe:
+            self._send_probe(now)
+        wake = now + timeout_s
+        if self._held:
+            wake = min(wake, self._held[0][0])
+        if self.control is not None:
+            wake = min(wake, self._next_probe)
+        poller = zmq.Poller()
+        poller.register(self._sock, zmq.POLLIN)
+        if self._probe is not None:
+            poller.register(self._probe, zmq.POLLIN)
+        ready = dict(poller.poll(max(0, int((wake - now) * 1000))))
+        if self._probe is not None and self._probe in ready:
+            self._take_answer()
+        out: list[Event] = self._receive() if self._sock in ready else []
+        if not self.sync.ready:
             return out
+        for event in out:  # timed on the sender's clock: held until their playout time
+            when = event.last_time_s if isinstance(event, Gap) else event.time_s
+            heapq.heappush(self._held, (when, next(self._order), event))
+        released: list[Event] = []
+        now = self.clock.now()
+        while self._held and self._held[0][0] <= now + 0.0005:
+            released.append(self._held[0][2])
+            heapq.heappop(self._held)
+        self._report_delay()
+        return released
+
+    def _timed(self, remote_s: float, now: float) -> float:
+        """Our time to play an event stamped ``remote_s`` on the sender's clock (now, before
+        the first clock exchange)."""
+        if not self.sync.ready:
+            return now
+        return self.buffer.playout(self.sync.to_local(remote_s), now)
+
+    def _receive(self) -> list[Event]:
+        out: list[Event] = []
         for _ in range(MAX_BATCH):
             try:
                 frames = self._sock.recv_multipart(zmq.NOBLOCK)
@@ -92,6 +242,8 @@ class RemoteSource(Source):
                 self.bad.unexpected(msg.kind.name)
                 self.problems.counts["bad remote message"] += 1
                 continue
+            if self.sync.ready:
+                self.buffer.observe(now - self.sync.to_local(msg.send_time_s), now)
             seq = self.tracker.observe_message(msg)
             if seq.status is SeqStatus.DUPLICATE:
                 self.problems.report("duplicate remote message", f"{self.name}: seq {msg.seq}")
@@ -105,19 +257,23 @@ class RemoteSource(Source):
                 for row in msg.rows:
                     o = Onset.from_record(row)
                     out.append(
-                        Onset(now, o.note, o.velocity, o.channel, o.instrument, o.zone,
-                              o.hihat, o.openness, o.source)
+                        Onset(self._timed(o.time_s, now), o.note, o.velocity, o.channel,
+                              o.instrument, o.zone, o.hihat, o.openness, o.source)
                     )  # fmt: skip
             elif msg.kind is Kind.CONTROL:
                 for row in msg.rows:
                     out.append(
-                        Control(now, ControlKind(int(row["kind"])), int(row["channel"]),
+                        Control(self._timed(float(row["time_s"]), now),
+                                ControlKind(int(row["kind"])), int(row["channel"]),
                                 int(row["number"]), int(row["value"]), int(row["source"]))
                     )  # fmt: skip
         return out
 
     def close(self) -> None:
-        if self._sock is not None:
-            self._sock.close(0)
-            self._sock = None
+        for sock in (self._sock, self._probe):
+            if sock is not None:
+                sock.close(0)
+        self._sock = self._probe = None
+        self._probe_sent = None
+        self._held.clear()
         self.is_open = False
