@@ -81,6 +81,11 @@ class Table:
             raise self.fail(key, "missing required key")
         return default
 
+    def raw(self, key: str, default: Any = _MISSING) -> Any:
+        """The value as TOML gave it, unchecked: for a key that may hold values of several
+        types (a name or a number), which the caller then reads with the matching method."""
+        return self._get(key, default)
+
     def text(self, key: str, default: Any = _MISSING, choices: Iterable[str] | None = None) -> Any:
         value = self._get(key, default)
         if value is default and default is not _MISSING:

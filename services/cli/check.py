@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from livedrummer.errors import LivedrummerError
@@ -49,7 +50,10 @@ if TYPE_CHECKING:
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "check", run)
-    p.add_argument("files", nargs="+", help="Standard MIDI File(s) or folders of them")
+    p.add_argument("files", nargs="*", help="Standard MIDI File(s) or folders of them")
+    p.add_argument("--stage", type=Path, metavar="TOML",
+                   help="check each drummer of a stage file on its own kit "
+                   "(default: none)")  # fmt: skip
     add_kit_option(p)
     add_map_option(p)
     add_channel_option(p)
@@ -63,6 +67,12 @@ def register(sub: Subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.stage is not None:
+        if args.files:
+            raise LivedrummerError("check: give MIDI files or --stage, not both")
+        return run_stage(args)
+    if not args.files:
+        raise LivedrummerError("check: give MIDI files or folders, or --stage FILE")
     import numpy as np
 
     from livedrummer.body.check import check
@@ -183,3 +193,52 @@ def notes_json(sticking: Sticking, kit: Kit, contact_error_m: np.ndarray) -> lis
     for row, is_played in zip(rows, played.tolist(), strict=True):
         row["contact_error_mm"] = round(next(error_mm), 4) if is_played else None
     return rows
+
+
+def run_stage(args: argparse.Namespace) -> int:
+    """``check --stage``: each drummer's part animated on its own kit, checked alone."""
+    from livedrummer.body.check import check
+    from livedrummer.body.expression import load_expression
+    from livedrummer.body.perform import perform
+    from livedrummer.body.strokes import StrokeParams
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.stage.stagefile import load_stage
+
+    from .common import rig_for
+    from .staging import stage_parts
+
+    stage = load_stage(args.stage)
+    drummers: list[dict[str, Any]] = []
+    for part in stage_parts(stage, args):
+        p = part.performer
+        kit = load_kit(p.kit)
+        avatar = None
+        if p.avatar is not None:
+            from .common import avatar_of
+
+            avatar = avatar_of(argparse.Namespace(avatar=p.avatar))
+        expression = load_expression(p.preset) if p.preset else None
+        sticking = sticking_of(args, part.performance, kit)
+        done = perform(part.performance, rig_for(kit, avatar), part.note_map, expression,
+                       StrokeParams(model=args.strokes), sticking=sticking)  # fmt: skip
+        r = check(done.animation, done.sticking, args.fps)
+        e = r.contact_error_m * 1000.0
+        drummers.append({
+            "id": part.label, "kit": kit.name, "channel": p.channel,
+            "at": [round(part.placement.x, 3), round(part.placement.y, 3)],
+            "yaw_deg": round(part.placement.yaw_deg, 2),
+            "notes": int(part.performance.onsets.size), "played": int(e.size),
+            "contact_error_mm_max": round(float(e.max()), 4) if e.size else 0.0,
+            "penetration_mm": round(r.penetration_m * 1000.0, 4),
+            "joint_limit_violations": r.joint_limit_violations,
+        })  # fmt: skip
+    if args.json:
+        print(json.dumps({"stage": str(args.stage), "drummers": drummers}, indent=1))
+    else:
+        print(f"stage {args.stage}: {len(drummers)} drummers")
+        for d in drummers:
+            print(f"  {d['id']:<12} kit {d['kit']:<12} at ({d['at'][0]:+.2f}, {d['at'][1]:+.2f}) "
+                  f"yaw {d['yaw_deg']:+.0f}  {d['notes']} notes, contact max "
+                  f"{d['contact_error_mm_max']:.3f} mm, "
+                  f"penetration {d['penetration_mm']:.3f} mm")  # fmt: skip
+    return 0
