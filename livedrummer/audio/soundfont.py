@@ -57,9 +57,6 @@ import ctypes
 import io
 import logging
 import math
-import os
-import sys
-import tempfile
 from collections.abc import Iterator, Sequence
 from functools import cache
 from pathlib import Path
@@ -72,6 +69,7 @@ from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.errors import LivedrummerError
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
+from livedrummer.native.stderr import native_stderr_to_log
 
 log = logging.getLogger(__name__)
 
@@ -150,23 +148,16 @@ def _on_log(level: int, message: bytes | None, _data: int | None) -> None:
 @contextlib.contextmanager
 def _loading() -> Iterator[None]:
     """Collect FluidSynth's errors, and the native noise written straight to file descriptor 2
-    (Debian's FluidSynth tries its libinstpatch DLS reader on a file its SF2 reader refused,
-    and GLib prints CRITICAL lines), for the DEBUG log instead of the user's one-line error."""
+    (:func:`~livedrummer.native.stderr.native_stderr_to_log`), for the DEBUG log instead of the
+    user's one-line error."""
     _errors.clear()
     _held.append([])
-    sys.stderr.flush()
-    saved = os.dup(2)
-    with tempfile.TemporaryFile() as sink:
-        os.dup2(sink.fileno(), 2)
-        try:
+    try:
+        with native_stderr_to_log(log, "stderr"):
             yield
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-            sink.seek(0)
-            native = sink.read().decode(errors="replace").splitlines()
-            for line in _held.pop() + [f"stderr: {x}" for x in native if x.strip()]:
-                log.debug("%s", line)
+    finally:
+        for line in _held.pop():
+            log.debug("%s", line)
 
 
 _log_callback = _LOG_FUNC(_on_log)  # kept alive: FluidSynth holds the pointer

@@ -51,10 +51,10 @@ import rtmidi
 from livedrummer.errors import MidiInputError
 from livedrummer.midi.decode import MessageDecoder
 from livedrummer.midi.drivertime import DeltaStamper
+from livedrummer.native.stderr import native_stderr_to_log
 from livedrummer.timeline.clock import Clock
 
 from .base import Event, MidiSource, Problems
-from .cnoise import c_stderr_to_log
 
 log = logging.getLogger("livedrummer.input")
 
@@ -82,7 +82,7 @@ def midi_in(api: str, client: str = "livedrummer") -> Any:
     if api not in APIS:
         raise MidiInputError(f"MIDI API {api!r}: expected one of {', '.join(APIS)}")
     try:
-        with c_stderr_to_log(f"MIDI API {api}"):  # libasound/libjack noise: one line, ours
+        with native_stderr_to_log(log, f"MIDI API {api}"):  # libasound/libjack noise: ours only
             return rtmidi.MidiIn(APIS[api], client, queue_size_limit=QUEUE_LIMIT)
     except (rtmidi.RtMidiError, RuntimeError) as exc:
         raise MidiInputError(f"MIDI API {api}: cannot start a client ({exc})") from None
