@@ -18,10 +18,12 @@ counts as round trip, which the filter discards as it discards queueing.
 
 :class:`JitterBuffer` chooses the playout delay: each message's transit (arrival here minus
 its send time mapped onto our clock) is kept for ``window_s``; the delay is a high quantile
-of those transits plus a margin. It rises at once when the network gets worse (a hit played
-late is worse than one interval stretched once) and falls slowly, at ``fall_rate`` seconds
-per second, when it gets better, so intervals shrink by at most that fraction while it
-adapts. A hit whose playout time has already passed when it arrives is played at once and
+of those transits plus a margin. It rises at once when the network gets worse, that is when a
+message arrives within half the margin of the delay (a hit played late is worse than one
+interval stretched once), but not while the quantile merely creeps up and every message is
+still in time (each rise stretches an interval); it falls slowly, at ``fall_rate`` seconds
+per second, when the network gets better, so intervals shrink by at most that fraction while
+it adapts. A hit whose playout time has already passed when it arrives is played at once and
 counted as late.
 
 Limits: the offset is only as good as the path is symmetric (an asymmetric route biases it by
@@ -67,7 +69,9 @@ class ClockSync:
     the better half of the anchors once they span :data:`DRIFT_SPAN_S`.
     """
 
-    def __init__(self, window: int = 64, best: int = 8, block: int = 8, anchors: int = 128) -> None:
+    def __init__(
+        self, window: int = 128, best: int = 8, block: int = 8, anchors: int = 128
+    ) -> None:
         if best < 1 or window < best or block < 1:
             raise ValueError("need 1 <= best <= window and block >= 1")
         self.best, self.block = best, block
@@ -145,7 +149,7 @@ class JitterBuffer:
         self,
         quantile: float = 0.99,
         window_s: float = 10.0,
-        margin_s: float = 0.002,
+        margin_s: float = 0.003,
         fall_rate: float = 0.002,
         max_delay_s: float = 1.0,
     ) -> None:
@@ -165,9 +169,14 @@ class JitterBuffer:
             self.transits.popleft()
         values = np.fromiter((t for _, t in self.transits), float, len(self.transits))
         target = min(float(np.quantile(values, self.quantile)) + self.margin_s, self.max_delay_s)
-        if self.delay_s is None or target >= self.delay_s:
+        if self.delay_s is None:
             self.delay_s = target
-        elif self._last_s is not None:
+        elif target > self.delay_s and transit_s > self.delay_s - self.margin_s / 2:
+            # a message came (nearly) too late: the network got worse, follow it now; a
+            # quantile that only creeps up while every message still arrives in time moves
+            # nothing, since each rise stretches one interval between two hits
+            self.delay_s = target
+        elif target < self.delay_s and self._last_s is not None:
             fall = self.fall_rate * max(0.0, now_s - self._last_s)
             self.delay_s = max(target, self.delay_s - fall)
         self._last_s = now_s

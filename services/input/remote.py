@@ -70,7 +70,7 @@ MAX_BATCH = 1000
 EVENT_KINDS = (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT)
 PROBE_S = 1.0  # one clock exchange a second once started ...
 FAST_PROBE_S = 0.05  # ... and twenty a second for the first FAST_PROBES
-FAST_PROBES = 40
+FAST_PROBES = 100
 PROBE_TIMEOUT_S = 1.0
 REPORT_STEP_S = 0.005
 
