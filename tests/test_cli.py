@@ -97,3 +97,18 @@ def test_demo_offline_renders_the_bundled_groove(tmp_path: Path) -> None:
     assert "sticking  optimal:" in proc.stdout
     assert str(out) in proc.stdout
     assert out.stat().st_size > 10_000
+
+
+def test_demo_takes_size_camera_and_kit(tmp_path: Path) -> None:
+    import av
+
+    out = tmp_path / "demo.mp4"
+    proc = run("demo", "--offline", "--seconds", "1", "-o", str(out), "--size", "320x180",
+               "--camera", "drummer", "--kit", "rock5-left", DISPLAY="", WAYLAND_DISPLAY="")  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "320x180 @ 30 fps, camera drummer, kit rock5-left" in proc.stdout
+    with av.open(str(out)) as c:
+        v = c.streams.video[0].codec_context
+        assert (v.width, v.height) == (320, 180)
+    bad = run("demo", "--offline", "--camera", "nope", DISPLAY="", WAYLAND_DISPLAY="")
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--camera 'nope'" in bad.stderr

@@ -8,6 +8,8 @@ a window (Q quits); otherwise the headless display records the show, and its dru
 ``out/demo.mp4`` (1280x720, 30 fps) and the demo says where it is. ``--seconds S`` sets how
 long it plays (default 30; it runs in real time); ``--headless`` records even with a screen.
 
+``--size``, ``--camera`` and ``--kit`` mean what they mean for ``up`` and ``render``.
+
 ``--offline`` is the offline twin: the same groove read as a file with full lookahead (the
 sticking of :func:`livedrummer.sticking.stick_performance`, as ``livedrummer sticking`` prints
 it), rendered to the same video as fast as the machine allows, or played in the file window
@@ -28,6 +30,7 @@ from .common import (
     DEMO_MAP,
     Subparsers,
     add_command,
+    add_kit_option,
     add_renamed,
     demo_groove,
     has_screen,
@@ -56,6 +59,14 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--soundfont", type=Path, metavar="SF2",
                    help="video: drum sounds from this General MIDI SoundFont "
                    "(default: the built-in kit)")  # fmt: skip
+    p.add_argument(
+        "--size",
+        metavar="WxH",
+        help=f"window or video size (default {DEMO_SIZE[0]}x{DEMO_SIZE[1]})",
+    )
+    p.add_argument("--camera", metavar="NAME",
+                   help="viewpoint (default stage live, front --offline)")  # fmt: skip
+    add_kit_option(p)
 
 
 def sticking_line(st: Sticking) -> str:
@@ -84,12 +95,16 @@ def run_live(args: argparse.Namespace) -> int:
     print(f"demo: {groove.name} (Groove MIDI Dataset, CC BY 4.0), played live into the pipeline")
     print_summary(read_midi_file(groove, load_note_map(DEMO_MAP)).summary())
     seconds = LIVE_SECONDS if args.seconds is None else args.seconds
-    argv = ["up", "--demo", "--seconds", f"{seconds:g}"]
+    argv = ["up", "--demo", "--seconds", f"{seconds:g}", "--kit", args.kit]
+    if args.camera is not None:
+        argv += ["--camera", args.camera]
     if has_screen() and not args.headless:
         print("demo: in a window (Q quits)", flush=True)
+        if args.size is not None:
+            argv += ["--size", args.size]
     else:
         out: Path = args.output
-        size = f"{DEMO_SIZE[0]}x{DEMO_SIZE[1]}"
+        size = args.size or f"{DEMO_SIZE[0]}x{DEMO_SIZE[1]}"
         print(f"demo: no screen: recording {seconds:g} s of the live show to {out} "
               f"({size} @ {DEMO_FPS} fps)", flush=True)  # fmt: skip
         argv += ["--video", str(out), "--size", size, "--fps", str(DEMO_FPS),
@@ -107,8 +122,15 @@ def run_file(args: argparse.Namespace) -> int:
     from livedrummer.render.camera import CAMERA_NAMES
 
     from .inspect import print_summary
-    from .render import ProgressBar, first_seconds
+    from .render import ProgressBar, first_seconds, parse_size
 
+    size = parse_size(args.size) if args.size else DEMO_SIZE
+    camera = args.camera or CAMERA_NAMES[0]
+    if camera not in CAMERA_NAMES:
+        from .render import RenderOptionError
+
+        raise RenderOptionError(f"--camera {camera!r}: expected one of {', '.join(CAMERA_NAMES)}")
+    kit = load_kit(args.kit)
     groove = demo_groove()
     note_map = load_note_map(DEMO_MAP)
     performance = read_midi_file(groove, note_map)
@@ -116,7 +138,6 @@ def run_file(args: argparse.Namespace) -> int:
         performance = first_seconds(performance, args.seconds)
     print(f"demo: {groove.name} (Groove MIDI Dataset, CC BY 4.0)")
     print_summary(performance.summary())
-    kit = load_kit("rock5")
     body = BodyScene.perform(performance, kit, note_map)
     print(sticking_line(body.performed.sticking))
     if has_screen() and not args.headless:
@@ -129,13 +150,13 @@ def run_file(args: argparse.Namespace) -> int:
 
     out: Path = args.output
     out.parent.mkdir(parents=True, exist_ok=True)
-    settings = VideoSettings(size=DEMO_SIZE, fps=DEMO_FPS)
+    settings = VideoSettings(size=size, fps=DEMO_FPS)
     print(f"no screen: rendering {performance.duration_s:.0f} s to {out} "
-          f"({DEMO_SIZE[0]}x{DEMO_SIZE[1]} @ {DEMO_FPS} fps, camera {CAMERA_NAMES[0]})",
+          f"({size[0]}x{size[1]} @ {DEMO_FPS} fps, camera {camera}, kit {kit.name})",
           flush=True)  # fmt: skip
     bar = ProgressBar("demo", True, DEMO_FPS, every_s=0.2 if sys.stderr.isatty() else 10.0)
     start = time.perf_counter()
-    report = export(performance, body, out=out, settings=settings, camera=CAMERA_NAMES[0],
+    report = export(performance, body, out=out, settings=settings, camera=camera,
                     progress=bar, soundfont=args.soundfont)  # fmt: skip
     took = time.perf_counter() - start
     print(f"demo: wrote {out.resolve()} ({report.duration_s:.1f} s of video with sound) "
