@@ -175,3 +175,46 @@ def test_bad_stage_files_are_one_line_errors(
     assert message in str(err.value) and str(path) in str(err.value)
     assert main(["check", "--stage", str(path)]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+
+
+def test_merge_by_depth_keeps_the_nearest_surface() -> None:
+    from services.display.stage_export import merge_by_depth
+
+    a = np.full((2, 2, 4), 10, np.uint8)
+    b = np.full((2, 2, 4), 200, np.uint8)
+    da = np.array([[0.5, 1.0], [0.2, 0.9]], np.float32)
+    db = np.array([[0.4, 1.0], [0.3, 0.1]], np.float32)
+    out = merge_by_depth([a, b], [da, db])
+    assert out[..., 0].tolist() == [[200, 10], [10, 200]]  # a tie (background) keeps the first
+
+
+@pytest.mark.usefixtures("gl_ok")
+def test_render_stage_draws_every_drummer_in_its_place(tmp_path: Path) -> None:
+    import av
+
+    counts = write_band(tmp_path / "band.mid")
+    chans = list(counts)[:2]
+    (tmp_path / "duo.toml").write_text(
+        '[formation]\nshape = "line"\nspacing = 4.0\n\n'
+        + "".join(f'[[performer]]\nid = "d{c}"\nfile = "band.mid"\nchannel = {c}\n'
+                  f'map = "general-midi"\n\n' for c in chans)
+    )  # fmt: skip
+    frames = tmp_path / "frames"
+    assert main(["render", "--stage", str(tmp_path / "duo.toml"), "--frames-dir", str(frames),
+                 "--size", "320x180", "--fps", "4", "--tail", "0", "--camera", "front"]) == 0  # fmt: skip
+    pngs = sorted(frames.glob("*.png"))
+    assert len(pngs) >= 4
+    with av.open(str(pngs[2])) as c:
+        img = next(iter(c.decode(video=0))).to_ndarray(format="rgb24").astype(int)
+    lit = img.sum(axis=2) > 120  # drummers and kits under their spots, not the dark stage
+    cols = np.flatnonzero(lit.any(axis=0))
+    assert cols.size, "nothing drawn"
+    left, right = lit[:, :160].sum(), lit[:, 160:].sum()
+    assert left > 150 and right > 150, (left, right)  # one drummer on each side
+    assert not lit[:, 150:170].any(axis=0).all()  # with a gap between them
+    out = tmp_path / "duo.mp4"
+    assert main(["render", "--stage", str(tmp_path / "duo.toml"), "-o", str(out), "--size",
+                 "160x90", "--fps", "5", "--tail", "0"]) == 0  # fmt: skip
+    with av.open(str(out)) as c:
+        audio = np.concatenate([f.to_ndarray() for f in c.decode(audio=0)], axis=1)
+    assert np.abs(audio).max() > 0.05  # both parts' drum track

@@ -89,6 +89,9 @@ def register(sub: Subparsers) -> None:
                    "(default: the built-in kit)")  # fmt: skip
     add_motion_options(p)
     add_avatar_option(p)
+    p.add_argument("--stage", type=Path, metavar="TOML",
+                   help="render every drummer of a stage file on one stage instead of FILE "
+                   "(default: none)")  # fmt: skip
 
 
 def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap,
@@ -170,6 +173,8 @@ class ProgressBar:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.stage is not None:
+        return run_stage(args)
     from livedrummer.kit.loader import load_kit
     from livedrummer.render.overlay import OVERLAYS, parse_overlays
     from livedrummer.sticking.strategy import get_strategy
@@ -227,4 +232,44 @@ def run(args: argparse.Namespace) -> int:
         f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}; "
         f"{report.realtime:.2f}x real time"
     )
+    return 0
+
+
+def run_stage(args: argparse.Namespace) -> int:
+    """``render --stage``: every drummer of the stage file, on one stage, in one video."""
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.stage.stagefile import load_stage
+
+    from ..display.stage_export import StageDrummer, export_stage
+    from ..display.video import VideoSettings, check_video_target
+    from .staging import stage_parts
+
+    if args.file:
+        raise RenderOptionError("render: give a MIDI file or --stage, not both")
+    size = parse_size(args.size)
+    if not 1 <= args.fps <= 240:
+        raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
+    stage = load_stage(args.stage)
+    out = args.output
+    if out is None and args.frames_dir is None:
+        out = Path(args.stage.stem + ".mp4")
+    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset)
+    if out is not None:
+        check_video_target(out, settings)
+    drummers = []
+    for part in stage_parts(stage, args):
+        p = part.performer
+        kit = load_kit(p.kit)
+        own = argparse.Namespace(**{**vars(args), "preset": p.preset or args.preset,
+                                    "avatar": p.avatar or args.avatar})  # fmt: skip
+        avatar = avatar_of(own)
+        body = body_scene(own, part.performance, kit, part.note_map, avatar)
+        drummers.append(StageDrummer(body, part.performance, part.placement, avatar))
+    bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
+    report = export_stage(drummers, out=out, frames_dir=args.frames_dir, settings=settings,
+                          camera=args.camera, tail_s=args.tail, progress=bar)  # fmt: skip
+    where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
+    print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s, "
+          f"{len(drummers)} drummers ({stage.formation.shape}), {size[0]}x{size[1]} @ "
+          f"{args.fps} fps, camera {args.camera}; {report.realtime:.2f}x real time")  # fmt: skip
     return 0
