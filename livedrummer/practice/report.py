@@ -28,6 +28,7 @@ from __future__ import annotations
 import html
 import io
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -100,7 +101,7 @@ def take_report(
     ``bar_bpm``: the reference tempo of each bar.
     """
     grades = note_grades(notes)
-    title = f"Practice: {result.get('reference', 'take')}"
+    title = f"Practice: {Path(str(result.get('reference', 'take'))).name}"
     figures = (
         f"<p class='figures'><b>{result['hits']}</b> of {result['reference_notes']} notes hit, "
         f"{result['wrong_piece']} wrong piece, {result['missed']} missed, "
@@ -154,10 +155,18 @@ def _timeline_svg(notes: np.ndarray, grades: list[str], result: dict[str, Any]) 
             y = np.where(np.isnan(off), 0.0, off)
             marker = "x" if grade in ("missed", "wrong_piece") else "o"
             ax.scatter(t, y, s=12, c=colour, marker=marker, label=grade.replace("_", " "))
+        extra_t = [e["time_s"] for e in result.get("extra_notes", ()) if e["piece"] == PIECES[code]]
+        if extra_t:
+            ax.scatter(extra_t, np.full(len(extra_t), 0.85 * window), s=14, c="#777", marker="v",
+                       label="extra")  # fmt: skip
         ax.set_ylim(-window, window)
         ax.set_ylabel(f"{PIECES[code]}\nms", fontsize=8)
         ax.tick_params(labelsize=8)
-    axes[0, 0].legend(fontsize=7, ncol=5, loc="upper right")
+    handles: dict[str, Any] = {}
+    for ax in axes[:, 0]:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
+    axes[0, 0].legend(handles.values(), handles.keys(), fontsize=7, ncol=6, loc="upper right")
     axes[-1, 0].set_xlabel("reference time (s)")
     return _svg(fig)
 
