@@ -221,9 +221,8 @@ def _drift_svg(notes: np.ndarray, bar_of: np.ndarray, bar_bpm: np.ndarray) -> st
     plt = _pyplot()
     bars, tempo, median = bar_drift(notes, bar_of, bar_bpm)
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(10, 4.2), sharex=True)
-    shown = np.arange(int(bar_of.max()) + 1 if bar_of.size else 1)
-    ax1.step(shown + 1, bar_bpm[shown] if bar_bpm.size else shown * 0, where="mid",
-             color="#555", label="reference")  # fmt: skip
+    shown = np.unique(bar_of)
+    ax1.step(shown + 1, bar_bpm[shown], where="mid", color="#555", label="reference")
     ax1.plot(bars + 1, tempo, "o-", color="#3a7bd5", ms=3, label="you")
     ax1.set_ylabel("bpm")
     ax1.legend(fontsize=8)

@@ -26,9 +26,57 @@ from typing import Any
 from .common import Subparsers, add_channel_option, add_command, add_map_option
 
 
+class _AnyName(dict[str, argparse.ArgumentParser]):
+    """The action table, saying yes to any name (argparse checks a choice before it calls the
+    action; :class:`_Actions` then reads an unknown first word as ``play``'s reference)."""
+
+    def __contains__(self, key: object) -> bool:
+        return True
+
+
+class _Actions(argparse._SubParsersAction):  # type: ignore[type-arg]
+    """``practice REF.mid ...`` is ``practice play REF.mid ...``: a first word that is not an
+    action name is the reference of ``play``."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._name_parser_map = self.choices = _AnyName()
+
+    def add_parser(self, name: str, **kwargs: Any) -> argparse.ArgumentParser:
+        self._name_parser_map = dict(self._name_parser_map)  # argparse's own name check
+        try:
+            parser: argparse.ArgumentParser = super().add_parser(name, **kwargs)
+            return parser
+        finally:
+            self._name_parser_map = self.choices = _AnyName(self._name_parser_map)
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        if values and not dict.__contains__(self._name_parser_map, values[0]):
+            values = ["play", *values]
+        super().__call__(parser, namespace, values, option_string)
+
+
 def register(sub: Subparsers) -> None:
-    p = add_command(sub, "practice", _usage, "score a take against a reference; progress reports")
-    actions = p.add_subparsers(dest="action", metavar="ACTION")
+    from .practice_live import add_live_options
+
+    p = add_command(sub, "practice", _usage, "play along with a reference, scored note by note")
+    p.epilog = (
+        "Play along with a reference (practice REF.mid --virtual NAME | --midi PORT | --serial "
+        "DEV ...), score a recorded take (practice score REF.mid TAKE.mid), or see progress "
+        "(practice history)."
+    )
+    actions = p.add_subparsers(dest="action", metavar="ACTION", action=_Actions)
+    play = actions.add_parser("play", help="play along with a reference (the default action: "
+                              "practice REF.mid ...)", description="Play along with a reference "
+                              "to a click; each pass scored.")  # fmt: skip
+    add_live_options(play)
+    play.set_defaults(func=_run_live)
     sc = actions.add_parser("score", help="judge a recorded take against its reference",
                             description="Judge a recorded take against its reference, note "
                             "by note.")  # fmt: skip
@@ -39,6 +87,7 @@ def register(sub: Subparsers) -> None:
                     help="note map of the take (name or .toml; auto as for --map)")  # fmt: skip
     add_channel_option(sc)
     add_judge_options(sc)
+    add_pass_options(sc)
     sc.add_argument("--shift-ms", type=float, default=0.0,
                     help="add this to every take time before judging (ms)")  # fmt: skip
     sc.add_argument("--json", action="store_true", help="print one JSON object")
@@ -68,6 +117,45 @@ def add_judge_options(p: argparse.ArgumentParser) -> None:
                    help="on time within ±40 ms (easy) or ±20 ms (hard) (default easy)")  # fmt: skip
 
 
+def add_pass_options(p: argparse.ArgumentParser) -> None:
+    """``--tempo``, ``--bpm``, ``--bars``: the pass judged (score) or played (live)."""
+    speed = p.add_mutually_exclusive_group()
+    speed.add_argument("--tempo", type=float, metavar="SCALE",
+                       help="play the reference at this speed, e.g. 0.8 (default 1)")  # fmt: skip
+    speed.add_argument("--bpm", type=float,
+                       help="play the reference at this tempo (default: its own)")  # fmt: skip
+    p.add_argument("--bars", metavar="BAR:BAR",
+                   help="loop bars A to B of the reference, from 1 (default: all)")  # fmt: skip
+
+
+def pass_setup(args: argparse.Namespace, reference: Any) -> tuple[Any, float]:
+    """(segment, tempo scale) that ``--bars``, ``--tempo`` and ``--bpm`` ask for."""
+    from livedrummer.errors import ConfigError
+    from livedrummer.practice.plan import first_bpm, parse_loop, segment
+
+    try:
+        loop = None if args.bars is None else parse_loop(args.bars)
+        seg = segment(reference.grid, reference.duration_s, loop)
+    except ValueError as exc:
+        raise ConfigError(f"--bars: {exc}") from None
+    scale = 1.0
+    if args.tempo is not None:
+        if not 0.1 <= args.tempo <= 4.0:
+            raise ConfigError(f"--tempo {args.tempo:g}: expected 0.1..4")
+        scale = args.tempo
+    elif args.bpm is not None:
+        if not 20 <= args.bpm <= 400:
+            raise ConfigError(f"--bpm {args.bpm:g}: expected 20..400")
+        scale = args.bpm / first_bpm(reference.grid, seg)
+    return seg, scale
+
+
+def _run_live(args: argparse.Namespace) -> int:
+    from .practice_live import run_live
+
+    return run_live(args)
+
+
 def add_db_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--db", type=Path, metavar="FILE",
                    help="practice database (default: $LIVEDRUMMER_HOME/practice.sqlite when "
@@ -76,7 +164,7 @@ def add_db_option(p: argparse.ArgumentParser) -> None:
 
 
 def _usage(args: argparse.Namespace) -> int:
-    print("usage: livedrummer practice {score,history} ...", file=sys.stderr)
+    print("usage: livedrummer practice {REF.mid,score,history} ...", file=sys.stderr)
     return 2
 
 
@@ -117,14 +205,18 @@ def run_score(args: argparse.Namespace) -> int:
     played = take.onsets.copy()
     played["time_s"] += args.shift_ms / 1e3 - take_lead_s(args.take)
     played = played[np.argsort(played["time_s"], kind="stable")]
-    matching = match_take(ref.onsets, played, window_ms, pieces)
+    from livedrummer.practice.plan import pass_notes
+
+    seg, scale = pass_setup(args, ref)
+    expected = pass_notes(ref.onsets, seg, scale)
+    matching = match_take(expected, played, window_ms, pieces)
     result = summary(matching, level)
     result["reference"] = str(args.reference)
     result["take"] = str(args.take)
     if args.report is not None:
         from .practice_out import write_take_report
 
-        write_take_report(args.report, result, ref, matching)
+        write_take_report(args.report, result, ref, matching, seg, scale)
     if args.save:
         from ..practice.store import PracticeStore
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from livedrummer.errors import LivedrummerError
 from livedrummer.practice.match import Matching
+from livedrummer.practice.plan import Segment, pass_index
 from livedrummer.timeline.performance import Performance
 
 REPORT_KIT = "rock5"
@@ -40,16 +41,29 @@ def bars_of(performance: Performance, times_s: np.ndarray) -> tuple[np.ndarray, 
 
 
 def write_take_report(
-    path: Path, result: dict[str, Any], reference: Performance, matching: Matching
+    path: Path,
+    result: dict[str, Any],
+    reference: Performance,
+    matching: Matching,
+    seg: Segment | None = None,
+    scale: float = 1.0,
 ) -> None:
+    """The take's report; ``seg`` and ``scale``: the pass the take was judged against (its
+    notes' times are on the pass clock; see :mod:`livedrummer.practice.plan`)."""
     from livedrummer.kit.loader import load_kit
     from livedrummer.practice.report import take_report
     from livedrummer.sticking.strategy import stick_performance
 
     sticking = stick_performance(reference, load_kit(REPORT_KIT))
-    limbs = [sticking.limb_of(int(i)) for i in matching.notes["ref"].tolist()]
+    ref_i = matching.notes["ref"]
+    ref_t = matching.notes["time_s"]
+    if seg is not None:
+        ref_i = pass_index(reference.onsets, seg)[ref_i]
+        ref_t = seg.start_s + ref_t * scale
+    limbs = [sticking.limb_of(int(i)) for i in ref_i.tolist()]
     names = [None if limb is None else limb.value for limb in limbs]
-    bar_of, bpm = bars_of(reference, matching.notes["time_s"])
+    bar_of, bpm = bars_of(reference, ref_t)
+    bpm = bpm * scale
     _write(path, take_report(result, matching.notes, names, bar_of, bpm))
 
 

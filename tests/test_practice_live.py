@@ -1,0 +1,138 @@
+"""Live practice through a real JACK server: a scripted player on a virtual port; the live
+pass scores equal ``practice score`` of the take the rig wrote. Plus the plan's pure parts."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
+from livedrummer.practice.grade import Level
+from livedrummer.practice.live import LiveReadout, meter
+from livedrummer.practice.plan import Ramp, count_in, pass_bounds, pass_clicks, segment
+
+FUNK = "drummer1/eval_session/1_funk-groove1_138_beat_4-4.mid"
+
+
+def test_loop_segment_clicks_and_count_in(groove_dir: Path) -> None:
+    perf = read_midi_file(groove_dir / FUNK, load_note_map("roland-td"))
+    seg = segment(perf.grid, perf.duration_s, (2, 3))
+    beat = 60 / 138
+    assert seg.start_s == pytest.approx(4 * beat, abs=1e-3)
+    assert seg.end_s == pytest.approx(12 * beat, abs=1e-3)
+    times, accents = pass_clicks(perf.grid, seg, 0.5)
+    assert times.size == 8 and accents.tolist() == [True, False, False, False] * 2
+    assert times[1] == pytest.approx(2 * beat, abs=1e-3)  # half speed
+    quiet, _ = pass_clicks(perf.grid, seg, 1.0, quiet=(1, 1))
+    assert quiet.size == 4  # the second bar is silent
+    cin, cacc = count_in(perf.grid, seg, 1.0, 2)
+    assert cin.size == 8 and cin[0] == pytest.approx(-8 * beat, abs=1e-3) and cacc[0]
+    with pytest.raises(ValueError, match="bars"):
+        segment(perf.grid, perf.duration_s, (2, 999))
+
+
+def test_pass_bounds_and_ramp() -> None:
+    assert pass_bounds([10.0, 14.0], [4.0, 4.0], 0.1, 0.1) == [(9.9, 13.95), (13.95, 18.1)]
+    up = Ramp(4.0, target_bpm=108.0)
+    assert up.next_bpm(100.0, 90.0) == 104.0
+    assert up.next_bpm(106.0, 90.0) == 108.0
+    assert up.next_bpm(108.0, 90.0) is None
+    assert Ramp(-5.0, min_accuracy_pct=80.0).next_bpm(100.0, 70.0) is None
+
+
+def test_readout_streak_and_meter() -> None:
+    r = LiveReadout(np.array([1.0, 1.5, 2.0]), np.array([1, 1, 1]), 100.0, Level.EASY)
+    a = r.process(1.010, 1)
+    b = r.process(1.560, 1)
+    c = r.process(2.300, 1)
+    assert (a.on_time, a.streak, b.on_time, b.streak) == (True, 1, False, 0)
+    assert c.offset_ms is None
+    assert meter(20.0) == "-----|-*---" and meter(-80.0) == "*----|-----"
+
+
+rtmidi = pytest.importorskip("rtmidi")
+
+
+def wait_port(name: str, timeout_s: float = 20.0) -> str:
+    probe = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "probe")
+    try:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            hits = [q for q in probe.get_ports() if q.endswith(f":{name}")]
+            if hits:
+                return str(hits[0])
+            time.sleep(0.05)
+        raise AssertionError(f"no JACK input port {name!r}: {probe.get_ports()}")
+    finally:
+        probe.delete()
+
+
+def test_live_pass_equals_score_of_its_take(jack_server: str, groove_dir: Path,
+                                            tmp_path: Path) -> None:  # fmt: skip
+    ref = groove_dir / FUNK
+    take = tmp_path / "take.mid"
+    env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "services", "practice", str(ref), "--virtual", "pads", "--api",
+         "jack", "--map", "roland-td", "--bars", "2:3", "--count-in", "1", "--no-sound",
+         "--json", "--take", str(take), "--seconds", "40", "--passes", "1"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        plan = json.loads(proc.stdout.readline())
+        assert plan["pass"] == 1 and plan["bars"] == [2, 3]
+        out = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "player")
+        out.open_port(out.get_ports().index(wait_port("pads")))
+        notes = plan["notes"]
+        rng = np.random.default_rng(2)
+        offsets = np.clip(rng.normal(8.0, 10.0, len(notes)), -30, 30) / 1e3
+        skip = {3, 11}  # missed
+        moved = 7  # played on tom1 (no tom1 in this groove)
+        sent = 0
+        for i, (t, note, velocity) in enumerate(notes):
+            if i in skip:
+                continue
+            while time.monotonic() < t + offsets[i]:
+                time.sleep(0.0002)
+            out.send_message([0x99, 48 if i == moved else note, velocity])
+            sent += 1
+        out.close_port()
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, stderr
+    lines = [json.loads(line) for line in stdout.splitlines()]
+    hits = [ln["hit"] for ln in lines if "hit" in ln]
+    assert len(hits) == sent, (lines[-1], [h["time_s"] for h in hits][:6])
+    live = next(ln for ln in lines if "pass_result" in ln)
+    assert (live["missed"], live["wrong_piece"], live["extra"]) == (2, 1, 0)
+    assert live["hits"] == len(notes) - 3
+    assert lines[-1]["done"] and lines[-1]["passes"] == 1
+    scored = subprocess.run(
+        [sys.executable, "-m", "services", "practice", "score", str(ref), str(take), "--map",
+         "roland-td", "--take-map", "roland-td", "--bars", "2:3", "--json"],
+        capture_output=True, text=True, timeout=60, env=env,
+    )  # fmt: skip
+    assert scored.returncode == 0, scored.stderr
+    score = json.loads(scored.stdout)
+    for key in ("reference_notes", "hits", "missed", "wrong_piece", "extra", "perfect", "good"):
+        assert score[key] == live[key], key
+    assert score["mean_offset_ms"] == pytest.approx(live["mean_offset_ms"], abs=0.2)
+    pairs = zip(score["notes"], live["notes"], strict=True)
+    assert all(a["result"] == b["result"] for a, b in pairs)
+    assert live["mean_offset_ms"] == pytest.approx(1e3 * offsets.mean(), abs=6.0)  # + MIDI path
+    history = subprocess.run(
+        [sys.executable, "-m", "services", "practice", "history", "--json"],
+        capture_output=True, text=True, timeout=60, env=env,
+    )  # fmt: skip
+    assert json.loads(history.stdout)["sessions"][0]["kind"] == "live"
