@@ -45,6 +45,7 @@ def test_pass_bounds_and_ramp() -> None:
     assert up.next_bpm(100.0, 90.0) == 104.0
     assert up.next_bpm(106.0, 90.0) == 108.0
     assert up.next_bpm(108.0, 90.0) is None
+    assert up.next_bpm(107.99998, 90.0) is None  # a grid's 108 bpm is not exactly 108
     assert Ramp(-5.0, min_accuracy_pct=80.0).next_bpm(100.0, 70.0) is None
 
 

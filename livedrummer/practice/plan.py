@@ -166,7 +166,8 @@ def pass_bounds(
 @dataclass(frozen=True)
 class Ramp:
     """Auto up/down: ``step_bpm`` after each pass (negative: down), stopping after the pass at
-    ``target_bpm`` (None: no target) or once a pass's accuracy is below ``min_accuracy_pct``."""
+    ``target_bpm`` (within 0.01 bpm; None: no target) or once a pass's accuracy is below
+    ``min_accuracy_pct``."""
 
     step_bpm: float
     target_bpm: float | None = None
@@ -177,8 +178,8 @@ class Ramp:
         if self.min_accuracy_pct is not None and accuracy_pct < self.min_accuracy_pct:
             return None
         if self.target_bpm is not None:
-            if (self.step_bpm >= 0 and bpm >= self.target_bpm - 1e-9) or (
-                self.step_bpm < 0 and bpm <= self.target_bpm + 1e-9
+            if (self.step_bpm >= 0 and bpm >= self.target_bpm - 0.01) or (
+                self.step_bpm < 0 and bpm <= self.target_bpm + 0.01
             ):
                 return None
             nxt = bpm + self.step_bpm

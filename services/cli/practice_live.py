@@ -204,6 +204,7 @@ def run_live(args: argparse.Namespace) -> int:
     planned: list[Pass] = []
     finished: list[Pass] = []
     stray = 0
+    reports: list[tuple[Pass, dict[str, Any], Any]] = []
     stopped = ""
     started = clock.now()
     try:
@@ -241,7 +242,7 @@ def run_live(args: argparse.Namespace) -> int:
                                   "accuracy_pct": round(line.accuracy_pct, 3)}})  # fmt: skip
                 else:
                     print(f"  {line.text()}", flush=True)
-            for p, (_, hi) in zip(planned, bounds, strict=True):
+            for p, (_, hi) in zip(list(planned), bounds, strict=True):
                 if p.result is not None or clock.now() < hi + SETTLE_S:
                     continue
                 hits = np.array(p.hits, dtype=ONSET_DTYPE)
@@ -252,7 +253,9 @@ def run_live(args: argparse.Namespace) -> int:
                               bpm=round(p.bpm, 3), bars=[seg.first_bar, seg.last_bar])  # fmt: skip
                 p.result = result
                 finished.append(p)
-                _keep(args, p, result, ref, matching, seg, hits)
+                _keep(args, p, result, hits)
+                if args.report is not None:
+                    reports.append((p, result, matching))
                 if args.json:
                     emit({"pass_result": p.number, **result})
                 else:
@@ -274,6 +277,13 @@ def run_live(args: argparse.Namespace) -> int:
         if player is not None:
             player.close()
         source.close()
+    for p, result, matching in reports:  # after the session: a report takes seconds to draw
+        from .practice_out import write_take_report
+
+        where = numbered(args.report, p.number)
+        write_take_report(where, result, ref, matching, seg, p.scale)
+        if not args.json:
+            print(f"report: {where}")
     if args.json:
         emit({"done": True, "passes": len(finished), "stray_hits": stray,
               "stopped": stopped or None})  # fmt: skip
@@ -283,24 +293,12 @@ def run_live(args: argparse.Namespace) -> int:
     return 0
 
 
-def _keep(
-    args: argparse.Namespace,
-    p: Pass,
-    result: dict[str, Any],
-    ref: Any,
-    matching: Any,
-    seg: Any,
-    hits: Any,
-) -> None:
-    """Write the pass's take and report, and store it (see the module docstring)."""
+def _keep(args: argparse.Namespace, p: Pass, result: dict[str, Any], hits: Any) -> None:
+    """Write the pass's take and store it (see the module docstring); both take milliseconds."""
     if args.take is not None:
         from ..practice.take import write_take
 
         write_take(numbered(args.take, p.number), hits)
-    if args.report is not None:
-        from .practice_out import write_take_report
-
-        write_take_report(numbered(args.report, p.number), result, ref, matching, seg, p.scale)
     if not args.no_save:
         from ..practice.store import PracticeStore
 
