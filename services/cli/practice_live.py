@@ -7,7 +7,9 @@ BAR:BAR`` (loop A-B; not spelled ``--loop``: ``input --loop`` is a flag, and one
 takes one kind of value in every command), for ``--passes N``. Hits come from the same
 sources as ``calibrate`` (through :func:`~.common.kit_source`; their times are the driver
 stamps on the shared clock, plus calibration.toml's ``input_ms``) and are decoded with
-``--take-map`` (the kit's note map).
+``--take-map`` (the kit's note map). A pass cut short (``--seconds``, Ctrl-C) is judged on the
+notes due a window before the stop, without the hits after them that match none, and marked
+``partial`` (its take, scored later against the whole pass, counts the rest as missed).
 
 Each hit gets a provisional line at once (:mod:`livedrummer.practice.live`: early/late meter,
 streak, running accuracy); when a pass is over (its end plus the window) all its hits are judged
@@ -30,6 +32,7 @@ player can follow), per hit, per pass result (the ``practice score --json`` obje
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from dataclasses import dataclass, field
@@ -200,11 +203,40 @@ def run_live(args: argparse.Namespace) -> int:
         cin, _ = count_in(ref.grid, seg, sc, 1)
         return float(-cin[0]) if cin.size else 2.0 / sc
 
-    source.open()
     planned: list[Pass] = []
     finished: list[Pass] = []
-    stray = 0
     reports: list[tuple[Pass, dict[str, Any], Any]] = []
+
+    def finish(p: Pass, due_s: float | None) -> dict[str, Any]:
+        """Judge pass ``p`` (only its notes due by ``due_s`` when it was cut short), print,
+        keep and queue its report."""
+        hits = np.array(p.hits, dtype=ONSET_DTYPE)
+        hits = hits[np.argsort(hits["time_s"], kind="stable")]
+        notes = p.notes if due_s is None else p.notes[p.notes["time_s"] <= due_s]
+        matching = match_take(notes, hits, window_ms, pieces)
+        if due_s is not None:  # a hit after the last note judged, left over: not counted
+            early = matching.played_s[matching.extra] <= due_s
+            matching = dataclasses.replace(matching, extra=matching.extra[early])
+        result = summary(matching, level)
+        result.update(reference=str(args.reference), pass_number=p.number,
+                      bpm=round(p.bpm, 3), bars=[seg.first_bar, seg.last_bar],
+                      partial=due_s is not None)  # fmt: skip
+        p.result = result
+        finished.append(p)
+        _keep(args, p, result, hits)
+        if args.report is not None:
+            reports.append((p, result, matching))
+        if args.json:
+            emit({"pass_result": p.number, **result})
+        else:
+            cut = f", stopped {due_s:.1f} s in" if due_s is not None else ""
+            print(f"pass {p.number} ({p.bpm:.1f} bpm{cut}):", flush=True)
+            for text in summary_lines(result):
+                print(f"  {text}", flush=True)
+        return result
+
+    source.open()
+    stray = 0
     stopped = ""
     started = clock.now()
     try:
@@ -245,23 +277,7 @@ def run_live(args: argparse.Namespace) -> int:
             for p, (_, hi) in zip(list(planned), bounds, strict=True):
                 if p.result is not None or clock.now() < hi + SETTLE_S:
                     continue
-                hits = np.array(p.hits, dtype=ONSET_DTYPE)
-                hits = hits[np.argsort(hits["time_s"], kind="stable")]
-                matching = match_take(p.notes, hits, window_ms, pieces)
-                result = summary(matching, level)
-                result.update(reference=str(args.reference), pass_number=p.number,
-                              bpm=round(p.bpm, 3), bars=[seg.first_bar, seg.last_bar])  # fmt: skip
-                p.result = result
-                finished.append(p)
-                _keep(args, p, result, hits)
-                if args.report is not None:
-                    reports.append((p, result, matching))
-                if args.json:
-                    emit({"pass_result": p.number, **result})
-                else:
-                    print(f"pass {p.number} ({p.bpm:.1f} bpm):", flush=True)
-                    for text in summary_lines(result):
-                        print(f"  {text}", flush=True)
+                result = finish(p, None)
                 if ramp is not None and p.number < passes_max:
                     nxt = ramp.next_bpm(p.bpm, result["accuracy_pct"])
                     if nxt is not None and nxt > 0:
@@ -277,6 +293,10 @@ def run_live(args: argparse.Namespace) -> int:
         if player is not None:
             player.close()
         source.close()
+    end = clock.now()
+    for p in planned:  # a pass cut short: judged on the notes due before the stop
+        if p.result is None and p.start_s < end and p.hits:
+            finish(p, end - p.start_s - window_s)
     for p, result, matching in reports:  # after the session: a report takes seconds to draw
         from .practice_out import write_take_report
 
