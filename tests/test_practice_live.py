@@ -13,11 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from livedrummer.kit.vocabulary import INSTRUMENT_CODE
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
-from livedrummer.practice.grade import Level
+from livedrummer.practice.grade import Level, tally
 from livedrummer.practice.live import LiveReadout, meter
+from livedrummer.practice.match import Result, match_take, piece_codes
 from livedrummer.practice.plan import Ramp, count_in, pass_bounds, pass_clicks, segment
+from livedrummer.timeline.events import ONSET_DTYPE
 
 FUNK = "drummer1/eval_session/1_funk-groove1_138_beat_4-4.mid"
 
@@ -57,6 +60,29 @@ def test_readout_streak_and_meter() -> None:
     assert (a.on_time, a.streak, b.on_time, b.streak) == (True, 1, False, 0)
     assert c.offset_ms is None
     assert meter(20.0) == "-----|-*---" and meter(-80.0) == "*----|-----"
+
+
+def test_readout_agrees_with_the_offline_judge_when_hits_are_unambiguous() -> None:
+    """Fed one hit at a time, the provisional readout pairs hits as match_take does wherever
+    no two hits fight over one note (notes of one piece farther apart than two windows)."""
+    rng = np.random.default_rng(9)
+    ref = np.zeros(120, dtype=ONSET_DTYPE)
+    ref["time_s"] = np.arange(120) * 0.125
+    ref["instrument"] = [INSTRUMENT_CODE[("kick", "snare", "hihat")[i % 3]] for i in range(120)]
+    played = ref.copy()
+    played["time_s"] += rng.normal(0.0, 0.025, ref.size)
+    played = np.delete(played, [5, 40, 77])
+    played = played[np.argsort(played["time_s"])]
+    readout = LiveReadout(ref["time_s"], piece_codes(ref), 100.0, Level.EASY)
+    live = [readout.process(float(h["time_s"]), int(c)) for h, c in
+            zip(played, piece_codes(played), strict=True)]  # fmt: skip
+    offline = match_take(ref, played)
+    hit = offline.notes["result"] == Result.HIT
+    want = sorted(np.round(offline.notes["offset_ms"][hit], 6).tolist())
+    got = sorted(round(x.offset_ms, 6) for x in live if x.offset_ms is not None)
+    assert got == want and len(got) == 117
+    whole = tally(offline.notes, offline.extra.size).accuracy_pct
+    assert live[-1].accuracy_pct == pytest.approx(whole, abs=1e-9)
 
 
 rtmidi = pytest.importorskip("rtmidi")

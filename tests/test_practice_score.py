@@ -12,6 +12,9 @@ from pathlib import Path
 
 import pytest
 
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
+from services.practice.take import write_take
 from tests.practice_takes import plant_take
 
 SCRIPT = Path(sys.executable).parent / "livedrummer"
@@ -65,6 +68,25 @@ def test_text_output_and_pieces(groove_dir: Path, tmp_path: Path) -> None:
     assert [ln.split()[0] for ln in lines[3:]] == ["snare"]
 
 
+def test_align_first_judges_an_export_that_starts_at_its_first_hit(
+    groove_dir: Path, tmp_path: Path
+) -> None:
+    ref = groove_dir / SOUL
+    take = tmp_path / "take.mid"
+    planted = plant_take(ref, take, seed=3, deleted=2, moved=0, extra=0, sd_ms=0.0, mean_ms=0.0)
+    export = tmp_path / "export.mid"
+    notes = read_midi_file(take, load_note_map("roland-td")).onsets
+    notes["time_s"] -= float(notes["time_s"][0]) - 1.0  # + the take's 1 s lead: starts at 0
+    write_take(export, notes, lead_s=0.0)
+    plain = run("practice", "score", str(ref), str(export), "--map", "roland-td", "--take-map",
+                "roland-td", "--json")  # fmt: skip
+    aligned = run("practice", "score", str(ref), str(export), "--map", "roland-td", "--take-map",
+                  "roland-td", "--json", "--align", "first")  # fmt: skip
+    assert json.loads(aligned.stdout)["hits"] == planted.hits
+    assert json.loads(aligned.stdout)["mean_offset_ms"] == pytest.approx(0.0, abs=0.5)
+    assert json.loads(plain.stdout)["hits"] < planted.hits
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
@@ -78,6 +100,23 @@ def test_bad_options_one_line(groove_dir: Path, args: list[str], message: str) -
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines()[-1].startswith("livedrummer: error: ")
     assert message in proc.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--bars", "9:999"], "--bars: 9:999: the reference has"),
+        (["--bars", "3"], "--bars: '3': expected BAR:BAR"),
+        (["--quiet-count", "0:1"], "--quiet-count 0:1: expected ON:OFF"),
+        (["--tempo", "9"], "--tempo 9: expected 0.1..4"),
+    ],
+)
+def test_live_bad_options_one_line_before_any_device(
+    groove_dir: Path, args: list[str], message: str
+) -> None:
+    proc = run("practice", str(groove_dir / SOUL), "--serial", "/nonexistent/tty", *args)
+    assert proc.returncode == 2
+    assert message in proc.stderr.strip().splitlines()[-1], proc.stderr
 
 
 def test_truncated_take_one_line_exit_2(groove_dir: Path, tmp_path: Path) -> None:

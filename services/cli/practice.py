@@ -12,7 +12,9 @@ JSON object with ``--json``. ``--report FILE.html`` writes the self-contained HT
 The take is judged on the reference's clock: a take the practice rig wrote
 (:mod:`services.practice.take`) says in a marker where the reference starts in it, and that
 lead is subtracted; any other file is judged as written, its time zero the reference's.
-``--shift-ms`` moves the whole take (a known input offset) before judging.
+``--shift-ms`` moves the whole take (a known input offset) before judging; ``--align first``
+moves it so its first hit lands on the reference's first note (a ``sessions export`` starts at
+its first hit, wherever the reference started).
 """
 
 from __future__ import annotations
@@ -90,6 +92,9 @@ def register(sub: Subparsers) -> None:
     add_pass_options(sc)
     sc.add_argument("--shift-ms", type=float, default=0.0,
                     help="add this to every take time before judging (ms)")  # fmt: skip
+    sc.add_argument("--align", choices=("none", "first"), default="none",
+                    help="first: move the take so its first hit lands on the reference's first "
+                    "note (a sessions export starts at its first hit) (default none)")  # fmt: skip
     sc.add_argument("--json", action="store_true", help="print one JSON object")
     sc.add_argument("--report", type=Path, metavar="FILE.html",
                     help="write a self-contained HTML report (default: none)")  # fmt: skip
@@ -209,6 +214,8 @@ def run_score(args: argparse.Namespace) -> int:
 
     seg, scale = pass_setup(args, ref)
     expected = pass_notes(ref.onsets, seg, scale)
+    if args.align == "first" and played.size and expected.size:
+        played["time_s"] += float(expected["time_s"][0]) - float(played["time_s"][0])
     matching = match_take(expected, played, window_ms, pieces)
     result = summary(matching, level)
     result["reference"] = str(args.reference)
