@@ -167,7 +167,7 @@ def _timeline_svg(notes: np.ndarray, grades: list[str], result: dict[str, Any]) 
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             handles.setdefault(label, handle)
     axes[0, 0].legend(handles.values(), handles.keys(), fontsize=7, ncol=6, loc="upper right")
-    axes[-1, 0].set_xlabel("reference time (s)")
+    axes[-1, 0].set_xlabel("time (s) from the start of the reference or loop, at the tempo played")
     return _svg(fig)
 
 
@@ -219,12 +219,20 @@ def bar_drift(
 
 def _drift_svg(notes: np.ndarray, bar_of: np.ndarray, bar_bpm: np.ndarray) -> str:
     plt = _pyplot()
+    from matplotlib.ticker import MaxNLocator
+
     bars, tempo, median = bar_drift(notes, bar_of, bar_bpm)
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(10, 4.2), sharex=True)
     shown = np.unique(bar_of)
     ax1.step(shown + 1, bar_bpm[shown], where="mid", color="#555", label="reference")
     ax1.plot(bars + 1, tempo, "o-", color="#3a7bd5", ms=3, label="you")
     ax1.set_ylabel("bpm")
+    if shown.size:  # at least ±5 bpm around the reference, so a hair's drift looks like one
+        values = np.concatenate([bar_bpm[shown], tempo])
+        mid = float(np.median(bar_bpm[shown]))
+        span = max(5.0, float(np.max(np.abs(values - mid))) * 1.1)
+        ax1.set_ylim(mid - span, mid + span)
+    ax2.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax1.legend(fontsize=8)
     ax2.axhline(0, color="#555", lw=0.6)
     ax2.bar(bars + 1, median, color=np.where(median > 0, "#e07a5f", "#3d85c6"))

@@ -220,7 +220,9 @@ def run_live(args: argparse.Namespace) -> int:
         result = summary(matching, level)
         result.update(reference=str(args.reference), pass_number=p.number,
                       bpm=round(p.bpm, 3), bars=[seg.first_bar, seg.last_bar],
-                      partial=due_s is not None)  # fmt: skip
+                      partial=due_s is not None,
+                      take=str(numbered(args.take, p.number)) if args.take else
+                      f"live pass {p.number}")  # fmt: skip
         p.result = result
         finished.append(p)
         _keep(args, p, result, hits)
