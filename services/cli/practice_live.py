@@ -295,6 +295,11 @@ def run_live(args: argparse.Namespace) -> int:
         if player is not None:
             player.close()
         source.close()
+    stats = source.decode_stats()
+    if stats is not None and stats.unknown_notes:  # a keyboard's keys outside the drum map
+        listed = ", ".join(f"note {k} x{v}" for k, v in sorted(stats.unknown_notes.items()))
+        print(f"practice: hits the map {note_map.name} does not know (not judged): {listed}",
+              file=sys.stderr)  # fmt: skip
     end = clock.now()
     for p in planned:  # a pass cut short: judged on the notes due before the stop
         if p.result is None and p.start_s < end and p.hits:
