@@ -163,3 +163,30 @@ def test_live_pass_equals_score_of_its_take(jack_server: str, groove_dir: Path,
         capture_output=True, text=True, timeout=60, env=env,
     )  # fmt: skip
     assert json.loads(history.stdout)["sessions"][0]["kind"] == "live"
+
+
+def test_ramp_and_quiet_count_drill(jack_server: str, groove_dir: Path, tmp_path: Path) -> None:
+    """Auto up: 240 then 260 bpm, stopping at the target; the click is silent every other bar;
+    a pass nobody played is all missed and kept in the database."""
+    env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
+    proc = subprocess.run(
+        [sys.executable, "-m", "services", "practice", str(groove_dir / FUNK), "--virtual", "p",
+         "--api", "jack", "--map", "roland-td", "--bars", "2:3", "--bpm", "240", "--ramp", "20",
+         "--ramp-target", "260", "--quiet-count", "1:1", "--no-sound", "--json"],
+        capture_output=True, text=True, timeout=60, env=env,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    lines = [json.loads(line) for line in proc.stdout.splitlines()]
+    plans = [ln for ln in lines if "notes" in ln and "pass" in ln]
+    assert [p["bpm"] for p in plans] == [240.0, 260.0]
+    for p in plans:
+        beat = 60.0 / p["bpm"]
+        clicks = np.array(p["clicks_s"]) - p["start_s"]
+        # one count-in bar, then only the first of the two bars (the second is quiet)
+        assert clicks == pytest.approx(np.array([-4, -3, -2, -1, 0, 1, 2, 3]) * beat, abs=1e-6)
+    results = [ln for ln in lines if "pass_result" in ln]
+    assert [r["missed"] for r in results] == [r["reference_notes"] for r in results]
+    assert lines[-1]["passes"] == 2
+    hist = subprocess.run([sys.executable, "-m", "services", "practice", "history", "--json"],
+                          capture_output=True, text=True, timeout=60, env=env)  # fmt: skip
+    assert [s["kind"] for s in json.loads(hist.stdout)["sessions"]] == ["live", "live"]
