@@ -43,7 +43,11 @@ def test_loop_segment_clicks_and_count_in(groove_dir: Path) -> None:
 
 
 def test_pass_bounds_and_ramp() -> None:
-    assert pass_bounds([10.0, 14.0], [4.0, 4.0], 0.1, 0.1) == [(9.9, 13.95), (13.95, 18.1)]
+    # first note 0.02 s in, last 3.9 s in: passes meet halfway between 13.9 and 14.02
+    bounds = pass_bounds([10.0, 14.0], [4.0, 4.0], 0.02, 3.9, [1.0, 1.0], 0.1)
+    assert np.allclose(bounds, [(9.92, 13.96), (13.96, 18.1)])
+    half = pass_bounds([10.0], [8.0], 0.02, 3.9, [0.5], 0.1)  # half speed: all times double
+    assert np.allclose(half, [(9.94, 18.1)])
     up = Ramp(4.0, target_bpm=108.0)
     assert up.next_bpm(100.0, 90.0) == 104.0
     assert up.next_bpm(106.0, 90.0) == 108.0

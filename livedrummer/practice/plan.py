@@ -15,10 +15,12 @@ click for OFF bars after every ON bars of a pass (the count-in always sounds). *
 (:class:`Ramp`) changes the bpm by a step after each pass and stops at a target or when a
 pass's accuracy falls below a threshold.
 
-Which pass a hit belongs to: pass p owns hits from its start minus the window (pass 1) or the
-previous pass's cut, up to the next pass's start minus a cut of min(window, half the gap
-between the segment's last note and its end); the last pass owns hits up to its end plus the
-window. A hit in the count-in before that belongs to no pass.
+A note up to 40 ms before a barline belongs to the bar after it (:data:`EARLY_S`): a human
+reference's downbeat is often played a little early, and it belongs to its bar, not to the end
+of the bar before (so it may lie a few ms before the pass starts). Which pass a hit belongs to:
+pass 1 owns hits from its first note minus the window; a pass gives way to the next halfway
+between its last note and the next pass's first; the last pass owns hits up to its end (or last
+note) plus the window. A hit in the count-in before that belongs to no pass.
 
 Limits: a meter change inside the loop is followed; a tempo ramp inside the reference is kept
 (scaled), not flattened.
@@ -42,6 +44,7 @@ class Segment:
     end_s: float
     first_bar: int
     last_bar: int
+    to_end: bool = False  # the segment runs to the reference's end (nothing after it)
 
 
 def parse_loop(spec: str) -> tuple[int, int]:
@@ -59,7 +62,7 @@ def segment(grid: Grid, duration_s: float, loop: tuple[int, int] | None) -> Segm
     """The whole reference (time 0 to its end), or bars ``loop`` of its grid."""
     bars = int(grid.bar[-1]) + 1 if grid.bar.size else 0
     if loop is None:
-        return Segment(0.0, float(duration_s), 1, max(1, bars))
+        return Segment(0.0, float(duration_s), 1, max(1, bars), to_end=True)
     a, b = loop
     if b > bars:
         raise ValueError(f"{a}:{b}: the reference has {bars} bars")
@@ -72,7 +75,7 @@ def segment(grid: Grid, duration_s: float, loop: tuple[int, int] | None) -> Segm
         last = np.flatnonzero(grid.bar == b - 1)
         step = float(np.median(np.diff(grid.beat_s))) if grid.beat_s.size > 1 else 0.5
         end = float(grid.beat_s[last[-1]]) + step
-    return Segment(start, end, a, b)
+    return Segment(start, end, a, b, to_end=b == bars)
 
 
 def first_bpm(grid: Grid, seg: Segment) -> float:
@@ -84,10 +87,18 @@ def first_bpm(grid: Grid, seg: Segment) -> float:
     return 60.0 / float(beats[i + 1] - beats[i])
 
 
+#: A note played up to this long before a barline belongs to the bar after it (a human
+#: reference's downbeat is often a little early).
+EARLY_S = 0.04
+
+
 def pass_index(onsets: np.ndarray, seg: Segment) -> np.ndarray:
-    """Indices of the reference's onsets inside ``seg``."""
+    """Indices of the reference's onsets inside ``seg``: from :data:`EARLY_S` before its
+    start to :data:`EARLY_S` before its end (to the reference's end when it runs there)."""
     t = onsets["time_s"]
-    out: np.ndarray = np.flatnonzero((t >= seg.start_s) & (t < seg.end_s))
+    lo = seg.start_s - EARLY_S if seg.start_s > 0 else -np.inf
+    hi = np.inf if seg.to_end else seg.end_s - EARLY_S
+    out: np.ndarray = np.flatnonzero((t >= lo) & (t < hi))
     return out
 
 
@@ -148,17 +159,21 @@ def pass_length_bar(beats: np.ndarray, grid: Grid, seg: Segment, scale: float) -
 
 
 def pass_bounds(
-    starts_s: list[float], length_s: list[float], window_s: float, tail_gap_s: float
-) -> list[tuple[float, float]]:
-    """[from, to) on the shared clock of the hits each pass owns (see the module docstring);
-    ``tail_gap_s``: from the segment's last note to its end, on each pass's clock (the
-    smallest over passes is safe)."""
-    cut = min(window_s, tail_gap_s / 2)
+    starts_s: list[float], length_s: list[float], first_s: float, last_s: float,
+    scales: list[float], window_s: float,
+) -> list[tuple[float, float]]:  # fmt: skip
+    """[from, to) on the shared clock of the hits each pass owns (see the module docstring).
+
+    ``first_s``/``last_s``: the segment's first and last note on the pass clock at scale 1
+    (each pass's own ``scales`` stretch them)."""
     out: list[tuple[float, float]] = []
     for p, start in enumerate(starts_s):
-        lo = start - window_s if p == 0 else out[-1][1]
-        last = p == len(starts_s) - 1
-        hi = start + length_s[p] + window_s if last else starts_s[p + 1] - cut
+        lo = start + first_s / scales[p] - window_s if p == 0 else out[-1][1]
+        if p == len(starts_s) - 1:
+            hi = max(start + length_s[p], start + last_s / scales[p]) + window_s
+        else:  # halfway between this pass's last note and the next pass's first
+            nxt = starts_s[p + 1] + first_s / scales[p + 1]
+            hi = (start + last_s / scales[p] + nxt) / 2
         out.append((lo, hi))
     return out
 

@@ -14,10 +14,12 @@ notes due a window before the stop, without the hits after them that match none,
 Each hit gets a provisional line at once (:mod:`livedrummer.practice.live`: early/late meter,
 streak, running accuracy); when a pass is over (its end plus the window) all its hits are judged
 with :func:`~livedrummer.practice.match.match_take` against the pass's notes
-(:mod:`livedrummer.practice.plan`) and its summary printed, stored in the practice database
-(``--no-save`` not to), written as a take (``--take FILE.mid``; pass k>1 as FILE-passK.mid) and
-as a report (``--report FILE.html``, likewise). ``practice score REF FILE.mid`` with the same
-``--bars/--tempo/--bpm`` judges the take file exactly as the pass was judged.
+(:mod:`livedrummer.practice.plan`), doubled notes merged first (one note twice within 1 ms, as
+every MIDI file is read, so the take file holds what was judged), and its summary printed,
+stored in the practice database (``--no-save`` not to), written as a take (``--take
+FILE.mid``; pass k>1 as FILE-passK.mid) and as a report (``--report FILE.html``, likewise).
+``practice score REF FILE.mid`` with the same ``--bars/--tempo/--bpm`` judges the take file
+exactly as the pass was judged.
 
 Drills: ``--pieces`` (time check of selected pieces), ``--quiet-count ON:OFF`` (the click drops
 out for OFF bars after ON bars), ``--ramp BPM`` with ``--ramp-target``/``--ramp-min-accuracy``
@@ -113,7 +115,7 @@ def run_live(args: argparse.Namespace) -> int:
 
     from livedrummer.errors import ConfigError, LivedrummerError
     from livedrummer.live.calibration import Calibration
-    from livedrummer.midi.decode import MessageDecoder
+    from livedrummer.midi.decode import MessageDecoder, merge_doubled_notes
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.practice.grade import summary
     from livedrummer.practice.live import LiveReadout
@@ -170,9 +172,9 @@ def run_live(args: argparse.Namespace) -> int:
             player = ClickPlayer(args.click_sound, args.click_level)
         except Exception as exc:  # PortAudio has many ways to fail; the rig still works
             print(f"practice: no sound ({exc}); playing without a click", file=sys.stderr)
-    notes_once = pass_notes(ref.onsets, seg, 1.0)
-    last_note = float(notes_once["time_s"].max()) if notes_once.size else 0.0
-    tail_gap_s = (seg.end_s - seg.start_s) - last_note  # at scale 1; scaled below
+    notes_once = pass_notes(ref.onsets, seg, 1.0)["time_s"]
+    first_note = float(notes_once.min()) if notes_once.size else 0.0
+    last_note = float(notes_once.max()) if notes_once.size else seg.end_s - seg.start_s
 
     def emit(obj: dict[str, Any]) -> None:
         print(json.dumps(obj), flush=True)
@@ -211,7 +213,7 @@ def run_live(args: argparse.Namespace) -> int:
         """Judge pass ``p`` (only its notes due by ``due_s`` when it was cut short), print,
         keep and queue its report."""
         hits = np.array(p.hits, dtype=ONSET_DTYPE)
-        hits = hits[np.argsort(hits["time_s"], kind="stable")]
+        hits = merge_doubled_notes(hits[np.argsort(hits["time_s"], kind="stable")])
         notes = p.notes if due_s is None else p.notes[p.notes["time_s"] <= due_s]
         matching = match_take(notes, hits, window_ms, pieces)
         if due_s is not None:  # a hit after the last note judged, left over: not counted
@@ -254,7 +256,8 @@ def run_live(args: argparse.Namespace) -> int:
                 stopped = "--seconds"
                 break
             bounds = pass_bounds([p.start_s for p in planned], [p.length_s for p in planned],
-                                 window_s, tail_gap_s / max(p.scale for p in planned))  # fmt: skip
+                                 first_note, last_note, [p.scale for p in planned],
+                                 window_s)  # fmt: skip
             for event in source.read(0.002):
                 if not isinstance(event, Onset):
                     continue
