@@ -119,7 +119,7 @@ def run_live(args: argparse.Namespace) -> int:
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.practice.grade import summary
     from livedrummer.practice.live import LiveReadout
-    from livedrummer.practice.match import match_take, piece_codes
+    from livedrummer.practice.match import PIECES, match_take, piece_codes
     from livedrummer.practice.plan import (
         Ramp,
         count_in,
@@ -187,7 +187,9 @@ def run_live(args: argparse.Namespace) -> int:
         acc = np.concatenate([cacc, accents])
         if player is not None:
             player.schedule(times, acc)
-        readout = LiveReadout(notes["time_s"], piece_codes(notes), window_ms, level)
+        codes = piece_codes(notes)
+        judged = np.ones(codes.size, bool) if pieces is None else np.isin(codes, list(pieces))
+        readout = LiveReadout(notes["time_s"][judged], codes[judged], window_ms, level)
         ps = Pass(number, start_s, sc, base_bpm * sc, notes, pass_length_s(seg, sc), readout)
         if args.json:
             emit({"pass": number, "start_s": start_s, "bpm": round(ps.bpm, 3), "scale": sc,
@@ -270,11 +272,13 @@ def run_live(args: argparse.Namespace) -> int:
                 rec = list(event.to_record())
                 rec[0] = t - owner.start_s
                 owner.hits.append(tuple(rec))
-                line = owner.readout.process(rec[0], int(piece_codes(
-                    np.array([tuple(rec)], dtype=ONSET_DTYPE))[0]))  # fmt: skip
+                code = int(piece_codes(np.array([tuple(rec)], dtype=ONSET_DTYPE))[0])
+                if pieces is not None and code not in pieces:
+                    continue  # not judged (--pieces): kept for the wrong-piece step only
+                line = owner.readout.process(rec[0], code)
                 if args.json:
                     emit({"hit": {"pass": owner.number, "time_s": round(line.time_s, 6),
-                                  "piece": int(line.piece), "offset_ms": line.offset_ms,
+                                  "piece": PIECES[line.piece], "offset_ms": line.offset_ms,
                                   "on_time": line.on_time, "streak": line.streak,
                                   "accuracy_pct": round(line.accuracy_pct, 3)}})  # fmt: skip
                 else:
