@@ -1,0 +1,1 @@
+"""Practice rig: judge a take against a reference (matching, grades), pure logic."""

@@ -1,0 +1,1 @@
+"""The practice rig's I/O: its session database."""
