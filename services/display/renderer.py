@@ -41,7 +41,7 @@ from livedrummer.body.skeleton import N_JOINTS
 from livedrummer.render.camera import Camera, look_at, perspective
 from livedrummer.render.geometry import Mesh, all_meshes
 from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
-from livedrummer.render.scene import SceneFrame, Skeleton, Tone
+from livedrummer.render.scene import SceneFrame, Skeleton, Tone, empty_channels
 from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
 
 from .avatar_gl import SkinnedDraw
@@ -194,9 +194,7 @@ class Renderer:
 
     def upload(self, frame: SceneFrame | None) -> None:
         """Copy one frame's kit channels, joints and sticks into the instance buffers."""
-        channels = (
-            frame.channels if frame is not None else np.zeros((self.kit_mesh.pieces, 4), np.float32)
-        )
+        channels = frame.channels if frame is not None else empty_channels(self.kit_mesh.pieces)
         inst = self.kit_mesh.instances(channels)
         for _vao, buf, idx in self._kit_vaos:
             buf.write(inst[idx].tobytes())
