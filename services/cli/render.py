@@ -10,6 +10,9 @@ bar goes to stderr and only when stderr is a terminal; the summary line goes to 
 ``--overlay score,joints`` adds SMED's scrolling score and the joint-angle graph as strips at
 the bottom of the frame. ``--soundfont FILE.sf2`` plays the drum track with that General MIDI
 SoundFont's kit (FluidSynth, :mod:`livedrummer.audio.soundfont`) instead of the built-in one.
+``--background`` puts a colour, an image, chroma green or nothing (alpha: RGBA PNGs, or a
+``.mov`` ProRes 4444 / ``.webm`` VP9 video with alpha, the default output then ``.mov``)
+behind the stage.
 """
 
 from __future__ import annotations
@@ -29,12 +32,14 @@ from .common import (
     DEMO_MAP,
     Subparsers,
     add_avatar_option,
+    add_background_option,
     add_channel_option,
     add_command,
     add_kit_option,
     add_motion_options,
     add_renamed,
     avatar_of,
+    background_of,
     check_aa,
     demo_groove,
     read_performance,
@@ -81,6 +86,7 @@ def register(sub: Subparsers) -> None:
                    "(default: the built-in kit)")  # fmt: skip
     add_motion_options(p)
     add_avatar_option(p)
+    add_background_option(p)
 
 
 def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap,
@@ -173,11 +179,13 @@ def run(args: argparse.Namespace) -> int:
     # option is the one line on stderr.
     kit = load_kit(args.kit)
     avatar = avatar_of(args)
+    background = background_of(args)
     get_strategy(args.sticking)
     out = args.output
     if out is None and args.frames_dir is None:
-        out = Path(source.stem + ".mp4")
-    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset)
+        out = Path(source.stem + (".mov" if background.transparent else ".mp4"))
+    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset,
+                             alpha=background.transparent)  # fmt: skip
     if out is not None:
         check_video_target(out, settings)
     performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
@@ -188,7 +196,7 @@ def run(args: argparse.Namespace) -> int:
     report = export(
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar, overlays=overlays,
-        soundfont=args.soundfont, avatar=avatar,
+        soundfont=args.soundfont, avatar=avatar, background=background,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
@@ -197,7 +205,8 @@ def run(args: argparse.Namespace) -> int:
         f"sticking {args.sticking}"
         f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"
         f"{', drum track 48 kHz stereo' if out is not None else ''}"
-        f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}; "
+        f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}"
+        f"{', background ' + args.background if args.background else ''}; "
         f"{report.realtime:.2f}x real time"
     )
     return 0

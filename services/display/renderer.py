@@ -26,6 +26,9 @@ look up with a hardware-compared 2x2 filter (``shaders/shadow.glsl``). Limits: o
 light; the kit's surfaces are opaque (the avatar's BLEND parts cast no shadow); every surface
 is lit by the same rig; the window must set :attr:`Renderer.size` when its framebuffer is
 resized.
+The frame is cleared to the ``background`` (:mod:`livedrummer.render.background`: the dark hall,
+a colour, chroma green, alpha 0, or an image stretched over it first by a full-screen pass);
+the floor is blended last so its rim fades into whatever is behind it.
 :meth:`Renderer.draw_overlay` blends a 2D RGBA image (the score and joint-angle strips of
 :mod:`livedrummer.render.overlay_raster`) over the drawn frame (``shaders/overlay.frag``).
 """
@@ -38,6 +41,7 @@ import numpy as np
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.body.skeleton import N_JOINTS
+from livedrummer.render.background import HALL, Background
 from livedrummer.render.camera import Camera, look_at, perspective
 from livedrummer.render.geometry import Mesh, all_meshes
 from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
@@ -46,7 +50,7 @@ from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
 
 from .avatar_gl import SkinnedDraw
 
-BACKGROUND = (0.02, 0.02, 0.035)
+BACKGROUND = HALL
 #: colour per :class:`Tone`
 PALETTE = np.zeros((len(Tone), 3), np.float32)
 PALETTE[Tone.SHIRT] = (0.14, 0.26, 0.50)
@@ -77,8 +81,11 @@ class Renderer:
         offscreen: bool = True,
         avatar: Avatar | Literal["mannequin"] | None = None,
         shadows: bool = True,
+        background: Background | None = None,
     ) -> None:
         self.ctx = ctx
+        self.background = background if background is not None else Background()
+        self._background_pass: tuple[Any, Any] | None = None
         self.kit_mesh = kit_mesh
         self.skeleton = skeleton
         self.size = size
@@ -230,7 +237,11 @@ class Renderer:
         self.ctx.viewport = (0, 0, w, h)
         self.ctx.enable(moderngl.DEPTH_TEST)
         self.ctx.disable(moderngl.CULL_FACE)
-        fbo.clear(*BACKGROUND, 1.0, depth=1.0)
+        bg = self.background
+        fbo.clear(*bg.rgb, bg.alpha, depth=1.0)
+        if bg.image is not None:
+            self._draw_background_image(bg.image)
+            self.ctx.enable(moderngl.DEPTH_TEST)
         self.upload(frame)
         vp = camera.view_projection(w / h)
         centre = self.kit_mesh.model[0, :3, 3] if len(self.kit_mesh.model) else np.zeros(3)
@@ -269,8 +280,35 @@ class Renderer:
             self._seg_vao.render(instances=self._seg_count)
             if self._ball_count:
                 self._ball_vao.render(instances=self._ball_count)
-        for vao, _buf, idx in self._kit_vaos:
+        for name, (vao, _buf, idx) in zip(self._kit_groups, self._kit_vaos, strict=True):
+            if name == "floor":  # its rim fades into whatever background is behind it
+                self.ctx.enable(moderngl.BLEND)
+                self.ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
+                                       moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)  # fmt: skip
             vao.render(instances=len(idx))
+        self.ctx.disable(moderngl.BLEND)
+
+    def _draw_background_image(self, image: np.ndarray) -> None:
+        """Stretch ``image`` ((H, W, 3) uint8, top row first) over the whole frame, writing no
+        depth; its texture is made once (``overlay.frag`` with the frame as its rectangle)."""
+        import moderngl
+
+        if self._background_pass is None:
+            prog = self.ctx.program(vertex_shader=shader_source("fullscreen.vert"),
+                                    fragment_shader=shader_source("overlay.frag"))  # fmt: skip
+            prog["u_image"].value = 0
+            h, w = image.shape[:2]
+            rgba = np.dstack([image, np.full((h, w), 255, np.uint8)])
+            tex = self.ctx.texture((w, h), 4, np.ascontiguousarray(rgba).tobytes())
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            self._background_pass = (self.ctx.vertex_array(prog, []), tex)
+        vao, tex = self._background_pass
+        w, h = self.size
+        vao.program["u_rect"].value = (0.0, 0.0, float(w), float(h))
+        self.ctx.disable(moderngl.DEPTH_TEST)
+        tex.use(location=0)
+        vao.render(moderngl.TRIANGLES, vertices=3)
 
     def _shadow_pass(self, light_vp: np.ndarray) -> None:
         """Draw every caster depth-only from the key light into the shadow map."""
@@ -352,6 +390,10 @@ class Renderer:
         return np.frombuffer(self._resolve.read(components=4, alignment=1), np.uint8).reshape(
             h, w, 4
         )
+
+    def read_rgba_top(self) -> np.ndarray:
+        """The last off-screen frame as (H, W, 4) uint8 with its alpha, top row first (PNG)."""
+        return np.ascontiguousarray(self.read_rgba()[::-1])
 
     def read_i420(self) -> np.ndarray:
         """The last off-screen frame as I420, (H*3/2, W) uint8, top row first.

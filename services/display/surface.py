@@ -73,7 +73,7 @@ class WindowSurface:
         self._glfw, self._window, self._ctx = glfw, window, ctx
         size = glfw.get_framebuffer_size(window)
         self.renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False,
-                                 avatar=avatar)  # fmt: skip
+                                 avatar=avatar, background=options.background)  # fmt: skip
         self._cameras = kit_cameras(kit)
         start = self._cameras[options.camera]
         self._move = CameraMove(start, start, 0.0, 0.0)

@@ -30,6 +30,7 @@ from typing import Any
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
+from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CAMERA_NAMES, Camera, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
@@ -55,6 +56,7 @@ class WindowOptions:
     quit_after_s: float | None = None  # close by itself (demos, smoke tests)
     overlays: frozenset[str] = frozenset()  # strips shown first: "score", "joints"
     screenshot: Path | None = None  # the last frame drawn, written as a PNG when it closes
+    background: Background | None = None  # behind the stage (None: the dark hall)
 
 
 DEFAULT_OPTIONS = WindowOptions()
@@ -206,7 +208,8 @@ def _loop(
     move = CameraMove(cameras[options.camera], cameras[options.camera], 0.0, 0.0)
     mesh = build_kit_mesh(kit)
     size = glfw.get_framebuffer_size(window)
-    renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False, avatar=avatar)
+    renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False, avatar=avatar,
+                        background=options.background)  # fmt: skip
     models = OverlayModels(body, transport.duration_s)
     shown = frozenset(options.overlays)
     strips = overlay_image(size, shown, models)
