@@ -348,6 +348,20 @@ def check_aa(samples: int) -> None:
         raise ConfigError(f"--aa {samples}: expected one of {allowed} (0: no multisampling)")
 
 
+def parse_aa(text: str) -> tuple[int, bool]:
+    """``--aa fxaa|N`` of ``render``: (multisample count, FXAA pass), one line when bad."""
+    from livedrummer.errors import ConfigError
+
+    value = str(text).strip().lower()
+    if value == "fxaa":
+        return 0, True
+    if not value.isdigit():
+        allowed = ", ".join(str(n) for n in AA_SAMPLES)
+        raise ConfigError(f"--aa {text}: expected fxaa or one of {allowed}")
+    check_aa(int(value))
+    return int(value), False
+
+
 def kit_source(args: argparse.Namespace, clock: Any, decoder: Any) -> Any:
     """The ``--midi PORT | --virtual NAME | --serial DEV`` source (a
     ``services.input.base.MidiSource``) of ``monitor``, ``map learn``, ``calibrate`` and

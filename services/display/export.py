@@ -97,6 +97,7 @@ def export(
     soundfont: Path | None = None,
     avatar: Avatar | None = None,
     background: Background | None = None,
+    fxaa: bool = False,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
@@ -132,7 +133,8 @@ def export(
     try:
         ctx = headless_context()
         renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
-                            samples=samples, avatar=avatar, background=background)  # fmt: skip
+                            samples=samples, avatar=avatar, background=background,
+                            fxaa=fxaa)  # fmt: skip
         alpha = background is not None and background.transparent
         gpu_yuv = i420_ok(settings.size) and not alpha
         strips = overlay_image(settings.size, overlays, OverlayModels(body, n / fps))
