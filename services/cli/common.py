@@ -224,7 +224,11 @@ def add_kit_option(parser: argparse.ArgumentParser) -> None:
 def add_background_option(parser: Any, transparent: bool = True) -> None:
     """``--background COLOUR|IMAGE|chroma|transparent``: what is behind the stage
     (:mod:`livedrummer.render.background`); a window cannot be ``transparent``."""
-    kinds = "#rrggbb, an image file, chroma" + (" or transparent" if transparent else "")
+    kinds = (
+        "#rrggbb, an image file, chroma or transparent"
+        if transparent
+        else ("#rrggbb, an image file or chroma")
+    )
     parser.add_argument(
         "--background", metavar="COLOUR|IMAGE|chroma" + ("|transparent" if transparent else ""),
         help=f"behind the stage: {kinds} (default: the dark hall)",
