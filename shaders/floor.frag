@@ -1,7 +1,7 @@
 #version 330
 // The stage floor, cheaper than lit.frag because it covers most of the frame: planks, and a
 // pool of key light around the kit that fades into the dark hall (no specular, no rim), in
-// which the drummer and the kit cast the key light's shadow.
+// which the drummer and the kit cast the key light's shadow. The rim fades to transparent.
 #include "shadow.glsl"
 uniform vec3 u_stage_centre;
 uniform float u_stage_radius;
@@ -20,5 +20,6 @@ void main() {
     pool *= mix(0.45, 1.0, key_shadow(v_pos, vec3(0.0, 0.0, 1.0)));
     float plank = 0.88 + 0.12 * step(0.5, fract(v_pos.x * 6.0));
     vec3 c = v_color.rgb * plank * (0.12 + 1.25 * pool * pool) * vec3(1.05, 0.95, 0.85);
-    f_color = vec4(c, 1.0);
+    // the rim fades out (blended), into the hall, a colour, an image or alpha 0 alike
+    f_color = vec4(c, 1.0 - smoothstep(0.85 * u_stage_radius, u_stage_radius, d));
 }

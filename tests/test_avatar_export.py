@@ -92,13 +92,14 @@ def test_exported_skin_matches_our_skinning(tmp_path: Path) -> None:
 def test_kit_moves_as_the_renderer_moves_it(tmp_path: Path) -> None:
     from livedrummer.kit.loader import load_kit
     from livedrummer.render.kitmesh import build_kit_mesh
+    from livedrummer.render.scene import N_CHANNELS
 
     avatar = load_avatar_file(af.write(tmp_path, "short.glb"))
     sk = build_skeleton(avatar.lengths)
     kit = build_kit_mesh(load_kit("rock5"), floor=False)
     rng = np.random.default_rng(9)
     t = 4
-    channels = rng.uniform(-0.2, 0.2, (t, kit.pieces, 4))
+    channels = rng.uniform(-0.2, 0.2, (t, kit.pieces, N_CHANNELS))
     local = np.tile([1.0, 0, 0, 0], (t, N_JOINTS, 1))
     root = np.tile(sk.root_m, (t, 1))
     data = performance_glb(avatar, sk, np.arange(t) / 10.0, local, root, kit, channels)

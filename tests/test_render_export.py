@@ -174,9 +174,11 @@ def test_video_colours_match_the_rendered_frames(groove: Path, tmp_path: Path, s
     # The same frames twice: as PNGs (the renderer's RGB read-back) and as H.264 (converted to
     # I420 on the GPU; a width that is not a multiple of 8 takes the CPU conversion). PyAV
     # decodes the video back to RGB with the stream's own colour metadata; 4:2:0 and x264 blur
-    # edges, so compare the mean colour of a grid of regions.
+    # edges, so compare the mean colour of a grid of regions. CRF 12 keeps x264's own loss
+    # (what this test does not measure) well under the bound: at CRF 16 the last frame of the
+    # 164-wide clip came to 4.2 once the feet and footboards moved, against 2.5 at CRF 12.
     argv = ["render", str(groove), "--size", size, "--fps", "10", "--tail", "0",
-            "--camera", "front", "--crf", "16"]  # fmt: skip
+            "--camera", "front", "--crf", "12"]  # fmt: skip
     out = tmp_path / "out.mp4"
     assert main([*argv, "-o", str(out)]) == 0
     assert main([*argv, "--frames-dir", str(tmp_path / "frames")]) == 0

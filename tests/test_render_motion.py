@@ -7,8 +7,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from livedrummer.body.animation import FOOT_LIFT_M
+from livedrummer.body.channels import BEATER_MAX_RAD, PEDAL_MAX_RAD
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import JOINTS, PARENTS, J
+from livedrummer.kit.behaviour import footboard_angle
 from livedrummer.kit.loader import load_kit
 from livedrummer.render.body_scene import (
     BODY_SKELETON,
@@ -16,7 +19,14 @@ from livedrummer.render.body_scene import (
     scene_channels,
     stick_segments,
 )
-from livedrummer.render.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE, CH_WOBBLE_AZIMUTH
+from livedrummer.render.scene import (
+    CH_HIGHLIGHT,
+    CH_PEDAL,
+    CH_TRAVEL,
+    CH_WOBBLE,
+    CH_WOBBLE_AZIMUTH,
+    N_CHANNELS,
+)
 from livedrummer.render.transport import KEYS, SPEEDS, Transport
 
 KIT = load_kit("rock5")
@@ -47,22 +57,30 @@ def test_scene_skeleton_is_the_body_skeleton() -> None:
 def test_channels_follow_the_body_channels() -> None:
     rec = records(5)
     ch = scene_channels(rec, KIT)
-    assert ch.shape == (5, len(KIT.pieces), 4) and ch.dtype == np.float32
+    assert ch.shape == (5, len(KIT.pieces), N_CHANNELS) and ch.dtype == np.float32
     np.testing.assert_array_equal(ch[..., CH_HIGHLIGHT], rec["glow"])
     for name, piece in P.items():
         kind = KIT.pieces[piece].kind
         wobble, travel = ch[:, piece, CH_WOBBLE], ch[:, piece, CH_TRAVEL]
+        board = ch[:, piece, CH_PEDAL]
+        swing = rec["swing"][:, piece]
         if kind.value == "kick":  # the beater's angle back from the head
-            np.testing.assert_array_equal(travel, rec["swing"][:, piece])
+            np.testing.assert_array_equal(travel, swing)
             assert np.all(wobble == 0)
-        elif kind.value == "hihat":  # top cymbal's lift; the footboard is not drawn
+            foot = swing / BEATER_MAX_RAD
+            np.testing.assert_allclose(board, footboard_angle(FOOT_LIFT_M * foot), atol=1e-6)
+        elif kind.value == "hihat":  # top cymbal's lift; the board follows the foot
             np.testing.assert_array_equal(travel, rec["lift"][:, piece])
             assert np.all(wobble == 0)
-        elif kind.is_cymbal:
-            np.testing.assert_array_equal(wobble, rec["swing"][:, piece])
-            assert np.all(travel == 0), name
+            foot = swing / PEDAL_MAX_RAD
+            np.testing.assert_allclose(board, footboard_angle(FOOT_LIFT_M * foot), atol=1e-6)
+        elif kind.value in ("tom", "snare") or kind.is_cymbal:  # swing or shake when struck
+            np.testing.assert_array_equal(wobble, swing)
+            assert np.all(travel == 0) and np.all(board == 0), name
         else:
             assert np.all(wobble == 0) and np.all(travel == 0), name
+        if kind.value in ("kick", "hihat"):
+            assert np.all(board > 0), name
 
 
 def test_cymbal_wobble_dips_the_edge_nearest_the_drummer() -> None:

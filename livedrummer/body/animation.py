@@ -20,9 +20,10 @@ about its grip out of any surface it would still enter (never at a contact, wher
 lies on the surface).
 
 Feet: a scalar lift spline raises the ball of the foot above the footboard and the leg IK
-runs per sample; the same scalar drives the kick beater and the hi-hat pedal, and the
-hi-hat foot also follows the pedal controller (openness). A limb without notes hovers over
-its home piece (hands) or rests on its pedal (feet).
+runs per sample (the heel follows only part of the rise, so the ankle flexes: see
+:func:`~livedrummer.body.ik.foot_pitch`); the same scalar drives the kick beater and the
+hi-hat pedal, and the hi-hat foot also follows the pedal controller (openness). A limb without
+notes hovers over its home piece (hands) or rests on its pedal (feet).
 """
 
 from __future__ import annotations
@@ -190,7 +191,8 @@ class Animation:
             hip_j, knee_j, ankle_j, _ = LEG[side.upper()]
             hip = skel.root_m + skel.offsets[hip_j]
             toe = self.toe_target(side, times)
-            leg = solve_leg(skel.lengths, np.broadcast_to(hip, toe.shape), toe)
+            rise = FOOT_LIFT_M * self.foot_lift(side, times)
+            leg = solve_leg(skel.lengths, np.broadcast_to(hip, toe.shape), toe, rise)
             local[:, hip_j], local[:, knee_j], local[:, ankle_j] = leg_locals(leg)
         return local, np.broadcast_to(skel.root_m, (t, 3)).copy()
 

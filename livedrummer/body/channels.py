@@ -2,31 +2,35 @@
 
 Three float channels per piece (so a kit of any size maps to fixed-width arrays):
 
-* ``swing`` (radians): a cymbal's wobble, a kick beater's angle back from the head, a
-  hi-hat footboard's angle. Cymbals follow the virtual-drummer paper's decaying sinusoid
-  ``velocity * max_angle * eta**dt * sin(beta * dt)`` from their latest hit; a new hit
-  overrides the vibration in progress (the paper's rule, discontinuity included) and a choke
-  (aftertouch grab) silences it until the next hit. Beater and footboard follow the foot's
-  lift, the same curve that moves the foot, so foot and pedal cannot drift apart.
+* ``swing`` (radians): a cymbal's swing or a drum's shake after a hit, a kick beater's angle
+  back from the head, a hi-hat footboard's angle. Hits follow the virtual-drummer paper's
+  decaying sinusoid ``velocity * max_angle * eta**dt * sin(beta * dt)`` from the latest hit,
+  with each piece's own amplitude and frequency (a cymbal's from its size, a drum's short shake:
+  :func:`livedrummer.kit.behaviour.swing_of`); a new hit overrides the vibration in progress
+  (the paper's rule, discontinuity included) and a choke (aftertouch grab) silences it until
+  the next hit. Beater and footboard follow the foot's lift, the same curve that moves the
+  foot, so foot and pedal cannot drift apart.
 * ``lift`` (metres): the hi-hat top cymbal's height above closed, from the pedal controller.
 * ``glow`` (0..1): SMED's skin highlight, the latest hit's velocity decaying exponentially.
 
-Limits: one wobble axis per cymbal; no shell or stand motion.
+Which piece does what is :data:`livedrummer.kit.behaviour.BEHAVIOURS`, not this module.
+Limits: one wobble axis per piece; no stand motion.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from livedrummer.body.targets import HIHAT_MAX_LIFT_M, zone_target
+from livedrummer.kit.behaviour import BEHAVIOURS, HitMotion, PedalMotion, swing_of
 from livedrummer.kit.model import Piece
 from livedrummer.kit.vocabulary import PieceKind, Zone
 
 BEATER_LENGTH_M = 0.20
-BEATER_MAX_RAD = 0.9  # beater angle at full foot lift
-PEDAL_MAX_RAD = 0.35
+BEATER_MAX_RAD = BEHAVIOURS[PieceKind.KICK].pedal_swing_rad  # beater angle at full foot lift
+PEDAL_MAX_RAD = BEHAVIOURS[PieceKind.HIHAT].pedal_swing_rad
 
 
 @dataclass(frozen=True, slots=True)
@@ -35,6 +39,12 @@ class VibrationParams:
     eta: float = 0.08  # damping per second (0..1: smaller decays faster)
     beta: float = 2 * np.pi * 3.0  # rad/s
     glow_tau_s: float = 0.15
+
+
+def piece_vibration(piece: Piece, p: VibrationParams) -> VibrationParams:
+    """``p`` with the hit motion of ``piece`` (its kind and size; see the module docstring)."""
+    s = swing_of(piece)
+    return replace(p, max_angle_rad=s.max_angle_rad, eta=s.eta, beta=2 * np.pi * s.hz)
 
 
 def vibration(
@@ -98,7 +108,8 @@ def kit_channels(
     p: VibrationParams | None = None,
 ) -> KitChannels:
     """Channels for every piece; per-piece lists hold that piece's hits and chokes (sorted),
-    and the lift curve of the foot on its pedal (or None)."""
+    and the lift curve of the foot on its pedal (or None); ``p`` gives the glow's time constant,
+    each piece's hit motion is its own (:func:`piece_vibration`)."""
     p = p or VibrationParams()
     t = times.size
     swing = np.zeros((t, len(pieces)))
@@ -106,12 +117,16 @@ def kit_channels(
     lum = np.zeros((t, len(pieces)))
     for k, piece in enumerate(pieces):
         lum[:, k] = glow(times, hit_s[k], hit_velocity[k], p.glow_tau_s)
-        if piece.kind is PieceKind.HIHAT:
+        b = BEHAVIOURS[piece.kind]
+        foot = foot_lift[k]
+        if b.pedal is PedalMotion.HIHAT:
             lift[:, k] = HIHAT_MAX_LIFT_M * np.clip(openness, 0.0, 1.0)
-            if foot_lift[k] is not None:
-                swing[:, k] = PEDAL_MAX_RAD * foot_lift[k]  # type: ignore[operator]
-        elif piece.kind.is_cymbal:
-            swing[:, k] = vibration(times, hit_s[k], hit_velocity[k], choke_s[k], p)
-        elif piece.kind is PieceKind.KICK and foot_lift[k] is not None:
-            swing[:, k] = BEATER_MAX_RAD * np.clip(foot_lift[k], 0.0, None)  # type: ignore[arg-type]
+            if foot is not None:
+                swing[:, k] = b.pedal_swing_rad * foot
+        elif b.pedal is PedalMotion.BEATER:
+            if foot is not None:
+                swing[:, k] = b.pedal_swing_rad * np.clip(foot, 0.0, None)
+        elif b.hit is not HitMotion.NONE:
+            own = piece_vibration(piece, p)
+            swing[:, k] = vibration(times, hit_s[k], hit_velocity[k], choke_s[k], own)
     return KitChannels(swing, lift, lum)

@@ -17,7 +17,9 @@ first direction that fits is used. A target beyond the straight arm plus stick s
 
 Everything is vectorized over N strikes. Results are world rotations and positions of
 shoulder, elbow, wrist and stick. Legs: hip-knee-ankle triangle with the knee forward, the
-ball of the foot on the footboard, heel raised by a fixed angle.
+ball of the foot on the footboard, heel raised by an angle at rest; as the ball of the foot
+lifts off the board the heel follows by only :data:`HEEL_FOLLOW` of the rise, so the ankle
+flexes (:func:`foot_pitch`) the way a foot working a pedal does.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from livedrummer.body.skeleton import (
 GRIP_RAD = np.radians(18.0)  # hand axis turned down from the stick axis
 REACH_SLACK = 0.995  # never straighten an arm or leg completely
 HEEL_UP_RAD = np.radians(28.0)
+HEEL_FOLLOW = 0.3  # the heel rises this fraction of the ball of the foot's rise
 SIDEWAYS_DEG = (0.0, 20.0, -20.0, 40.0, -40.0, 60.0, -60.0)
 MAX_FLEXION_RAD = np.radians(140.0)  # contact poses fold the elbow no further than this
 MAX_BEND_RAD = np.radians(60.0)  # hand off the forearm at contact, before HAND_FOLLOW
@@ -213,12 +216,23 @@ class LegSolution:
     reached: np.ndarray
 
 
-def solve_leg(lengths: SegmentLengths, hip: np.ndarray, toe: np.ndarray) -> LegSolution:
-    """Leg poses putting the ball of the foot on ``toe`` (arrays over N samples)."""
+def foot_pitch(rise_m: np.ndarray, foot_m: float) -> np.ndarray:
+    """How far the foot turns up at the ankle (radians) when the ball of the foot is ``rise_m``
+    above the footboard and the heel follows by :data:`HEEL_FOLLOW` of that."""
+    drop = np.sin(HEEL_UP_RAD) - (1.0 - HEEL_FOLLOW) * np.maximum(rise_m, 0.0) / foot_m
+    out: np.ndarray = HEEL_UP_RAD - np.arcsin(np.clip(drop, -1.0, 1.0))
+    return out
+
+
+def solve_leg(lengths: SegmentLengths, hip: np.ndarray, toe: np.ndarray,
+              rise_m: np.ndarray | None = None) -> LegSolution:  # fmt: skip
+    """Leg poses putting the ball of the foot on ``toe`` (arrays over N samples), lifted
+    ``rise_m`` (N,) above its footboard (None: on it), which flexes the ankle."""
     s = lengths
     fwd = toe - hip
     fwd = _unit(np.concatenate([fwd[..., :2], np.zeros_like(fwd[..., :1])], axis=-1))
-    foot_dir = np.cos(HEEL_UP_RAD) * fwd - np.sin(HEEL_UP_RAD) * UP
+    heel = HEEL_UP_RAD if rise_m is None else (HEEL_UP_RAD - foot_pitch(rise_m, s.foot))[..., None]
+    foot_dir = np.cos(heel) * fwd - np.sin(heel) * UP
     ankle = toe - s.foot * foot_dir
     pole = fwd + 0.3 * UP
     knee, hinge, reached = two_bone(hip, ankle, s.thigh, s.shin, pole)

@@ -13,6 +13,7 @@ import numpy as np
 from livedrummer.body.animation import Animation
 from livedrummer.body.channels import KitChannels, VibrationParams, kit_channels
 from livedrummer.body.pose import pack_poses
+from livedrummer.kit.behaviour import BEHAVIOURS, PedalMotion
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import Limb, PieceKind, Zone
 from livedrummer.midi.notemap import NoteMap
@@ -59,8 +60,9 @@ def channels_at(
         hits_s.append(on["time_s"][m].astype(np.float64))
         hits_v.append(on["velocity"][m].astype(np.float64) / 127.0)
         foot = None
-        if piece.kind in (PieceKind.KICK, PieceKind.HIHAT):
-            limb = piece.limb_for(Zone.PEDAL if piece.kind is PieceKind.HIHAT else Zone.HEAD)
+        pedal = BEHAVIOURS[piece.kind].pedal
+        if pedal is not PedalMotion.NONE:
+            limb = piece.limb_for(Zone.PEDAL if pedal is PedalMotion.HIHAT else Zone.HEAD)
             side = "r" if limb in (Limb.RF, Limb.RH) else "l"
             foot = anim.foot_lift(side, times)
         feet.append(foot)

@@ -23,6 +23,7 @@ File layout (every key is checked; unknown keys are errors naming file, table an
     elasticity = 0.8
     pedal_position_m = [...]      # kick and hi-hat only (required there)
     double_pedal = false          # kick only
+    swing_deg = 7.0               # cymbals only, optional: largest swing (default by diameter)
 
     [[pair]]
     pieces = ["ride", "hihat"]    # pair(ride, hihat) ...
@@ -110,6 +111,7 @@ def _parse_piece(t: Table) -> Piece:
     needs_pedal = kind in (PieceKind.KICK, PieceKind.HIHAT)
     pedal = t.vector("pedal_position_m", 3) if needs_pedal else None
     double = t.boolean("double_pedal", False) if kind is PieceKind.KICK else False
+    swing = t.number("swing_deg", None, lo=0.0, hi=30.0) if kind.is_cymbal else None
     piece = Piece(
         name=name,
         kind=kind,
@@ -125,6 +127,7 @@ def _parse_piece(t: Table) -> Piece:
         elasticity=t.number("elasticity", lo=0.0, hi=1.0),
         pedal_position_m=pedal,
         double_pedal=double,
+        swing_deg=swing,
     )
     _check_above_floor(t, piece)
     t.done()

@@ -53,6 +53,7 @@ class Piece:
     elasticity: float
     pedal_position_m: Vec3 | None = None  # footboard, for kick and hi-hat
     double_pedal: bool = False
+    swing_deg: float | None = None  # cymbals: largest swing at full velocity (None: by size)
 
     @property
     def normal(self) -> np.ndarray:

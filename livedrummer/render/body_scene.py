@@ -13,12 +13,14 @@ model (the body's), and the renderer never learns how either is computed.
   the stick's tail behind the hand (:data:`STICK_TAIL_M`), right stick first.
 * Rotations: the body's world joint rotations (the records carry local ones; the product
   down the parent chain, :func:`world_rotations`), which a skinned avatar is posed with.
-* Kit channels: ``glow`` is the highlight; ``swing`` is a cymbal's wobble, and for the kick the
-  beater's angle back from the head, which the scene calls travel; ``lift`` (the hi-hat top
-  cymbal's height above closed, metres) is the hi-hat's travel. The hi-hat footboard's angle
-  (``swing`` on the hi-hat) has no scene channel and is not drawn. A cymbal wobbles about the
-  horizontal axis across the line from it to the throne, so a positive swing dips the edge
-  nearest the drummer, where the stick lands.
+* Kit channels: ``glow`` is the highlight; ``swing`` is a cymbal's swing or a drum's shake
+  (wobble), and for the kick the beater's angle back from the head, which the scene calls
+  travel; ``lift`` (the hi-hat top cymbal's height above closed, metres) is the hi-hat's
+  travel. On both pedal pieces the swing also gives the foot's lift, from which the footboard's
+  angle (pedal) is computed so the board stays under the ball of the foot. Which piece does
+  what is :data:`livedrummer.kit.behaviour.BEHAVIOURS`. A piece wobbles about the horizontal
+  axis across the line from it to the throne, so a positive swing dips the edge nearest the
+  drummer, where the stick lands.
 
 Frames are made for many times at once (:meth:`BodyScene.frames` samples in chunks, so memory
 stays bounded on long files). Limits: the body's pose is used as given (no smoothing between
@@ -33,17 +35,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.body import quat
+from livedrummer.body.animation import FOOT_LIFT_M
 from livedrummer.body.expression import Expression
 from livedrummer.body.perform import Performed, perform
 from livedrummer.body.rig import build_rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import JOINTS, PARENTS, J
 from livedrummer.body.strokes import StrokeParams
+from livedrummer.kit.behaviour import BEHAVIOURS, HitMotion, PedalMotion, footboard_angle
 from livedrummer.kit.model import Kit
-from livedrummer.kit.vocabulary import PieceKind
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.render.scene import (
     CH_HIGHLIGHT,
+    CH_PEDAL,
     CH_TRAVEL,
     CH_WOBBLE,
     CH_WOBBLE_AZIMUTH,
@@ -106,24 +110,38 @@ def stick_segments(position: np.ndarray) -> np.ndarray:
 
 
 def channel_roles(kit: Kit) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per piece: swing is wobble, swing is travel, lift is travel (bool (P,)), wobble azimuth."""
-    kinds = [p.kind for p in kit.pieces]
-    wobbles = np.array([k.is_cymbal and k is not PieceKind.HIHAT for k in kinds])
-    beater = np.array([k is PieceKind.KICK for k in kinds])
-    lifts = np.array([k is PieceKind.HIHAT for k in kinds])
+    """Per piece: swing is wobble, swing is travel, lift is travel (bool (P,)), wobble azimuth
+    (from :data:`~livedrummer.kit.behaviour.BEHAVIOURS`)."""
+    looks = [BEHAVIOURS[p.kind] for p in kit.pieces]
+    wobbles = np.array([b.hit is not HitMotion.NONE and b.pedal is PedalMotion.NONE
+                        for b in looks], bool)  # fmt: skip
+    beater = np.array([b.pedal is PedalMotion.BEATER for b in looks], bool)
+    lifts = np.array([b.pedal is PedalMotion.HIHAT for b in looks], bool)
     pos = np.array([p.position_m for p in kit.pieces], np.float64).reshape(-1, 3)
     azimuth = np.arctan2(-pos[:, 1], -pos[:, 0]) + np.pi / 2
     return wobbles, beater, lifts, azimuth
 
 
+def footboard_channel(poses: np.ndarray, kit: Kit) -> np.ndarray:
+    """Footboard angles (F, P) from the pose records: the body's swing on a pedal piece is
+    ``pedal_swing_rad`` per unit of foot lift, and the board turns so that the ball of the foot,
+    lifted ``FOOT_LIFT_M`` per unit, stays on it (a foot lifted further leaves the board)."""
+    per_lift = np.array([BEHAVIOURS[p.kind].pedal_swing_rad for p in kit.pieces], np.float64)
+    swing = np.asarray(poses["swing"], np.float64).reshape(-1, len(kit.pieces))
+    lift = np.where(per_lift > 0, swing / np.where(per_lift > 0, per_lift, 1.0), 0.0)
+    out: np.ndarray = np.where(per_lift > 0, footboard_angle(FOOT_LIFT_M * lift), 0.0)
+    return out
+
+
 def scene_channels(poses: np.ndarray, kit: Kit) -> np.ndarray:
-    """Kit channels (F, P, 4) float32 of the scene from pose records (F,)."""
+    """Kit channels (F, P, N_CHANNELS) float32 of the scene from pose records (F,)."""
     wobbles, beater, lifts, azimuth = channel_roles(kit)
     out = np.zeros((poses.size, len(kit.pieces), N_CHANNELS), np.float32)
     out[..., CH_HIGHLIGHT] = poses["glow"]
     out[..., CH_WOBBLE] = np.where(wobbles, poses["swing"], 0.0)
     out[..., CH_WOBBLE_AZIMUTH] = azimuth
     out[..., CH_TRAVEL] = np.where(beater, poses["swing"], np.where(lifts, poses["lift"], 0.0))
+    out[..., CH_PEDAL] = footboard_channel(poses, kit).reshape(out.shape[:-1])
     return out
 
 

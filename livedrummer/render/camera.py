@@ -8,8 +8,8 @@ another over a duration: the target moves in a straight line while the eye trave
 in spherical coordinates, so a move never passes through the kit.
 
 Matrices follow OpenGL conventions (right-handed eye space looking down -z, clip depth -1..1)
-and are returned row-major float32; the renderer transposes them for upload. Limits: no roll, no
-orbit/zoom by mouse yet (a window can add one by producing new cameras).
+and are returned row-major float32; the renderer transposes them for upload. Limits: no roll;
+mouse orbit, zoom and pan make new cameras in :mod:`livedrummer.render.orbit`.
 """
 
 from __future__ import annotations

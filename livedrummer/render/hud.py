@@ -29,6 +29,8 @@ HELP_LINES: tuple[str, ...] = (
     "+ -  SPEED     0  NORMAL SPEED",
     "M  MARK     [ ]  PREVIOUS / NEXT MARK",
     "1-8  CAMERAS     O  SCORE     G  JOINT ANGLES",
+    "SHIFT 1-8  STORE A VIEW (1-8 RECALLS IT)",
+    "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
     "F  FULL SCREEN     I  READOUT     H  HELP     Q ESC  QUIT",
 )
 PANEL_RGBA = (10, 10, 16, 170)
@@ -66,7 +68,9 @@ def live_lines(state: str, camera: str, show_help: bool = False) -> list[str]:
     """The readout for a live window: the performer's state and the camera."""
     lines = [f"LIVE   {state.upper()}   CAMERA {camera.upper()}   H HELP"]
     if show_help:
-        lines += ["", "1-8  CAMERAS     F  FULL SCREEN     I  READOUT     Q ESC  QUIT"]
+        lines += ["", "1-8  CAMERAS     SHIFT 1-8  STORE A VIEW",
+                  "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
+                  "F  FULL SCREEN     I  READOUT     Q ESC  QUIT"]  # fmt: skip
     return lines
 
 

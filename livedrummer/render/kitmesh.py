@@ -4,9 +4,10 @@ The kit file says where each piece's playing surface is, which way it faces and 
 (:mod:`livedrummer.kit.model`); this module turns that into instances of the unit meshes of
 :mod:`livedrummer.render.geometry`, so a mirrored or a user kit is drawn without code changes.
 It is built once per kit (:func:`build_kit_mesh`); per frame, :meth:`KitMesh.instances` applies
-the kit channels of :mod:`livedrummer.render.scene` (wobble about the playing-surface centre, hi-hat
-lift along the surface normal, kick beater swing about its pivot, hit highlight) to all
-instances at once with array operations.
+the kit channels of :mod:`livedrummer.render.scene` (a cymbal's swing or a drum's shake about the
+playing-surface centre, hi-hat lift along the surface normal, kick beater swing about its pivot,
+footboards turned about their heel hinge, hit highlight) to all instances at once with array
+operations. Which parts move how is read from :data:`livedrummer.kit.behaviour.BEHAVIOURS`.
 
 An instance is one float32 row of ``INSTANCE_FLOATS``: the model matrix (16, column-major as
 OpenGL reads it), colour (r, g, b, highlight) and material (metalness, shininess, kind,
@@ -22,13 +23,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from livedrummer.kit.behaviour import (
+    BEHAVIOURS,
+    FOOTBOARD_HINGE_M,
+    FOOTBOARD_REST_RAD,
+    HitMotion,
+    PedalMotion,
+)
 from livedrummer.kit.model import Kit, Piece
 from livedrummer.kit.vocabulary import PieceKind
-from livedrummer.render.scene import CH_HIGHLIGHT, CH_TRAVEL, CH_WOBBLE, CH_WOBBLE_AZIMUTH
+from livedrummer.render.scene import (
+    CH_HIGHLIGHT,
+    CH_PEDAL,
+    CH_TRAVEL,
+    CH_WOBBLE,
+    CH_WOBBLE_AZIMUTH,
+    N_CHANNELS,
+)
 
 INSTANCE_FLOATS = 24
 MATERIAL_PLAIN, MATERIAL_FLOOR, MATERIAL_CYMBAL, MATERIAL_HEAD = 0.0, 1.0, 2.0, 3.0
-MOTION_STATIC, MOTION_WOBBLE, MOTION_LIFT, MOTION_BEATER = 0, 1, 2, 3
+MOTION_STATIC, MOTION_WOBBLE, MOTION_LIFT, MOTION_BEATER, MOTION_PEDAL = 0, 1, 2, 3, 4
 
 #: colour (rgb), metalness, shininess, material kind
 LOOKS: dict[str, tuple[tuple[float, float, float], float, float, float]] = {
@@ -107,20 +122,22 @@ class KitMesh:
         return {name: np.flatnonzero(self.mesh == name) for name in sorted(set(self.mesh))}
 
     def instances(self, channels: np.ndarray) -> np.ndarray:
-        """All instance rows (N, INSTANCE_FLOATS) float32 with ``channels`` (P, 4) applied."""
+        """All instance rows (N, INSTANCE_FLOATS) float32 with ``channels`` (P, N_CHANNELS)
+        applied."""
         n = len(self.mesh)
-        ch = np.zeros((n, 4))
+        ch = np.zeros((n, N_CHANNELS))
         has = self.piece >= 0
         ch[has] = channels[self.piece[has]]
-        moving = self.motion != MOTION_STATIC
-        # Wobble: tilt about a horizontal axis through the playing-surface centre.
+        # Wobble: tilt about a horizontal axis through the playing-surface centre; beater and
+        # footboard: turn about their hinge by the travel or pedal channel.
         az = ch[:, CH_WOBBLE_AZIMUTH]
-        wobble_axis = np.stack([np.cos(az), np.sin(az), np.zeros(n)], axis=1)
-        angle = np.where(moving & (self.motion != MOTION_BEATER), ch[:, CH_WOBBLE], 0.0)
-        beater = self.motion == MOTION_BEATER
-        wobble_axis[beater] = self.axis[beater]
-        angle = np.where(beater, ch[:, CH_TRAVEL], angle)
-        rot = rotations(wobble_axis, angle)
+        axis = np.stack([np.cos(az), np.sin(az), np.zeros(n)], axis=1)
+        angle = np.where(self.motion == MOTION_WOBBLE, ch[:, CH_WOBBLE], 0.0)
+        for kind, column in ((MOTION_BEATER, CH_TRAVEL), (MOTION_PEDAL, CH_PEDAL)):
+            hinged = self.motion == kind
+            axis[hinged] = self.axis[hinged]
+            angle = np.where(hinged, ch[:, column], angle)
+        rot = rotations(axis, angle)
         motion = np.tile(np.eye(4), (n, 1, 1))
         motion[:, :3, :3] = rot
         motion[:, :3, 3] = self.pivot - np.einsum("nij,nj->ni", rot, self.pivot)
@@ -195,14 +212,24 @@ def _stand(b: _Builder, top: np.ndarray, foot_xy: np.ndarray, look: str = "stand
         b.add("rod", segment(knee, foot, 0.008), look)
 
 
-def _pedal(b: _Builder, pedal: np.ndarray, towards: np.ndarray) -> None:
+def _pedal(b: _Builder, pedal: np.ndarray, towards: np.ndarray, piece: int) -> None:
+    """A footboard whose middle is under the ball of the foot (``pedal``), hinged at its heel
+    end and turned up by the piece's pedal channel."""
     f = towards[:2] - pedal[:2]
     f = np.array([f[0], f[1], 0.0]) / max(float(np.hypot(*f)), 1e-9)
     x = np.cross(f, _Z)
     rot = np.stack([x, f, _Z], axis=1)
-    tilt = rotations(x[None], np.array([np.radians(14.0)]))[0]
-    b.add("cube", placed(pedal + np.array([0.0, 0.0, 0.035]), tilt @ rot, (0.09, 0.28, 0.015)),
-          "pedal")  # fmt: skip
+    tilt = rotations(x[None], np.array([FOOTBOARD_REST_RAD]))[0]
+    centre = pedal + np.array([0.0, 0.0, 0.035])
+    hinge = centre - FOOTBOARD_HINGE_M * (tilt @ f)
+    board = _Move(piece, MOTION_PEDAL, hinge, x)
+    b.add("cube", placed(centre, tilt @ rot, (0.09, 2 * FOOTBOARD_HINGE_M, 0.015)), "pedal",
+          move=board)  # fmt: skip
+    b.add("cube", placed(hinge - np.array([0.0, 0.0, 0.012]), rot, (0.11, 0.05, 0.02)), "pedal")
+
+
+def _moves_when_hit(p: Piece) -> bool:
+    return BEHAVIOURS[p.kind].hit is not HitMotion.NONE
 
 
 def _drum(b: _Builder, p: Piece, i: int) -> None:
@@ -210,7 +237,7 @@ def _drum(b: _Builder, p: Piece, i: int) -> None:
     n = p.normal
     rot = basis(n)
     bottom = c - n * p.depth_m
-    wob = _Move(i, MOTION_WOBBLE, c)
+    wob = _Move(i, MOTION_WOBBLE if _moves_when_hit(p) else MOTION_STATIC, c)
     shell = "snare_shell" if p.kind is PieceKind.SNARE else "shell"
     b.add("cylinder", placed(bottom, rot, (p.radius_m, p.radius_m, p.depth_m)), shell,
           highlight=0.3, move=wob)  # fmt: skip
@@ -218,13 +245,13 @@ def _drum(b: _Builder, p: Piece, i: int) -> None:
     for end in (c - n * 0.012, bottom - n * 0.004):
         b.add("cylinder", placed(end, rot, (p.radius_m * 1.025, p.radius_m * 1.025, 0.018)),
               "chrome", move=wob)  # fmt: skip
-    if p.kind is PieceKind.KICK:
+    if BEHAVIOURS[p.kind].pedal is PedalMotion.BEATER:
         flipped = rot * np.array([1.0, -1.0, -1.0])[None, :]
         b.add("disc", placed(bottom, flipped, (p.radius_m, p.radius_m, 1.0)), "front_head",
               highlight=0.6, move=wob)  # fmt: skip
         if p.pedal_position_m is not None:
             pedal = np.asarray(p.pedal_position_m, float)
-            _pedal(b, pedal, c)
+            _pedal(b, pedal, c, i)
             contact = c - np.array([0.0, 0.0, 0.08]) + n * 0.03
             pivot = contact + n * 0.12
             pivot[2] = pedal[2] + 0.07
@@ -245,8 +272,8 @@ def _cymbal(b: _Builder, p: Piece, i: int) -> None:
     n = p.normal
     rot = basis(n)
     r = p.radius_m
-    wob = _Move(i, MOTION_WOBBLE, c)
-    if p.kind is PieceKind.HIHAT:
+    wob = _Move(i, MOTION_WOBBLE if _moves_when_hit(p) else MOTION_STATIC, c)
+    if BEHAVIOURS[p.kind].pedal is PedalMotion.HIHAT:
         top = _Move(i, MOTION_LIFT, c, n)
         b.add("cymbal", placed(c - n * 0.05 * r, rot, (r, r, r)), "bronze", highlight=1.0, move=top)
         flipped = rot * np.array([1.0, -1.0, -1.0])[None, :]
@@ -254,7 +281,7 @@ def _cymbal(b: _Builder, p: Piece, i: int) -> None:
         b.add("rod", segment(c, c + n * 0.22, 0.005), "chrome", move=top)
         _stand(b, c - n * 0.04, c[:2])
         if p.pedal_position_m is not None:
-            _pedal(b, np.asarray(p.pedal_position_m, float), c)
+            _pedal(b, np.asarray(p.pedal_position_m, float), c, i)
     else:
         b.add("cymbal", placed(c - n * 0.05 * r, rot, (r, r, r)), "bronze", highlight=1.0, move=wob)
         b.add(

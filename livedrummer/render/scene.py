@@ -11,7 +11,7 @@ the radius of the capsule drawn from the parent to the joint, the radius of the 
 the joint (the head is just a joint with a large ball) and a tone per joint (costume, skin, ...)
 that picks a colour from the renderer's palette. A :class:`SceneFrame` is the moving part: one
 float32 ``(J, 3)`` array of joint positions, a ``(2, 2, 3)`` array of stick segments
-(``[stick, butt|tip, xyz]``, right hand's stick first) and a ``(P, 4)`` array of kit channels,
+(``[stick, butt|tip, xyz]``, right hand's stick first) and a ``(P, 5)`` array of kit channels,
 one row per ``kit.pieces`` entry, with the columns named by the ``CH_*`` indices below. A
 frame with no joints (shape ``(0, 3)``) draws no drummer: the kit and the sticks only.
 
@@ -35,13 +35,15 @@ from livedrummer.errors import LivedrummerError
 
 #: Kit channel columns: a hit highlight in 0..1 (SMED's skin highlighting), the angle in
 #: radians a cymbal or drum is tilted away from rest by the hit (wobble), the azimuth in radians
-#: of the axis the wobble tilts about, and a piece-specific travel: the hi-hat top cymbal's lift
-#: above the bottom one in metres, or the kick beater's angle back from the head in radians.
+#: of the axis the wobble tilts about, a piece-specific travel: the hi-hat top cymbal's lift
+#: above the bottom one in metres, or the kick beater's angle back from the head in radians,
+#: and the footboard's turn up from rest about its heel hinge in radians (pedal).
 CH_HIGHLIGHT = 0
 CH_WOBBLE = 1
 CH_WOBBLE_AZIMUTH = 2
 CH_TRAVEL = 3
-N_CHANNELS = 4
+CH_PEDAL = 4
+N_CHANNELS = 5
 
 
 class SceneError(LivedrummerError):
@@ -124,7 +126,7 @@ class SceneFrame:
 
     joints_m: np.ndarray  # float32 (J, 3)
     sticks_m: np.ndarray  # float32 (2, 2, 3): [stick, butt|tip, xyz]
-    channels: np.ndarray  # float32 (P, 4): CH_* columns per kit piece
+    channels: np.ndarray  # float32 (P, N_CHANNELS): CH_* columns per kit piece
     time_s: float = 0.0
     rotations_q: np.ndarray | None = None  # float32 (J, 4) world rotations, w x y z; or None
 
@@ -149,5 +151,5 @@ class SceneFrame:
 
 
 def empty_channels(pieces: int) -> np.ndarray:
-    """A kit at rest: no highlight, no wobble, hi-hat closed, beater at the head."""
+    """A kit at rest: no highlight, no wobble, hi-hat closed, beater at the head, boards down."""
     return np.zeros((pieces, N_CHANNELS), np.float32)

@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from livedrummer.body.rig import Rig
     from livedrummer.kit.model import Kit
     from livedrummer.midi.notemap import NoteMap
+    from livedrummer.render.background import Background
     from livedrummer.sticking.result import Sticking
     from livedrummer.timeline.performance import Performance
 
@@ -220,6 +221,35 @@ def add_kit_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--kit", default="rock5", help="kit name or .toml path (default rock5)")
 
 
+def add_background_option(parser: Any, transparent: bool = True) -> None:
+    """``--background COLOUR|IMAGE|chroma|transparent``: what is behind the stage
+    (:mod:`livedrummer.render.background`); a window cannot be ``transparent``."""
+    kinds = (
+        "#rrggbb, an image file, chroma or transparent"
+        if transparent
+        else ("#rrggbb, an image file or chroma")
+    )
+    parser.add_argument(
+        "--background", metavar="COLOUR|IMAGE|chroma" + ("|transparent" if transparent else ""),
+        help=f"behind the stage: {kinds} (default: the dark hall)",
+    )  # fmt: skip
+
+
+def background_of(args: argparse.Namespace, window: bool = False) -> Background:
+    """The checked, decoded ``--background`` of ``args`` (one line on a bad value)."""
+    from livedrummer.render.background import BackgroundError
+
+    from ..display.background import load_background
+
+    bg = load_background(args.background)
+    if window and bg.transparent:
+        raise BackgroundError(
+            "--background transparent: a window shows no alpha; render PNG frames or a "
+            ".mov/.webm video with `livedrummer render --background transparent`"
+        )
+    return bg
+
+
 def add_avatar_option(parser: Any) -> None:
     """``--avatar FILE|NAME`` and ``--bone-map FILE``: who plays. The rig takes the avatar's
     proportions (:func:`rig_for`), the renderer its mesh; the same in every command."""
@@ -320,6 +350,20 @@ def check_aa(samples: int) -> None:
     if samples not in AA_SAMPLES:
         allowed = ", ".join(str(n) for n in AA_SAMPLES)
         raise ConfigError(f"--aa {samples}: expected one of {allowed} (0: no multisampling)")
+
+
+def parse_aa(text: str) -> tuple[int, bool]:
+    """``--aa fxaa|N`` of ``render``: (multisample count, FXAA pass), one line when bad."""
+    from livedrummer.errors import ConfigError
+
+    value = str(text).strip().lower()
+    if value == "fxaa":
+        return 0, True
+    if not value.isdigit():
+        allowed = ", ".join(str(n) for n in AA_SAMPLES)
+        raise ConfigError(f"--aa {text}: expected fxaa or one of {allowed}")
+    check_aa(int(value))
+    return int(value), False
 
 
 def kit_source(args: argparse.Namespace, clock: Any, decoder: Any) -> Any:

@@ -24,12 +24,14 @@ from .common import (
     DEMO_MAP,
     Subparsers,
     add_avatar_option,
+    add_background_option,
     add_channel_option,
     add_command,
     add_kit_option,
     add_motion_options,
     add_renamed,
     avatar_of,
+    background_of,
     check_aa,
     demo_groove,
     read_performance,
@@ -62,6 +64,7 @@ def register(sub: Subparsers) -> None:
                    "(default: none)")  # fmt: skip
     add_motion_options(p)
     add_avatar_option(p)
+    add_background_option(p, transparent=False)
     live = p.add_argument_group("live (poses from a running synth)")
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
     live.add_argument("--sub", default="tcp://127.0.0.1:5720",
@@ -103,6 +106,7 @@ def run(args: argparse.Namespace) -> int:
 
     from ..display.window import WindowOptions, show
 
+    background = background_of(args, window=True)
     source = Path(args.file) if args.file else demo_groove()
     performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
     if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
@@ -110,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     options = WindowOptions(
         size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
         camera=args.camera, samples=args.aa, quit_after_s=args.seconds,
-        overlays=parse_overlays(args.overlay), screenshot=args.screenshot,
+        overlays=parse_overlays(args.overlay), screenshot=args.screenshot, background=background,
     )  # fmt: skip
     kit = load_kit(args.kit)
     avatar = avatar_of(args)
@@ -140,6 +144,10 @@ def run_live(args: argparse.Namespace) -> int:
     from ..service import serve
 
     window = None
+    background = background_of(args, window=True)
+    if args.headless and args.background is not None:
+        raise ConfigError("display --live --headless: --background is drawn in windows and by "
+                          "`livedrummer render`, not in the headless recording")  # fmt: skip
     if not args.headless:
         from ..display.window import WindowOptions
 
@@ -148,7 +156,7 @@ def run_live(args: argparse.Namespace) -> int:
                               "add --headless")  # fmt: skip
         window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
                                monitor=args.monitor, camera=args.camera, samples=args.aa,
-                               vsync=False)  # fmt: skip
+                               vsync=False, background=background)  # fmt: skip
     if args.max_frames is not None and args.max_frames < 1:
         raise ConfigError(f"--max-frames: expected >= 1 (got {args.max_frames})")
     if not 0 < args.fps <= 1000:

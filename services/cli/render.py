@@ -11,6 +11,9 @@ bar goes to stderr and only when stderr is a terminal; the summary line goes to 
 ``--overlay score,joints`` adds SMED's scrolling score and the joint-angle graph as strips at
 the bottom of the frame. ``--soundfont FILE.sf2`` plays the drum track with that General MIDI
 SoundFont's kit (FluidSynth, :mod:`livedrummer.audio.soundfont`) instead of the built-in one.
+``--background`` puts a colour, an image, chroma green or nothing (alpha: RGBA PNGs, or a
+``.mov`` ProRes 4444 / ``.webm`` VP9 video with alpha, the default output then ``.mov``)
+behind the stage.
 """
 
 from __future__ import annotations
@@ -31,14 +34,16 @@ from .common import (
     DEMO_MAP,
     Subparsers,
     add_avatar_option,
+    add_background_option,
     add_channel_option,
     add_command,
     add_kit_option,
     add_motion_options,
     add_renamed,
     avatar_of,
-    check_aa,
+    background_of,
     demo_groove,
+    parse_aa,
     read_performance,
     rig_for,
     sticking_of,
@@ -78,8 +83,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--end", metavar="POS",
                    help="render up to POS: seconds (40) or the end of a bar (bar8) "
                    "(default: the last event plus --tail)")  # fmt: skip
-    p.add_argument("--aa", type=int, default=0, metavar="N",
-                   help="multisample N: 0, 2, 4 or 8 (slow on CPU; default 0)")  # fmt: skip
+    p.add_argument("--aa", default="fxaa", metavar="fxaa|N",
+                   help="anti-aliasing: fxaa (one cheap pass; default), 0 (none) or multisample "
+                   "N = 2, 4, 8 (about 2.7x the frame time on a CPU)")  # fmt: skip
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
     p.add_argument("--x264-preset", default="veryfast", help="x264 speed")
     p.add_argument("--overlay", default="", metavar="LIST",
@@ -92,6 +98,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--stage", type=Path, metavar="TOML",
                    help="render every drummer of a stage file on one stage instead of FILE "
                    "(default: none)")  # fmt: skip
+    add_background_option(p)
 
 
 def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap,
@@ -183,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
     from ..display.video import VideoSettings, check_video_target
 
     size = parse_size(args.size)
-    check_aa(args.aa)
+    samples, fxaa = parse_aa(args.aa)
     overlays = parse_overlays(args.overlay)
     if not 1 <= args.fps <= 240:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
@@ -197,11 +204,13 @@ def run(args: argparse.Namespace) -> int:
     # option is the one line on stderr.
     kit = load_kit(args.kit)
     avatar = avatar_of(args)
+    background = background_of(args)
     get_strategy(args.sticking)
     out = args.output
     if out is None and args.frames_dir is None:
-        out = Path(source.stem + ".mp4")
-    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset)
+        out = Path(source.stem + (".mov" if background.transparent else ".mp4"))
+    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset,
+                             alpha=background.transparent)  # fmt: skip
     if out is not None:
         check_video_target(out, settings)
     performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
@@ -218,8 +227,9 @@ def run(args: argparse.Namespace) -> int:
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
-        camera=args.camera, tail_s=args.tail, samples=args.aa, progress=bar, overlays=overlays,
-        soundfont=args.soundfont, avatar=avatar, span=span,
+        camera=args.camera, tail_s=args.tail, samples=samples, fxaa=fxaa, progress=bar,
+        overlays=overlays, soundfont=args.soundfont, avatar=avatar, background=background,
+        span=span,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
@@ -229,7 +239,8 @@ def run(args: argparse.Namespace) -> int:
         f"sticking {args.sticking}"
         f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"
         f"{', drum track 48 kHz stereo' if out is not None else ''}"
-        f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}; "
+        f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}"
+        f"{', background ' + args.background if args.background else ''}; "
         f"{report.realtime:.2f}x real time"
     )
     return 0
@@ -249,11 +260,13 @@ def run_stage(args: argparse.Namespace) -> int:
     size = parse_size(args.size)
     if not 1 <= args.fps <= 240:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
+    background = background_of(args)
     stage = load_stage(args.stage)
     out = args.output
     if out is None and args.frames_dir is None:
-        out = Path(args.stage.stem + ".mp4")
-    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset)
+        out = Path(args.stage.stem + (".mov" if background.transparent else ".mp4"))
+    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset,
+                             alpha=background.transparent)  # fmt: skip
     if out is not None:
         check_video_target(out, settings)
     drummers = []
@@ -267,7 +280,8 @@ def run_stage(args: argparse.Namespace) -> int:
         drummers.append(StageDrummer(body, part.performance, part.placement, avatar))
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export_stage(drummers, out=out, frames_dir=args.frames_dir, settings=settings,
-                          camera=args.camera, tail_s=args.tail, progress=bar)  # fmt: skip
+                          camera=args.camera, tail_s=args.tail, progress=bar,
+                          background=background)  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s, "
           f"{len(drummers)} drummers ({stage.formation.shape}), {size[0]}x{size[1]} @ "

@@ -43,11 +43,13 @@ from .common import (
     Subparsers,
     add_api_option,
     add_avatar_option,
+    add_background_option,
     add_command,
     add_kit_option,
     add_renamed,
     avatar_argv,
     avatar_of,
+    background_of,
     demo_groove,
     has_screen,
     kit_source,
@@ -71,6 +73,7 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
     add_kit_option(p)
     add_avatar_option(p)
+    add_background_option(p, transparent=False)
     p.add_argument("--map", help="note map (default roland-td)")
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
@@ -200,6 +203,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
+        display_argv += ["--background", args.background] if args.background else []
         display_argv += ["--fullscreen"] if args.fullscreen else []
     else:
         display_argv += ["--headless", "--frames-dir", str(args.frames_dir)]
@@ -253,6 +257,13 @@ def run(args: argparse.Namespace) -> int:
 
         check_soundfont(args.soundfont)
     avatar_of(args)  # a bad --avatar is one line here, before three services start
+    background_of(args, window=True)  # and a bad --background
+    if args.background is not None and not windowed(args):
+        import logging
+
+        logging.getLogger("livedrummer.up").warning(
+            "--background %s: no window here; the headless recording keeps the hall",
+            args.background)  # fmt: skip
     check_before_start(args)
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None

@@ -7,7 +7,8 @@ cymbal chokes the body plays (``body.performed.chokes``: a grab stops the sound 
 the cymbal), then renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or
 the PNG writer. The video gets each frame as I420, converted to YUV on the GPU, where the
 width is a multiple of 8 (other widths: RGBA, converted on the encoder thread); the PNGs get
-RGB. The drummer and the kit's motion come from a
+RGB (RGBA with a transparent background, whose video keeps its alpha: see
+:mod:`.video`). The drummer and the kit's motion come from a
 :class:`~livedrummer.render.body_scene.BodyScene` (the body model), sampled in chunks of frames
 as the render goes, and the drum track is mixed on disk
 (:func:`~services.display.record.spooled_track`), so memory stays bounded however long the
@@ -40,6 +41,7 @@ import numpy as np
 from livedrummer.audio.mix import mix_onsets
 from livedrummer.audio.soundfont import render_soundfont
 from livedrummer.avatar.model import Avatar
+from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
@@ -95,10 +97,13 @@ def export(
     soundfont: Path | None = None,
     avatar: Avatar | None = None,
     span: tuple[float, float] | None = None,
+    background: Background | None = None,
+    fxaa: bool = False,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
-    drum track from the SoundFont ``soundfont`` when given, else the built-in kit.
+    drum track from the SoundFont ``soundfont`` when given, else the built-in kit; behind the
+    stage ``background`` (transparent: RGBA PNGs and a video with alpha).
 
     ``span`` = (start_s, end_s) renders only that part (``render --start/--end``): frame ``i``
     shows ``start_s + i / fps``, the motion is the whole performance's (strokes that begin
@@ -138,8 +143,10 @@ def export(
     try:
         ctx = headless_context()
         renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
-                            samples=samples, avatar=avatar)  # fmt: skip
-        gpu_yuv = i420_ok(settings.size)
+                            samples=samples, avatar=avatar, background=background,
+                            fxaa=fxaa)  # fmt: skip
+        alpha = background is not None and background.transparent
+        gpu_yuv = i420_ok(settings.size) and not alpha
         strips = overlay_image(settings.size, overlays, OverlayModels(body, first_s + n / fps))
         for i, frame in enumerate(body.frames(times)):
             renderer.draw(frame, cam)
@@ -149,7 +156,8 @@ def export(
             if writer is not None:
                 writer.write(renderer.read_i420() if gpu_yuv else renderer.read_rgba())
             if frames_dir is not None:
-                write_png(frames_dir / f"frame_{i:06d}.png", renderer.read_rgb())
+                pixels = renderer.read_rgba_top() if alpha else renderer.read_rgb()
+                write_png(frames_dir / f"frame_{i:06d}.png", pixels)
             if progress is not None:
                 progress(i + 1, n)
         done = True

@@ -13,7 +13,9 @@ index (one numpy gather, no per-joint Python loop) and the segment shader builds
 capsule's basis on the GPU. Drawing is one instanced call per unit mesh and program.
 
 Off-screen, it draws into a texture framebuffer, or with ``samples > 0`` into a multisampled
-one resolved into it (multisampling costs about 4x on llvmpipe, so export defaults to none).
+one resolved into it (multisampling costs about 2.7x on llvmpipe), and with ``fxaa`` a
+full-screen anti-aliasing pass (``shaders/fxaa.frag``) runs once over the drawn scene, before
+the first read-back or overlay (overlays are painted over it unfiltered; off screen only).
 :meth:`Renderer.read_rgb` returns top-down RGB rows as PNG writers expect;
 :meth:`Renderer.read_rgba` returns the driver's own bottom-up RGBA, the cheapest read-back,
 and :meth:`Renderer.read_i420` converts the frame to the video encoder's planar YUV 4:2:0 on
@@ -26,6 +28,9 @@ look up with a hardware-compared 2x2 filter (``shaders/shadow.glsl``). Limits: o
 light; the kit's surfaces are opaque (the avatar's BLEND parts cast no shadow); every surface
 is lit by the same rig; the window must set :attr:`Renderer.size` when its framebuffer is
 resized.
+The frame is cleared to the ``background`` (:mod:`livedrummer.render.background`: the dark hall,
+a colour, chroma green, alpha 0, or an image stretched over it first by a full-screen pass);
+the floor is blended last so its rim fades into whatever is behind it.
 :meth:`Renderer.draw_overlay` blends a 2D RGBA image (the score and joint-angle strips of
 :mod:`livedrummer.render.overlay_raster`) over the drawn frame (``shaders/overlay.frag``).
 """
@@ -38,15 +43,16 @@ import numpy as np
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.body.skeleton import N_JOINTS
+from livedrummer.render.background import HALL, Background
 from livedrummer.render.camera import Camera, look_at, perspective
 from livedrummer.render.geometry import Mesh, all_meshes
 from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
-from livedrummer.render.scene import SceneFrame, Skeleton, Tone
+from livedrummer.render.scene import SceneFrame, Skeleton, Tone, empty_channels
 from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
 
 from .avatar_gl import SkinnedDraw
 
-BACKGROUND = (0.02, 0.02, 0.035)
+BACKGROUND = HALL
 #: colour per :class:`Tone`
 PALETTE = np.zeros((len(Tone), 3), np.float32)
 PALETTE[Tone.SHIRT] = (0.14, 0.26, 0.50)
@@ -77,8 +83,12 @@ class Renderer:
         offscreen: bool = True,
         avatar: Avatar | Literal["mannequin"] | None = None,
         shadows: bool = True,
+        background: Background | None = None,
+        fxaa: bool = False,
     ) -> None:
         self.ctx = ctx
+        self.background = background if background is not None else Background()
+        self._background_pass: tuple[Any, Any] | None = None
         self.kit_mesh = kit_mesh
         self.skeleton = skeleton
         self.size = size
@@ -141,6 +151,19 @@ class Renderer:
                 self._fbo = ctx.framebuffer(color_attachments=[self._rgb], depth_attachment=depth)
                 self._resolve = self._fbo
         self.samples = samples
+        self.fxaa = fxaa and offscreen
+        self._final, self._final_tex = self._resolve, getattr(self, "_rgb", None)
+        self._fxaa: Any = None
+        self._stale = False  # a frame drawn since the anti-aliasing pass last ran
+        if self.fxaa:
+            post = ctx.texture(size, 4)
+            self._final, self._final_tex = ctx.framebuffer(color_attachments=[post]), post
+            prog = ctx.program(vertex_shader=shader_source("fullscreen.vert"),
+                               fragment_shader=shader_source("fxaa.frag"))  # fmt: skip
+            prog["u_image"].value = 0
+            sampler = ctx.sampler(texture=self._rgb, filter=(moderngl.LINEAR, moderngl.LINEAR),
+                                  repeat_x=False, repeat_y=False)  # fmt: skip
+            self._fxaa = (ctx.vertex_array(prog, []), sampler)
         self._i420: tuple[list[tuple[Any, Any]], Any] | None = None  # made on first use
         self._overlay: tuple[Any, Any] | None = None  # (vao, texture), made on first use
 
@@ -194,9 +217,7 @@ class Renderer:
 
     def upload(self, frame: SceneFrame | None) -> None:
         """Copy one frame's kit channels, joints and sticks into the instance buffers."""
-        channels = (
-            frame.channels if frame is not None else np.zeros((self.kit_mesh.pieces, 4), np.float32)
-        )
+        channels = frame.channels if frame is not None else empty_channels(self.kit_mesh.pieces)
         inst = self.kit_mesh.instances(channels)
         for _vao, buf, idx in self._kit_vaos:
             buf.write(inst[idx].tobytes())
@@ -227,12 +248,17 @@ class Renderer:
         import moderngl
 
         fbo = target if target is not None else self._fbo
+        self._stale = True
         fbo.use()
         w, h = self.size
         self.ctx.viewport = (0, 0, w, h)
         self.ctx.enable(moderngl.DEPTH_TEST)
         self.ctx.disable(moderngl.CULL_FACE)
-        fbo.clear(*BACKGROUND, 1.0, depth=1.0)
+        bg = self.background
+        fbo.clear(*bg.rgb, bg.alpha, depth=1.0)
+        if bg.image is not None:
+            self._draw_background_image(bg.image)
+            self.ctx.enable(moderngl.DEPTH_TEST)
         self.upload(frame)
         vp = camera.view_projection(w / h)
         centre = self.kit_mesh.model[0, :3, 3] if len(self.kit_mesh.model) else np.zeros(3)
@@ -271,8 +297,35 @@ class Renderer:
             self._seg_vao.render(instances=self._seg_count)
             if self._ball_count:
                 self._ball_vao.render(instances=self._ball_count)
-        for vao, _buf, idx in self._kit_vaos:
+        for name, (vao, _buf, idx) in zip(self._kit_groups, self._kit_vaos, strict=True):
+            if name == "floor":  # its rim fades into whatever background is behind it
+                self.ctx.enable(moderngl.BLEND)
+                self.ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
+                                       moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)  # fmt: skip
             vao.render(instances=len(idx))
+        self.ctx.disable(moderngl.BLEND)
+
+    def _draw_background_image(self, image: np.ndarray) -> None:
+        """Stretch ``image`` ((H, W, 3) uint8, top row first) over the whole frame, writing no
+        depth; its texture is made once (``overlay.frag`` with the frame as its rectangle)."""
+        import moderngl
+
+        if self._background_pass is None:
+            prog = self.ctx.program(vertex_shader=shader_source("fullscreen.vert"),
+                                    fragment_shader=shader_source("overlay.frag"))  # fmt: skip
+            prog["u_image"].value = 0
+            h, w = image.shape[:2]
+            rgba = np.dstack([image, np.full((h, w), 255, np.uint8)])
+            tex = self.ctx.texture((w, h), 4, np.ascontiguousarray(rgba).tobytes())
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            self._background_pass = (self.ctx.vertex_array(prog, []), tex)
+        vao, tex = self._background_pass
+        w, h = self.size
+        vao.program["u_rect"].value = (0.0, 0.0, float(w), float(h))
+        self.ctx.disable(moderngl.DEPTH_TEST)
+        tex.use(location=0)
+        vao.render(moderngl.TRIANGLES, vertices=3)
 
     def _shadow_pass(self, light_vp: np.ndarray) -> None:
         """Draw every caster depth-only from the key light into the shadow map."""
@@ -320,7 +373,12 @@ class Renderer:
             tex.repeat_x = tex.repeat_y = False
             self._overlay = (vao, tex)
         tex.write(np.ascontiguousarray(image, np.uint8))
-        (target if target is not None else self._fbo).use()
+        if target is None and self._fxaa is not None:
+            self._resolved()  # the scene is anti-aliased; the overlay goes over it as painted
+            self._final.use()
+        else:
+            (target if target is not None else self._fbo).use()
+            self._stale = True
         bottom = self.size[1] - y - h  # GL rows count from the bottom
         self.ctx.viewport = (x, bottom, w, h)
         vao.program["u_rect"].value = (float(x), float(bottom), float(w), float(h))
@@ -334,14 +392,30 @@ class Renderer:
         self.ctx.viewport = (0, 0, *self.size)
 
     def _resolved(self) -> None:
+        """The frame drawn since the last call resolved (multisampling) and anti-aliased (FXAA)
+        into :attr:`_final`; nothing to do when nothing was drawn since."""
+        if not self._stale:
+            return
         if self.samples > 0:
             self.ctx.copy_framebuffer(self._resolve, self._fbo)
+        if self._fxaa is not None:
+            import moderngl
+
+            vao, sampler = self._fxaa
+            self._final.use()
+            self.ctx.viewport = (0, 0, *self.size)
+            self.ctx.disable(moderngl.DEPTH_TEST)
+            vao.program["u_texel"].value = (1.0 / self.size[0], 1.0 / self.size[1])
+            sampler.use(location=0)
+            vao.render(moderngl.TRIANGLES, vertices=3)
+            sampler.clear(location=0)
+        self._stale = False
 
     def read_rgb(self) -> np.ndarray:
         """The last off-screen frame as (H, W, 3) uint8, top row first."""
         w, h = self.size
         self._resolved()
-        data = self._resolve.read(components=3, alignment=1)
+        data = self._final.read(components=3, alignment=1)
         return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1]
 
     def read_rgba(self) -> np.ndarray:
@@ -351,9 +425,11 @@ class Renderer:
         """
         w, h = self.size
         self._resolved()
-        return np.frombuffer(self._resolve.read(components=4, alignment=1), np.uint8).reshape(
-            h, w, 4
-        )
+        return np.frombuffer(self._final.read(components=4, alignment=1), np.uint8).reshape(h, w, 4)
+
+    def read_rgba_top(self) -> np.ndarray:
+        """The last off-screen frame as (H, W, 4) uint8 with its alpha, top row first (PNG)."""
+        return np.ascontiguousarray(self.read_rgba()[::-1])
 
     def read_i420(self) -> np.ndarray:
         """The last off-screen frame as I420, (H*3/2, W) uint8, top row first.
@@ -394,7 +470,7 @@ class Renderer:
             prog = self.ctx.program(vertex_shader=shader_source("fullscreen.vert"),
                                     fragment_shader=shader_source(frag))  # fmt: skip
             prog["u_image"].value = 0
-            sampler = self.ctx.sampler(texture=self._rgb, filter=(filt, filt), repeat_x=False,
+            sampler = self.ctx.sampler(texture=self._final_tex, filter=(filt, filt), repeat_x=False,
                                        repeat_y=False)  # fmt: skip
             passes.append((self.ctx.vertex_array(prog, []), sampler))
         target = self.ctx.texture((w // 4, h * 3 // 2), 4)

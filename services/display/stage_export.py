@@ -36,6 +36,7 @@ import numpy as np
 
 from livedrummer.audio.mix import fit_headroom, mix_onsets
 from livedrummer.avatar.model import Avatar
+from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import Camera, pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
@@ -125,8 +126,10 @@ def export_stage(
     camera: str = "stage",
     tail_s: float = 1.0,
     progress: Progress | None = None,
+    background: Background | None = None,
 ) -> ExportReport:
-    """Render the stage to ``out`` (MP4 with the summed drum track) and/or PNGs."""
+    """Render the stage to ``out`` (MP4 with the summed drum track) and/or PNGs, in front of
+    ``background`` (transparent: alpha 0 where no drummer, kit or floor is nearest)."""
     if not drummers:
         raise DisplayError("a stage needs at least one drummer")
     if out is None and frames_dir is None:
@@ -145,6 +148,7 @@ def export_stage(
         writer = VideoWriter(partial_path(out), settings)
         writer.write_audio(audio)
     world = group_camera(drummers, camera, settings.size[0] / settings.size[1])
+    alpha = background is not None and background.transparent
     ctx = None
     done = False
     try:
@@ -153,7 +157,7 @@ def export_stage(
         passes: list[tuple[Renderer, Any, Any, Camera, Iterator[SceneFrame]]] = []
         for d in drummers:
             renderer = Renderer(ctx, build_kit_mesh(d.body.kit), BODY_SKELETON, settings.size,
-                                samples=0, avatar=d.avatar)  # fmt: skip
+                                samples=0, avatar=d.avatar, background=background)  # fmt: skip
             depth = ctx.depth_texture((w, h))
             fbo = ctx.framebuffer(color_attachments=[ctx.texture((w, h), 4)],
                                   depth_attachment=depth)  # fmt: skip
@@ -170,7 +174,8 @@ def export_stage(
             if writer is not None:
                 writer.write(rgba)
             if frames_dir is not None:
-                write_png(frames_dir / f"frame_{i:06d}.png", rgba[::-1, :, :3])
+                top_down = rgba[::-1] if alpha else rgba[::-1, :, :3]
+                write_png(frames_dir / f"frame_{i:06d}.png", np.ascontiguousarray(top_down))
             if progress is not None:
                 progress(i + 1, n)
         done = True

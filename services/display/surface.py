@@ -21,15 +21,15 @@ from typing import Any
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
 from livedrummer.render.body_scene import BODY_SKELETON
-from livedrummer.render.camera import CAMERA_NAMES, CameraMove, kit_cameras
+from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.scene import SceneFrame
 
 from .renderer import Renderer
+from .viewcontrol import ViewControl
 from .window import (
     Readout,
     WindowOptions,
-    camera_key,
     key_name,
     open_window,
     toggle_fullscreen,
@@ -73,7 +73,7 @@ class WindowSurface:
         self._glfw, self._window, self._ctx = glfw, window, ctx
         size = glfw.get_framebuffer_size(window)
         self.renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False,
-                                 avatar=avatar)  # fmt: skip
+                                 avatar=avatar, background=options.background)  # fmt: skip
         self._cameras = kit_cameras(kit)
         start = self._cameras[options.camera]
         self._move = CameraMove(start, start, 0.0, 0.0)
@@ -90,12 +90,14 @@ class WindowSurface:
                 self._keys.append(key_name(glfw, key, mods))
 
         glfw.set_key_callback(window, on_key)
+        self._view = ViewControl(glfw, window)
 
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
         self._now = now_s
         fb = self._glfw.get_framebuffer_size(self._window)
         if fb != self.renderer.size and fb[0] > 0 and fb[1] > 0:
             self.renderer.size = fb
+        self._move = self._view.mouse(self._move, now_s, self.renderer.size)
         self.renderer.draw(frame, self._move.at(now_s), target=self._ctx.screen)
         if self._show_readout or self._show_help:
             from livedrummer.render.hud import live_lines
@@ -117,9 +119,8 @@ class WindowSurface:
             elif name == "f":
                 toggle_fullscreen(glfw, self._window, self._options)
             else:
-                self._move = camera_key(name, self._move, self._cameras, self._now)
-                if name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
-                    self.camera = CAMERA_NAMES[int(name) - 1]
+                self._move, label = self._view.key(name, self._move, self._cameras, self._now)
+                self.camera = label or self.camera
         self._keys.clear()
         return not glfw.window_should_close(self._window)
 

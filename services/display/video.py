@@ -15,6 +15,13 @@ fragment and keeps no per-frame index in memory, where a plain MP4 holds its who
 it closes (measured: 69 bytes a frame, 7 MB an hour at 30 fps), and a writer killed mid-show
 leaves a file that plays up to its last fragment.
 
+Video with alpha (``VideoSettings.alpha``, a transparent background for stage video systems to
+composite): ``.mov`` is ProRes 4444 (``prores_ks``, 10-bit 4:4:4 with a 10-bit alpha plane;
+AAC sound) and ``.webm`` is VP9 with alpha (``libvpx-vp9``, 4:2:0 with an alpha plane; Opus
+sound). Both encoders are in PyAV's FFmpeg; frames go in as RGBA and are converted here.
+FFmpeg's own VP9 decoder drops the alpha plane: read such a file back with ``libvpx-vp9``.
+Without alpha, ``.webm`` is VP9 too and the rest are H.264.
+
 Limits: even width and height (4:2:0 chroma); constant frame rate; one stereo audio track;
 AAC pads its last frame, so a decoder may return up to 1024 samples (21 ms) more than was
 written.
@@ -34,7 +41,8 @@ import numpy as np
 from .context import DisplayError
 
 AUDIO_FRAME = 1024  # samples per AAC frame
-CONTAINERS = (".mp4", ".m4v", ".mov", ".mkv")
+CONTAINERS = (".mp4", ".m4v", ".mov", ".mkv", ".webm")
+ALPHA_CONTAINERS = (".mov", ".webm")
 BT709 = 1  # FFmpeg's AVCOL_SPC / AVCOL_PRI / AVCOL_TRC code for BT.709
 LIMITED_RANGE = 1  # AVCOL_RANGE_MPEG: luma 16..235, chroma 16..240
 
@@ -47,6 +55,38 @@ class VideoSettings:
     preset: str = "veryfast"
     sample_rate: int = 48_000
     fragmented: bool = False  # fragmented MP4: no in-memory index (see the module docstring)
+    alpha: bool = False  # keep the frame's alpha: .mov ProRes 4444 or .webm VP9
+
+
+@dataclass(frozen=True)
+class Codec:
+    """The video and audio encoders a file gets, by its type and whether it keeps alpha."""
+
+    video: str
+    pix_fmt: str
+    options: dict[str, str]
+    audio: str
+
+    @property
+    def alpha(self) -> bool:
+        return self.pix_fmt.startswith("yuva")
+
+
+def codec_for(suffix: str, settings: VideoSettings) -> Codec:
+    """The encoders for a file of type ``suffix`` (see the module docstring)."""
+    if suffix == ".webm":
+        fmt = "yuva420p" if settings.alpha else "yuv420p"
+        vp9 = {"crf": str(settings.crf + 11), "b": "0", "deadline": "realtime",
+               "cpu-used": "8", "row-mt": "1"}  # fmt: skip
+        return Codec("libvpx-vp9", fmt, vp9, "libopus")
+    if settings.alpha:  # .mov
+        return Codec("prores_ks", "yuva444p10le", {"profile": "4", "vendor": "apl0"}, "aac")
+    x264 = {
+        "crf": str(settings.crf),
+        "preset": settings.preset,
+        "x264-params": "colorprim=bt709:transfer=bt709:colormatrix=bt709:range=tv",
+    }
+    return Codec("libx264", "yuv420p", x264, "aac")
 
 
 def encode_audio(container: Any, stream: Any, stereo: np.ndarray, sample_rate: int) -> None:
@@ -67,7 +107,7 @@ def encode_audio(container: Any, stream: Any, stereo: np.ndarray, sample_rate: i
 
 
 class _Encoder:
-    """The PyAV side: an open MP4 with one H.264 and one AAC stream (runs in the child)."""
+    """The PyAV side: an open file with one video and one audio stream (:func:`codec_for`)."""
 
     def __init__(self, path: str, settings: VideoSettings) -> None:
         import av
@@ -78,16 +118,14 @@ class _Encoder:
         self.container: Any = av.open(
             path, mode="w", container_options=frag if settings.fragmented else {}
         )
-        stream = self.container.add_stream("libx264", rate=settings.fps)
-        stream.width, stream.height, stream.pix_fmt = w, h, "yuv420p"
-        stream.options = {
-            "crf": str(settings.crf),
-            "preset": settings.preset,
-            "x264-params": "colorprim=bt709:transfer=bt709:colormatrix=bt709:range=tv",
-        }
+        self.codec = codec_for(Path(path).suffix.lower(), settings)
+        stream: Any = self.container.add_stream(self.codec.video, rate=settings.fps)
+        stream.width, stream.height, stream.pix_fmt = w, h, self.codec.pix_fmt
+        stream.options = self.codec.options
         self.video = stream
-        self.audio = self.container.add_stream("aac", rate=settings.sample_rate)
-        self.audio.layout = "stereo"
+        audio: Any = self.container.add_stream(self.codec.audio, rate=settings.sample_rate)
+        audio.layout = "stereo"
+        self.audio = audio
 
     def write_audio(self, stereo: np.ndarray) -> None:
         encode_audio(self.container, self.audio, stereo, self.settings.sample_rate)
@@ -100,7 +138,7 @@ class _Encoder:
         else:
             frame = av.VideoFrame.from_ndarray(
                 np.ascontiguousarray(image[::-1]), format="rgba"
-            ).reformat(format="yuv420p", dst_colorspace="ITU709")
+            ).reformat(format=self.codec.pix_fmt, dst_colorspace="ITU709")
         frame.colorspace = BT709
         frame.color_primaries = BT709
         frame.color_trc = BT709
@@ -122,6 +160,11 @@ def check_video_target(path: Path, settings: VideoSettings) -> None:
     if path.suffix.lower() not in CONTAINERS:
         raise DisplayError(
             f"video file {path}: unknown type {path.suffix!r}; use {', '.join(CONTAINERS)}"
+        )
+    if settings.alpha and path.suffix.lower() not in ALPHA_CONTAINERS:
+        raise DisplayError(
+            f"video file {path}: a transparent background needs a video with alpha: "
+            "use .mov (ProRes 4444) or .webm (VP9)"
         )
     if not path.parent.is_dir():
         raise DisplayError(f"video file {path}: folder {path.parent} does not exist")

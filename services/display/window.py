@@ -30,8 +30,9 @@ from typing import Any
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
+from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
-from livedrummer.render.camera import CAMERA_NAMES, Camera, CameraMove, kit_cameras
+from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
@@ -40,6 +41,7 @@ from livedrummer.timeline.performance import Performance
 
 from .context import DisplayError
 from .renderer import Renderer
+from .viewcontrol import ViewControl
 
 log = logging.getLogger(__name__)
 
@@ -55,6 +57,7 @@ class WindowOptions:
     quit_after_s: float | None = None  # close by itself (demos, smoke tests)
     overlays: frozenset[str] = frozenset()  # strips shown first: "score", "joints"
     screenshot: Path | None = None  # the last frame drawn, written as a PNG when it closes
+    background: Background | None = None  # behind the stage (None: the dark hall)
 
 
 DEFAULT_OPTIONS = WindowOptions()
@@ -123,15 +126,8 @@ def key_name(glfw: Any, key: int, mods: int) -> str:
         name = chr(ord("0") + key - glfw.KEY_0)
     else:
         return ""
-    return f"shift+{name}" if mods & glfw.MOD_SHIFT and name in ("left", "right") else name
-
-
-def camera_key(name: str, move: CameraMove, cameras: dict[str, Camera], now: float) -> CameraMove:
-    """Keys 1..8 start a smooth move from where the camera is now to that stored viewpoint;
-    any other key leaves ``move`` as it is."""
-    if name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
-        return CameraMove(move.at(now), cameras[CAMERA_NAMES[int(name) - 1]], now)
-    return move
+    shifted = name in ("left", "right") or name.isdigit()  # seek steps; store a viewpoint
+    return f"shift+{name}" if mods & glfw.MOD_SHIFT and shifted else name
 
 
 def show(
@@ -206,7 +202,8 @@ def _loop(
     move = CameraMove(cameras[options.camera], cameras[options.camera], 0.0, 0.0)
     mesh = build_kit_mesh(kit)
     size = glfw.get_framebuffer_size(window)
-    renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False, avatar=avatar)
+    renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False, avatar=avatar,
+                        background=options.background)  # fmt: skip
     models = OverlayModels(body, transport.duration_s)
     shown = frozenset(options.overlays)
     strips = overlay_image(size, shown, models)
@@ -217,6 +214,7 @@ def _loop(
             pending.append(key_name(glfw, key, mods))
 
     glfw.set_key_callback(window, on_key)
+    view = ViewControl(glfw, window)
     transport.apply("play_pause")
     last = started = clock()
     frames = 0
@@ -242,10 +240,10 @@ def _loop(
             elif name == "f":
                 toggle_fullscreen(glfw, window, options)
             else:
-                move = camera_key(name, move, cameras, now)
-                if name.isdigit() and 1 <= int(name) <= len(CAMERA_NAMES):
-                    camera = CAMERA_NAMES[int(name) - 1]
+                move, label = view.key(name, move, cameras, now)
+                camera = label or camera
         pending.clear()
+        move = view.mouse(move, now, renderer.size)
         t = transport.advance(now - last)
         last = now
         fb = glfw.get_framebuffer_size(window)
