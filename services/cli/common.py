@@ -290,6 +290,11 @@ def add_sticking_options(p: argparse.ArgumentParser) -> None:
 def add_motion_options(p: argparse.ArgumentParser) -> None:
     """How the body is animated (check, export, render, display): sticking, strokes, preset."""
     add_sticking_options(p)
+    add_style_options(p)
+
+
+def add_style_options(p: argparse.ArgumentParser) -> None:
+    """``--preset`` and ``--strokes``: how the body plays, the same for files and live."""
     p.add_argument(
         "--preset", default=None, help="expression preset name or .toml path (default: neutral)"
     )
@@ -299,6 +304,14 @@ def add_motion_options(p: argparse.ArgumentParser) -> None:
         choices=("livedrummer", "paper", "smed"),
         help="stroke overlap rules (default livedrummer)",
     )
+
+
+def style_argv(args: argparse.Namespace) -> list[str]:
+    """``--preset``/``--strokes`` as given, for a child process (``up``)."""
+    out = ["--strokes", args.strokes]
+    if args.preset is not None:
+        out += ["--preset", str(args.preset)]
+    return out
 
 
 def sticking_of(args: argparse.Namespace, performance: Performance, kit: Kit) -> Sticking:

@@ -15,6 +15,7 @@ from .common import (
     add_avatar_option,
     add_command,
     add_kit_option,
+    add_style_options,
     avatar_of,
     rig_for,
 )
@@ -43,6 +44,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--no-provisional", action="store_true",
                    help="publish a hit only once its hand is decided, L after it")  # fmt: skip
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
+    add_style_options(p)
     add_curve_options(p, server=True, client=True)
 
 
@@ -50,6 +52,8 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import zmq
 
+    from livedrummer.body.expression import load_expression
+    from livedrummer.body.strokes import StrokeParams
     from livedrummer.errors import ConfigError
     from livedrummer.kit.loader import load_kit
     from livedrummer.live.calibration import Calibration
@@ -81,7 +85,9 @@ def run(args: argparse.Namespace) -> int:
     cc_open = np.array([note_map.openness(v) for v in range(128)])
     avatar = avatar_of(args)
     rig = rig_for(load_kit(args.kit), avatar)
-    synth = LiveSynth(rig, params, cc_open=cc_open, note_map=note_map)
+    expression = load_expression(args.preset) if args.preset else None
+    synth = LiveSynth(rig, params, strokes=StrokeParams(model=args.strokes), cc_open=cc_open,
+                      note_map=note_map, expression=expression)  # fmt: skip
     calibration = Calibration.load()
     config = SynthConfig(
         sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
@@ -96,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "
           f"{s['pose_samples']} pose samples in {s['pose_messages']} messages, "
           f"{s['animations']} re-animations, {s['quick_contacts']} quick contacts, "
-          f"answered in {p50}/{p99} ms p50/p99, {s['late_contacts']} contacts late",
+          f"answered in {p50}/{p99} ms p50/p99, {s['late_contacts']} contacts late; "
+          f"played with preset {args.preset or 'neutral'}, {args.strokes} strokes",
           file=sys.stderr)  # fmt: skip
     return code

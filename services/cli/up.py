@@ -46,11 +46,13 @@ from .common import (
     add_command,
     add_kit_option,
     add_renamed,
+    add_style_options,
     avatar_argv,
     avatar_of,
     demo_groove,
     has_screen,
     kit_source,
+    style_argv,
 )
 from .keys import add_curve_options
 
@@ -111,6 +113,7 @@ def register(sub: Subparsers) -> None:
                    help="wait for a --midi port or --serial device that is not there yet "
                         "(default: one line naming what exists, exit 2)")  # fmt: skip
     p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
+    add_style_options(p)
     add_curve_options(p, server=True, client=False)
     # what "left at its default" means for the rig profile (see apply_profile)
     p.set_defaults(up_defaults={a.dest: a.default for a in p._actions})
@@ -192,7 +195,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     synth_argv = [*me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
                   "--control", ep["syn_ctl"], "--kit", args.kit, "--map", map_name,
                   "--lookahead-ms", str(args.lookahead_ms),
-                  "--delay-ms", str(args.delay_ms), *avatar_argv(args),
+                  "--delay-ms", str(args.delay_ms), *avatar_argv(args), *style_argv(args),
                   *curve["synth"]]  # fmt: skip
     display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], "--kit", args.kit,
                     "--camera", args.camera,
@@ -253,6 +256,10 @@ def run(args: argparse.Namespace) -> int:
 
         check_soundfont(args.soundfont)
     avatar_of(args)  # a bad --avatar is one line here, before three services start
+    if args.preset is not None:  # and a bad --preset
+        from livedrummer.body.expression import load_expression
+
+        load_expression(args.preset)
     check_before_start(args)
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None
