@@ -83,7 +83,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.body.animation import hihat_openness
-from livedrummer.body.expression import Expression
+from livedrummer.body.expression import Expression, with_param
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import Rig
 from livedrummer.body.strokes import StrokeParams
@@ -199,6 +199,11 @@ class LiveSynth:
         """Play with ``expression`` from clock time ``now_s`` on, eased in (see
         :mod:`livedrummer.live.style`): the window is re-animated at each step of the ramp."""
         self.style.set(expression, now_s)
+
+    def set_param(self, name: str, value: float, now_s: float) -> None:
+        """One expression parameter (:data:`~livedrummer.body.expression.PARAMS`) set from
+        clock time ``now_s`` on, eased in like a preset; ValueError names a bad name or value."""
+        self.set_expression(with_param(self.style.target, name, value), now_s)
 
     def quick_state(self) -> QuickState:
         """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
