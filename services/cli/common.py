@@ -306,6 +306,32 @@ def add_style_options(p: argparse.ArgumentParser) -> None:
     )
 
 
+def add_osc_options(p: argparse.ArgumentParser, what: str) -> None:
+    """``--osc PORT`` and ``--osc-allow ADDR,...`` (see :mod:`services.osc`)."""
+    p.add_argument("--osc", type=int, metavar="PORT",
+                   help=f"OSC show control on this UDP port ({what}; no authentication: "
+                   "loopback only unless --osc-allow) (default: none)")  # fmt: skip
+    p.add_argument(
+        "--osc-allow",
+        metavar="ADDR,...",
+        help="also take OSC from these sender addresses (default: loopback only)",
+    )
+
+
+def osc_allow(args: argparse.Namespace) -> tuple[str, ...]:
+    """``--osc-allow`` checked: one line naming a bad address."""
+    from livedrummer.errors import ConfigError
+
+    from ..osc import parse_allow
+
+    if args.osc is not None and not 0 <= args.osc <= 65535:
+        raise ConfigError(f"--osc: expected a UDP port 0..65535 (got {args.osc})")
+    try:
+        return parse_allow(args.osc_allow)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
 def style_argv(args: argparse.Namespace) -> list[str]:
     """``--preset``/``--strokes`` as given, for a child process (``up``)."""
     out = ["--strokes", args.strokes]

@@ -15,8 +15,10 @@ from .common import (
     add_avatar_option,
     add_command,
     add_kit_option,
+    add_osc_options,
     add_style_options,
     avatar_of,
+    osc_allow,
     rig_for,
 )
 from .keys import add_curve_options, security_from_args
@@ -45,6 +47,7 @@ def register(sub: Subparsers) -> None:
                    help="publish a hit only once its hand is decided, L after it")  # fmt: skip
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
     add_style_options(p)
+    add_osc_options(p, "preset, param, state")
     add_curve_options(p, server=True, client=True)
 
 
@@ -93,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
         sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
         tick_hz=args.tick_hz, input_offset_s=calibration.input_ms / 1000.0,
         security=security_from_args(args), avatar="" if avatar is None else avatar.digest,
+        osc_port=args.osc, osc_allow=osc_allow(args), preset=args.preset or "neutral",
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)

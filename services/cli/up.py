@@ -45,6 +45,7 @@ from .common import (
     add_avatar_option,
     add_command,
     add_kit_option,
+    add_osc_options,
     add_renamed,
     add_style_options,
     avatar_argv,
@@ -52,6 +53,7 @@ from .common import (
     demo_groove,
     has_screen,
     kit_source,
+    osc_allow,
     style_argv,
 )
 from .keys import add_curve_options
@@ -61,6 +63,7 @@ if TYPE_CHECKING:
 
 RECORD_GRACE_S = 60.0  # how long past --seconds a set-length recording may take to finish
 SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscribe_protocol)
+OSC_SYNTH, OSC_DISPLAY = 12, 13  # their loopback OSC ports (UDP), from --port-base
 
 
 def register(sub: Subparsers) -> None:
@@ -114,6 +117,11 @@ def register(sub: Subparsers) -> None:
                         "(default: one line naming what exists, exit 2)")  # fmt: skip
     p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
     add_style_options(p)
+    add_osc_options(
+        p,
+        "every /livedrummer address, forwarded to the synth and the display "
+        "on UDP ports PORT_BASE+12 and +13",
+    )
     add_curve_options(p, server=True, client=False)
     # what "left at its default" means for the rig profile (see apply_profile)
     p.set_defaults(up_defaults={a.dest: a.default for a in p._actions})
@@ -201,6 +209,9 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
                     "--camera", args.camera,
                     "--fps", str(args.fps), "--size", frame_size(args), *avatar_argv(args),
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
+    if args.osc is not None:  # up's OSC port forwards to these (services.osc)
+        synth_argv += ["--osc", str(base + OSC_SYNTH)]
+        display_argv += ["--osc", str(base + OSC_DISPLAY)]
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
         display_argv += ["--fullscreen"] if args.fullscreen else []
@@ -261,6 +272,7 @@ def run(args: argparse.Namespace) -> int:
 
         load_expression(args.preset)
     check_before_start(args)
+    allow = osc_allow(args)
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None
         if args.video is not None:
@@ -269,7 +281,24 @@ def run(args: argparse.Namespace) -> int:
             sessions = Path(tmp) if args.demo else sessions_dir()
             args.video.parent.mkdir(parents=True, exist_ok=True)
         started = time.time()
-        code = _supervise(args, Supervisor(specs(args, sessions)))
+        router = None
+        if args.osc is not None:
+            import logging
+
+            from ..osc import DISPLAY_ADDRESSES, SYNTH_ADDRESSES, OscRouter
+
+            routes = {"synth": (SYNTH_ADDRESSES, args.port_base + OSC_SYNTH),
+                      "display": (DISPLAY_ADDRESSES, args.port_base + OSC_DISPLAY)}  # fmt: skip
+            router = OscRouter(args.osc, routes, logging.getLogger("livedrummer.up"), allow)
+            print(f"up: OSC on udp port {router.port} "
+                  f"({'loopback and ' + ', '.join(allow) if allow else 'loopback only'})",
+                  flush=True)  # fmt: skip
+            router.start()
+        try:
+            code = _supervise(args, Supervisor(specs(args, sessions)))
+        finally:
+            if router is not None:
+                router.stop()
         if code == 0 and args.video is not None and sessions is not None:
             add_drum_track(args, sessions, started)
     return code

@@ -81,6 +81,7 @@ from ..badmsg import BadMessages
 from ..net import Security, connect, socket, subscribe_protocol
 from ..service import OnReady, Service
 from .record import LiveRecorder
+from .showctl import DisplayShow
 from .surface import HeadlessSurface, WindowSurface
 from .video import VideoSettings
 from .window import WindowOptions
@@ -167,6 +168,8 @@ class LiveConfig:
     security: Security = field(default_factory=Security)
     control: str | None = None  # HELLO/READY endpoint (none unless asked: up runs many displays)
     avatar: Avatar | None = None  # who is drawn (None: the built-in character); READY says which
+    osc_port: int | None = None  # OSC camera and blackout (services.display.showctl)
+    osc_allow: tuple[str, ...] = ()
 
 
 @dataclass
@@ -206,6 +209,7 @@ class LiveDisplay(Service):
         self.late = BehindCounter("pose messages arrived after every frame they cover",
                                   "the avatar is behind: raise the synth's --delay-ms")  # fmt: skip
         self.held = BehindCounter("frames drawn with a stale pose (the pose stream stalled)")
+        self.show: DisplayShow | None = None
 
     def open(self) -> None:
         """Connect to the synth's poses (the base binds the control socket, if one is asked)."""
@@ -213,8 +217,15 @@ class LiveDisplay(Service):
         subscribe_protocol(self._sub)
         connect(self._sub, self.config.sub, "sub endpoint", self.config.security)
         self.endpoints["sub"] = self.config.sub
+        port = self.config.osc_port
+        if port is not None:
+            self.show = DisplayShow(self.kit, self.config.camera, port, self.config.osc_allow)
+            self.endpoints["osc"] = f"udp://127.0.0.1:{self.show.osc.port}"
 
     def release(self) -> None:
+        if self.show is not None:
+            self.show.close()
+            self.show = None
         if self._sub is not None:
             self._sub.close(0)
             self._sub = None
@@ -237,6 +248,8 @@ class LiveDisplay(Service):
                 surface = WindowSurface(self.kit, cfg.window, cfg.avatar)
             elif cfg.render:
                 surface = HeadlessSurface(self.kit, cfg.size, cfg.camera, cfg.avatar)
+            if surface is not None and self.show is not None:
+                surface.stage = self.show.stage
             # A set-length headless recording is drawn after the show from what arrived (see
             # the module docstring): every frame at full rate, and no drawing during the show.
             deferred = (cfg.video is not None and isinstance(surface, HeadlessSurface)
@@ -279,6 +292,10 @@ class LiveDisplay(Service):
                 record: dict[str, Any] = {"frame": self.stats.frames, "render_s": now,
                                           "show_s": show, "pose_s": None,
                                           "newest_s": self.track.newest_s}  # fmt: skip
+                if self.show is not None:  # OSC commands reach this very frame
+                    self.show.apply(now)
+                    record["camera"] = self.show.stage.camera
+                    record["dark"] = round(self.show.stage.darkness(now), 3)
                 if got is not None:
                     pose_s, row = got
                     record["pose_s"] = pose_s
