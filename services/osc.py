@@ -8,6 +8,7 @@ Addresses (the README's table):
 ``/livedrummer/camera``         name or 1-8         smooth move to a stored viewpoint (display)
 ``/livedrummer/camera/cut``     name or 1-8         cut to it, no move (display)
 ``/livedrummer/blackout``       0 or 1              fade to black, and back (display)
+``/livedrummer/cue``            name                a cue of ``--cues FILE`` (both)
 ``/livedrummer/state``          (none)              reply: name/value pairs of every service
 ==============================  ==================  =========================================
 
@@ -54,8 +55,9 @@ from .badmsg import BadMessages
 
 PREFIX = "/livedrummer/"
 STATE = PREFIX + "state"
-SYNTH_ADDRESSES = (PREFIX + "preset", PREFIX + "param/")
-DISPLAY_ADDRESSES = (PREFIX + "camera", PREFIX + "camera/cut", PREFIX + "blackout")
+CUE = PREFIX + "cue"
+SYNTH_ADDRESSES = (PREFIX + "preset", PREFIX + "param/", CUE)
+DISPLAY_ADDRESSES = (PREFIX + "camera", PREFIX + "camera/cut", PREFIX + "blackout", CUE)
 LOOPBACK = ("127.0.0.1", "::1")
 MAX_DATAGRAM = 65_536
 

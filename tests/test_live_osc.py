@@ -73,7 +73,11 @@ def test_up_is_steered_over_osc(gl_ok: None, tmp_path: Path) -> None:
     probe.bind(("127.0.0.1", 0))
     port = probe.getsockname()[1]
     probe.close()
-    proc = launch(tmp_path, "--seconds", "60", "--osc", str(port), "--png", "--fps", "10")
+    cues = tmp_path / "cues.toml"
+    cues.write_text('[[cue]]\nname = "outro"\npreset = "relaxed"\ncamera = "overhead"\n'
+                    '[cue.params]\ntwist_fraction = 0.1\n')  # fmt: skip
+    proc = launch(tmp_path, "--seconds", "60", "--osc", str(port), "--png", "--fps", "10",
+                  "--cues", str(cues))  # fmt: skip
     client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     client.bind(("127.0.0.1", 0))
     client.settimeout(5.0)
@@ -117,6 +121,11 @@ def test_up_is_steered_over_osc(gl_ok: None, tmp_path: Path) -> None:
         lit = frames.png(cut).mean()
         assert frames.png(back).mean() > 0.8 * lit > 5, "the picture comes back after the blackout"
         assert state(client, port)["camera"] == "front"
+        client.sendto(encode("/livedrummer/cue", ("outro",)), ("127.0.0.1", port))
+        frames.wait(lambda r: r.get("camera") == "overhead", "from the cue's camera")
+        after = state(client, port)
+        assert after["preset"] == "relaxed" and after["camera"] == "overhead"
+        assert after["param/twist_fraction"] == pytest.approx(0.1)
     finally:
         proc.terminate()
         out, _ = proc.communicate(timeout=60)

@@ -316,6 +316,18 @@ def add_osc_options(p: argparse.ArgumentParser, what: str) -> None:
         metavar="ADDR,...",
         help="also take OSC from these sender addresses (default: loopback only)",
     )
+    p.add_argument("--cues", type=Path, metavar="FILE",
+                   help="cue list (TOML) whose cues OSC /livedrummer/cue NAME fires "
+                   "(default: none)")  # fmt: skip
+
+
+def cues_of(args: argparse.Namespace) -> dict[str, Any]:
+    """``--cues FILE`` loaded (one line naming the file, cue and key when it is bad)."""
+    if getattr(args, "cues", None) is None:
+        return {}
+    from livedrummer.live.cues import load_cues
+
+    return dict(load_cues(args.cues))
 
 
 def osc_allow(args: argparse.Namespace) -> tuple[str, ...]:

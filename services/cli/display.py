@@ -32,6 +32,7 @@ from .common import (
     add_renamed,
     avatar_of,
     check_aa,
+    cues_of,
     demo_groove,
     osc_allow,
     read_performance,
@@ -179,6 +180,7 @@ def run_live(args: argparse.Namespace) -> int:
         png=not args.no_png, security=security_from_args(args), window=window,
         video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
         control=args.control, avatar=avatar, osc_port=args.osc, osc_allow=osc_allow(args),
+        cues=cues_of(args),
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     if args.synth_control is not None:  # one line when the synth plays another avatar

@@ -18,6 +18,7 @@ from .common import (
     add_osc_options,
     add_style_options,
     avatar_of,
+    cues_of,
     osc_allow,
     rig_for,
 )
@@ -97,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
         tick_hz=args.tick_hz, input_offset_s=calibration.input_ms / 1000.0,
         security=security_from_args(args), avatar="" if avatar is None else avatar.digest,
         osc_port=args.osc, osc_allow=osc_allow(args), preset=args.preset or "neutral",
+        cues=cues_of(args),
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)

@@ -50,6 +50,7 @@ from .common import (
     add_style_options,
     avatar_argv,
     avatar_of,
+    cues_of,
     demo_groove,
     has_screen,
     kit_source,
@@ -212,6 +213,10 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     if args.osc is not None:  # up's OSC port forwards to these (services.osc)
         synth_argv += ["--osc", str(base + OSC_SYNTH)]
         display_argv += ["--osc", str(base + OSC_DISPLAY)]
+        if args.cues is not None:
+            cues = ["--cues", str(args.cues.resolve())]
+            synth_argv += cues
+            display_argv += cues
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
         display_argv += ["--fullscreen"] if args.fullscreen else []
@@ -273,6 +278,7 @@ def run(args: argparse.Namespace) -> int:
         load_expression(args.preset)
     check_before_start(args)
     allow = osc_allow(args)
+    cues_of(args)  # a bad cue list is one line before anything starts
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None
         if args.video is not None:

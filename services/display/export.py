@@ -41,7 +41,7 @@ from livedrummer.audio.mix import mix_onsets
 from livedrummer.audio.soundfont import render_soundfont
 from livedrummer.avatar.model import Avatar
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
-from livedrummer.render.camera import pick_camera
+from livedrummer.render.camera import Camera, pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
@@ -51,6 +51,7 @@ from .context import DisplayError, headless_context
 from .png import write_png
 from .record import spooled_track
 from .renderer import Renderer, i420_ok
+from .showctl import darken
 from .video import VideoSettings, VideoWriter, check_video_target
 
 log = logging.getLogger("livedrummer.render")
@@ -94,10 +95,13 @@ def export(
     overlays: frozenset[str] = frozenset(),
     soundfont: Path | None = None,
     avatar: Avatar | None = None,
+    staging: Callable[[float], tuple[Camera, float]] | None = None,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
-    drum track from the SoundFont ``soundfont`` when given, else the built-in kit."""
+    drum track from the SoundFont ``soundfont`` when given, else the built-in kit.
+    ``staging``: each frame's camera and darkness by its time (a cue list's
+    :class:`~livedrummer.live.cues.CuedStage`), instead of ``camera``."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
     start = time.perf_counter()
@@ -132,7 +136,12 @@ def export(
         gpu_yuv = i420_ok(settings.size)
         strips = overlay_image(settings.size, overlays, OverlayModels(body, n / fps))
         for i, frame in enumerate(body.frames(times)):
-            renderer.draw(frame, cam)
+            if staging is None:
+                renderer.draw(frame, cam)
+            else:
+                view, dark = staging(float(times[i]))
+                renderer.draw(frame, view)
+                darken(renderer, dark)
             if not strips.empty:
                 r = strips.rect
                 renderer.draw_overlay(strips.paint(float(times[i])), (r.x, r.y, r.width, r.height))

@@ -170,6 +170,7 @@ class LiveConfig:
     avatar: Avatar | None = None  # who is drawn (None: the built-in character); READY says which
     osc_port: int | None = None  # OSC camera and blackout (services.display.showctl)
     osc_allow: tuple[str, ...] = ()
+    cues: dict[str, Any] = field(default_factory=dict)  # livedrummer.live.cues, by name
 
 
 @dataclass
@@ -219,7 +220,8 @@ class LiveDisplay(Service):
         self.endpoints["sub"] = self.config.sub
         port = self.config.osc_port
         if port is not None:
-            self.show = DisplayShow(self.kit, self.config.camera, port, self.config.osc_allow)
+            self.show = DisplayShow(self.kit, self.config.camera, port, self.config.osc_allow,
+                                    self.config.cues)  # fmt: skip
             self.endpoints["osc"] = f"udp://127.0.0.1:{self.show.osc.port}"
 
     def release(self) -> None:

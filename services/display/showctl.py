@@ -21,9 +21,10 @@ from typing import Any
 import numpy as np
 
 from livedrummer.kit.model import Kit
+from livedrummer.live.cues import Cue, fire_stage
 from livedrummer.live.stage import Stage
 
-from ..osc import DISPLAY_ADDRESSES, PREFIX, STATE, Command, OscEndpoint, state_pairs
+from ..osc import CUE, DISPLAY_ADDRESSES, PREFIX, STATE, Command, OscEndpoint, state_pairs
 
 log = logging.getLogger("livedrummer.display")
 
@@ -31,8 +32,10 @@ log = logging.getLogger("livedrummer.display")
 class DisplayShow:
     """The stage and the OSC endpoint that steers it (see the module docstring)."""
 
-    def __init__(self, kit: Kit, camera: str, port: int, allow: tuple[str, ...] = ()) -> None:
+    def __init__(self, kit: Kit, camera: str, port: int, allow: tuple[str, ...] = (),
+                 cues: dict[str, Cue] | None = None) -> None:  # fmt: skip
         self.stage = Stage(kit, camera)
+        self.cues = cues or {}
         self.osc = OscEndpoint(port, DISPLAY_ADDRESSES, "display", log, allow)
         self.frames = 0
 
@@ -54,7 +57,12 @@ class DisplayShow:
             self.osc.argument(cmd, "expected one argument")
             return
         try:
-            if cmd.address == PREFIX + "blackout":
+            if cmd.address == CUE:
+                cue = self.cues.get(args[0]) if isinstance(args[0], str) else None
+                if cue is None:
+                    raise ValueError(f"no cue of that name (known: {', '.join(self.cues)})")
+                fire_stage(stage, cue, now_s)
+            elif cmd.address == PREFIX + "blackout":
                 if isinstance(args[0], str) or args[0] not in (0, 1):
                     raise ValueError("expected 0 or 1")
                 stage.set_blackout(bool(args[0]), now_s)

@@ -46,6 +46,7 @@ import zmq
 
 from livedrummer.errors import ProtocolError
 from livedrummer.live.behind import BehindCounter
+from livedrummer.live.cues import Cue
 from livedrummer.live.synth import LiveSynth, PoseBatch
 from livedrummer.protocol import (
     Hello,
@@ -69,7 +70,7 @@ from ..net import (
     socket,
     subscribe_protocol,
 )
-from ..osc import PREFIX, STATE, SYNTH_ADDRESSES, Command, OscEndpoint, state_pairs
+from ..osc import CUE, PREFIX, STATE, SYNTH_ADDRESSES, Command, OscEndpoint, state_pairs
 from ..service import OnReady, Service
 
 log = logging.getLogger("livedrummer.synth")
@@ -94,6 +95,7 @@ class SynthConfig:
     osc_port: int | None = None  # OSC show control (services.osc): preset, param, state
     osc_allow: tuple[str, ...] = ()  # OSC senders besides loopback
     preset: str = "neutral"  # the expression's name, for the state reply
+    cues: dict[str, Cue] = field(default_factory=dict)  # fired by OSC /livedrummer/cue
 
 
 @dataclass
@@ -210,7 +212,13 @@ class SynthService(Service):
             return
         args = cmd.args
         try:
-            if cmd.address == PREFIX + "preset":
+            if cmd.address == CUE:
+                cue = self.config.cues.get(args[0]) if len(args) == 1 else None  # type: ignore[arg-type]
+                if cue is None:
+                    raise ValueError(f"no cue of that name (known: {', '.join(self.config.cues)})")
+                self.synth.set_expression(cue.apply(self.synth.style.target), now)
+                self.preset = cue.preset or self.preset
+            elif cmd.address == PREFIX + "preset":
                 if len(args) != 1 or not isinstance(args[0], str):
                     raise ValueError("expected one preset name")
                 self.synth.set_expression(load_expression(args[0]), now)
