@@ -123,6 +123,14 @@ def register(sub: Subparsers) -> None:
         "every /livedrummer address, forwarded to the synth and the display "
         "on UDP ports PORT_BASE+12 and +13",
     )
+    p.add_argument("--control", type=Path, metavar="FILE",
+                   help="MIDI controller map (livedrummer control learn) applied from "
+                   "--control-midi (default: none)")  # fmt: skip
+    p.add_argument(
+        "--control-midi",
+        metavar="PORT",
+        help="the MIDI controller's port, for --control (default: none)",
+    )
     add_curve_options(p, server=True, client=False)
     # what "left at its default" means for the rig profile (see apply_profile)
     p.set_defaults(up_defaults={a.dest: a.default for a in p._actions})
@@ -210,7 +218,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
                     "--camera", args.camera,
                     "--fps", str(args.fps), "--size", frame_size(args), *avatar_argv(args),
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
-    if args.osc is not None:  # up's OSC port forwards to these (services.osc)
+    if args.osc is not None or args.control is not None:  # up's OSC port forwards here
         synth_argv += ["--osc", str(base + OSC_SYNTH)]
         display_argv += ["--osc", str(base + OSC_DISPLAY)]
         if args.cues is not None:
@@ -279,6 +287,13 @@ def run(args: argparse.Namespace) -> int:
     check_before_start(args)
     allow = osc_allow(args)
     cues_of(args)  # a bad cue list is one line before anything starts
+    mapping = None
+    if (args.control is None) != (args.control_midi is None):
+        raise ConfigError("--control FILE and --control-midi PORT go together")
+    if args.control is not None:
+        from livedrummer.live.controlmap import load_control_map
+
+        mapping = load_control_map(args.control)
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None
         if args.video is not None:
@@ -287,22 +302,32 @@ def run(args: argparse.Namespace) -> int:
             sessions = Path(tmp) if args.demo else sessions_dir()
             args.video.parent.mkdir(parents=True, exist_ok=True)
         started = time.time()
-        router = None
-        if args.osc is not None:
+        router = bridge = None
+        if args.osc is not None or mapping is not None:
             import logging
 
             from ..osc import DISPLAY_ADDRESSES, SYNTH_ADDRESSES, OscRouter
 
             routes = {"synth": (SYNTH_ADDRESSES, args.port_base + OSC_SYNTH),
                       "display": (DISPLAY_ADDRESSES, args.port_base + OSC_DISPLAY)}  # fmt: skip
-            router = OscRouter(args.osc, routes, logging.getLogger("livedrummer.up"), allow)
+            # a controller alone gets a loopback port of its own (0: the system picks one)
+            port = args.osc if args.osc is not None else 0
+            router = OscRouter(port, routes, logging.getLogger("livedrummer.up"), allow)
             print(f"up: OSC on udp port {router.port} "
                   f"({'loopback and ' + ', '.join(allow) if allow else 'loopback only'})",
                   flush=True)  # fmt: skip
             router.start()
+        if mapping is not None and router is not None:
+            from ..controller import ControllerBridge
+
+            bridge = ControllerBridge(args.control_midi, mapping, router.port, args.api).start()
+            print(f"up: controller {args.control_midi} steers the show ({args.control})",
+                  flush=True)  # fmt: skip
         try:
             code = _supervise(args, Supervisor(specs(args, sessions)))
         finally:
+            if bridge is not None:
+                bridge.stop()
             if router is not None:
                 router.stop()
         if code == 0 and args.video is not None and sessions is not None:
