@@ -3,12 +3,20 @@ its offline twin (polled as a service would)."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from livedrummer.live.beat import BeatTracker, beat_accuracy, onset_weights, track_beats
+from livedrummer.midi.notemap import load_note_map
+from livedrummer.midi.smf import read_midi_file
+from livedrummer.timeline.clock import SteppedClock
 from livedrummer.timeline.events import ONSET_DTYPE
 from livedrummer.timeline.performance import Performance
+from services.journal import JournalWriter
 
 
 def rock(bpm: float, bars: int, jitter_s: float = 0.008) -> tuple[np.ndarray, np.ndarray]:
@@ -59,3 +67,27 @@ def test_polled_online_the_tracker_gives_its_offline_twin_s_beats(groove: Perfor
     assert got.size > 20 and abs(got.size - offline.size) <= 2
     near = np.min(np.abs(got[:, None] - offline[None, :]), axis=1)
     assert np.mean(near < 0.002) >= 0.95, f"{np.mean(near < 0.002):.2f} of the beats agree"
+
+
+def test_sessions_export_writes_the_detected_tempo_map(tmp_path: Path) -> None:
+    on, _ = rock(100.0, 12, jitter_s=0.004)
+    on["note"] = np.where(on["instrument"] == 0, 36, np.where(on["instrument"] == 1, 38, 42))
+    on["channel"] = 9
+    on["openness"] = np.nan
+    on["time_s"] += 5000.0
+    w = JournalWriter.create({"performer": 0}, SteppedClock(5000.0), tmp_path, "rock")
+    w.append_onsets(on, 0.0, 0)
+    w.close()
+    out = tmp_path / "rock.mid"
+    run = subprocess.run([sys.executable, "-m", "services", "sessions", "export", str(w.path),
+                          "-o", str(out)], capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    back = read_midi_file(out, load_note_map("roland-td"))
+    played = on["time_s"] - on["time_s"][0]
+    heard = back.onsets["time_s"] - back.onsets["time_s"][0]
+    assert np.abs(heard - played).max() < 0.002, "the tempo map keeps every onset's time"
+    beats = back.grid.beat_s[back.grid.beat_s > 4.0]
+    assert 60.0 / np.median(np.diff(beats)) == pytest.approx(100.0, rel=0.02)
+    # the file's beats fall on the played beats (kick and snare), not between them
+    hits = played[np.isin(on["instrument"], (0, 1))] + float(back.onsets["time_s"][0])
+    assert beat_accuracy(beats, hits[hits > 4.5], 4.5, 0.03) >= 0.9
