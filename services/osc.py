@@ -44,6 +44,7 @@ from __future__ import annotations
 import logging
 import socket
 import threading
+import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -261,8 +262,6 @@ class OscRouter:
     def _gather(self) -> list[Arg]:
         """Every service's state reply, merged (a service that does not answer within
         ``wait_s`` is named in ``missing``)."""
-        import time
-
         ports = {port: name for name, (_, port) in self.routes.items()}
         while True:  # replies to an earlier request that came too late
             try:

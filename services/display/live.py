@@ -42,6 +42,10 @@ live (on 2 cores with llvmpipe a 720p frame of the character takes 60-120 ms), a
 run does not compete with the synth for the CPU. It costs the drawing time after the show
 (about 90 s for the 30 s demo here). Open-ended recordings are still drawn live.
 
+Show control. With ``config.osc_port``, OSC camera, blackout and cue commands are applied
+before each frame (:mod:`services.display.showctl`); frames.jsonl then also names each
+frame's camera and darkness.
+
 Life cycle: the service base's (:mod:`services.service`); readiness comes after the first
 frame that drew the drummer, and a control socket answering HELLO with READY (service
 "display", role "frames", the pose format) is bound only when ``config.control`` names one,

@@ -24,6 +24,11 @@ checked; a bad one is dropped, counted per kind (``bad_events``, ``bad_control``
 :class:`~services.badmsg.BadMessages`, logged once per kind, totals logged at exit and in
 ``summary()["bad_messages"]``) and the loop carries on with the next message.
 
+Show control. With ``config.osc_port`` the loop also reads an OSC port
+(:mod:`services.osc`) before each tick: a preset, a parameter or a cue changes the style
+(eased in, :mod:`livedrummer.live.style`), ``/livedrummer/state`` is answered with the preset,
+every parameter and the performer's state.
+
 Limits: the pose socket is a plain PUB (a slow display loses samples past the high-water
 mark; it sees the gap in the sequence numbers); one performer per synth.
 
