@@ -271,8 +271,11 @@ def main(argv: list[str]) -> int:
                         "would spare: llvmpipe draws on the pipeline's cores)")  # fmt: skip
     parser.add_argument("--no-provisional", action="store_true",
                         help="the synth publishes a hit only once its hand is decided")  # fmt: skip
-    parser.add_argument("--osc", action="store_true",
-                        help="synth and display read an OSC port too (show control on)")
+    parser.add_argument(
+        "--osc",
+        action="store_true",
+        help="synth and display read an OSC port too (show control on)",
+    )
     args = parser.parse_args(argv)
     synth_args = ["--no-provisional"] if args.no_provisional else []
     osc = ["--osc", "0"] if args.osc else []  # a port the system picks: polled, never sent to

@@ -218,7 +218,8 @@ class SynthService(Service):
         args = cmd.args
         try:
             if cmd.address == CUE:
-                cue = self.config.cues.get(args[0]) if len(args) == 1 else None  # type: ignore[arg-type]
+                name = args[0] if len(args) == 1 else None
+                cue = self.config.cues.get(name) if isinstance(name, str) else None
                 if cue is None:
                     raise ValueError(f"no cue of that name (known: {', '.join(self.config.cues)})")
                 self.synth.set_expression(cue.apply(self.synth.style.target), now)
