@@ -92,7 +92,8 @@ def register(sub: Subparsers) -> None:
         help="headless frames folder"))  # fmt: skip
     p.add_argument("--fps", type=float, default=30.0, help="display frames per second")
     p.add_argument("--port-base", type=int, default=5710,
-                   help="TCP ports PORT..PORT+11 on --bind (default 5710)")  # fmt: skip
+                   help="TCP ports PORT..PORT+11 on --bind, and UDP PORT+12 and +13 on "
+                   "loopback with --osc or --control (default 5710)")  # fmt: skip
     p.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
                    help="address the input and synth serve on (default 127.0.0.1)")  # fmt: skip
     p.add_argument("--png", action="store_true",
