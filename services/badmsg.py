@@ -78,6 +78,10 @@ class BadMessages:
         """Count a valid message this socket does not serve (``what`` names it)."""
         self._count("unexpected", f"{what} is not served here")
 
+    def count(self, kind: str, detail: str) -> None:
+        """Count a dropped message of another protocol (OSC) by its own ``kind``."""
+        self._count(kind, detail)
+
     def _count(self, kind: str, detail: str) -> None:
         with self._lock:
             first = kind not in self.counts

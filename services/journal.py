@@ -235,18 +235,56 @@ def list_sessions(directory: Path | None = None) -> list[SessionInfo]:
     return out
 
 
+def detected_beats(journal: Journal) -> np.ndarray | None:
+    """The beats the online tracker (:mod:`livedrummer.live.beat`) finds in a journal's
+    onsets, cleaned into an increasing grid (a beat closer than half the median interval
+    to the one before is dropped); None when it finds fewer than four."""
+    from livedrummer.live.beat import onset_weights, track_beats
+
+    on = np.sort(journal.onsets, order="time_s")
+    if on.size < 8:
+        return None
+    times = on["time_s"].astype(np.float64)
+    beats = np.sort(track_beats(times, onset_weights(on), float(times[-1]) + 1.0))
+    if beats.size < 4:
+        return None
+    half = 0.5 * float(np.median(np.diff(beats)))
+    kept = [float(beats[0])]
+    for b in beats[1:]:
+        if b - kept[-1] >= half:
+            kept.append(float(b))
+    return np.array(kept) if len(kept) >= 4 else None
+
+
 def journal_to_midi(
-    journal: Journal, bpm: float = DEFAULT_BPM, ticks_per_beat: int = DEFAULT_TPB
+    journal: Journal,
+    bpm: float = DEFAULT_BPM,
+    ticks_per_beat: int = DEFAULT_TPB,
+    beats: np.ndarray | None = None,
 ) -> mido.MidiFile:
-    """One-track SMF of a journal (see the module docstring for the mapping)."""
+    """One-track SMF of a journal (see the module docstring for the mapping). With
+    ``beats`` (clock times, increasing: :func:`detected_beats`), the file's tempo map puts a
+    beat at each of them (a tempo event per beat; before the first and after the last, their
+    neighbours' tempo), so a sequencer's bars follow the playing; else one tempo, ``bpm``."""
     if not 1.0 <= bpm <= 1000.0:
         raise JournalError(f"export tempo {bpm} bpm out of range 1..1000")
     on, ctl = journal.onsets, journal.controls
     times = np.concatenate([on["time_s"], ctl["time_s"]])
     origin = float(times.min()) if times.size else 0.0
     ticks_per_s = ticks_per_beat * bpm / 60.0
+    grid: np.ndarray | None = None
+    if beats is not None and beats.size >= 2:
+        # the beats, extended a beat before the first sound and after the last
+        first, last = float(beats[1] - beats[0]), float(beats[-1] - beats[-2])
+        before = np.arange(float(beats[0]) - first, origin - first, -first)[::-1]
+        end = float(times.max()) if times.size else float(beats[-1])
+        after = np.arange(float(beats[-1]) + last, end + 2 * last, last)
+        grid = np.concatenate([before, beats, after])
 
     def tick(t: float) -> int:
+        if grid is not None:
+            index = float(np.interp(t, grid, np.arange(grid.size, dtype=np.float64)))
+            return round(index * ticks_per_beat)
         return round((t - origin) * ticks_per_s)
 
     # (tick, order, message): controls first at a tick (CC4 precedes its note), then
@@ -286,7 +324,14 @@ def journal_to_midi(
     events.sort(key=lambda e: e[:3])
     mid = mido.MidiFile(type=0, ticks_per_beat=ticks_per_beat)
     track = mido.MidiTrack()
-    track.append(mido.MetaMessage("set_tempo", tempo=round(60_000_000 / bpm), time=0))
+    if grid is None:
+        track.append(mido.MetaMessage("set_tempo", tempo=round(60_000_000 / bpm), time=0))
+    else:  # a tempo event on each beat: its length to the next
+        for k, length in enumerate(np.diff(grid)):
+            tempo = min(max(round(length * 1e6), 1), 0xFFFFFF)
+            events.append((k * ticks_per_beat, -1, -1,
+                           mido.MetaMessage("set_tempo", tempo=tempo)))  # fmt: skip
+        events.sort(key=lambda e: e[:3])
     now = 0
     for t, _, _, msg in events:
         track.append(msg.copy(time=t - now))
@@ -297,10 +342,16 @@ def journal_to_midi(
 
 
 def export_session(
-    source: Path, out: Path, bpm: float = DEFAULT_BPM, ticks_per_beat: int = DEFAULT_TPB
+    source: Path,
+    out: Path,
+    bpm: float = DEFAULT_BPM,
+    ticks_per_beat: int = DEFAULT_TPB,
+    detect: bool = False,
 ) -> Journal:
+    """Write a journal as MIDI; ``detect``: with the detected tempo map (else ``bpm``)."""
     journal = load_journal(source)
-    mid = journal_to_midi(journal, bpm, ticks_per_beat)
+    beats = detected_beats(journal) if detect else None
+    mid = journal_to_midi(journal, bpm, ticks_per_beat, beats)
     try:
         mid.save(out)
     except OSError as exc:

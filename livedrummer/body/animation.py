@@ -29,7 +29,7 @@ notes hovers over its home piece (hands) or rests on its pedal (feet).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -37,7 +37,7 @@ from livedrummer.body import fk, quat, spline
 from livedrummer.body.expression import Expression
 from livedrummer.body.ik import solve_leg
 from livedrummer.body.rig import Rig, neutral_world
-from livedrummer.body.secondary import BOB_KINDS, SecondaryParams, Torso, build_torso
+from livedrummer.body.secondary import BOB_KINDS, SecondaryParams, Torso, TorsoStyle, build_torso
 from livedrummer.body.skeleton import ARM, LEG, N_JOINTS, J
 from livedrummer.body.strike import leg_locals, solve_strike, to_local
 from livedrummer.body.strokes import (
@@ -77,9 +77,11 @@ class JointCurve:
     rotvec: np.ndarray  # (K, 3)
     tension: np.ndarray
     continuity: np.ndarray
+    bias: np.ndarray | None = None  # Expression.ctb_bias at the contacts
 
     def sample(self, times: np.ndarray) -> np.ndarray:
-        rv = spline.evaluate(self.time_s, self.rotvec, times, self.tension, self.continuity)
+        rv = spline.evaluate(self.time_s, self.rotvec, times, self.tension, self.continuity,
+                             self.bias)  # fmt: skip
         return quat.exp(rv)
 
 
@@ -315,7 +317,7 @@ def animate(
     step = pause or _nothing
     ex = expression or Expression()
     sp = strokes or StrokeParams()
-    sec = secondary or SecondaryParams()
+    sec = replace(secondary or SecondaryParams(), twist_cap_deg_s=ex.turn_speed_deg_s)
     kit = rig.kit
     on = sticking.onsets
     played = (sticking.limb >= 0) & (sticking.piece >= 0)
@@ -323,6 +325,9 @@ def animate(
     piece = sticking.piece.astype(np.int64)
     zone = on["zone"].astype(np.int64)
     vel = on["velocity"].astype(np.float64) / 127.0
+    # each piece kind's amplitude (Expression.piece_amplitude) scales its strokes' lift
+    gain = np.array([ex.piece_gain(p.kind.value) for p in kit.pieces] or [1.0])
+    lift_all = vel * gain[np.maximum(piece, 0)]
     times = on["time_s"].astype(np.float64)
     elasticity = np.array([p.elasticity for p in kit.pieces])
     hihat = next((i for i, p in enumerate(kit.pieces) if p.kind is PieceKind.HIHAT), -1)
@@ -337,6 +342,8 @@ def animate(
         sec, ex.twist_fraction, np.radians(ex.back_amplitude_deg),
         np.radians(ex.head_amplitude_deg), np.asarray(beats, dtype=np.float64), times[hands],
         h_point, head_m, times[bob_mask], vel[bob_mask], times[played],
+        TorsoStyle(ex.back_frequency, ex.head_frequency, np.radians(ex.side_sway_deg),
+                   np.radians(ex.head_tilt_deg)),
     )  # fmt: skip
     step()
 
@@ -357,7 +364,7 @@ def animate(
             openn = np.array([np.nan])
         else:
             pz = (piece[notes], zone[notes])
-            lift_v = vel[notes]
+            lift_v = lift_all[notes]
             openn = on["openness"][notes]
         chest_q, r_sh, l_sh = _spine(rig, torso, t)
         shoulder = r_sh if side == "r" else l_sh
@@ -387,7 +394,7 @@ def animate(
             axis_w = quat.rotate(world[j], X)
             rise = np.sum(axis_w * quat.cross(point - pivots[j], normal), axis=-1)
             signed[j] = np.where(rise >= 0, 1.0, -1.0)
-        arm = _ArmKeys(keys, base, signed, amps, scales)
+        arm = _ArmKeys(keys, base, signed, amps, scales, ex.ctb_bias)
         arm_keys[side] = arm
         arms[side] = arm.curves()
         step()
@@ -406,7 +413,7 @@ def animate(
         pedal_m = np.array([
             kit.pieces[i].pedal_position_m or kit.pieces[i].position_m for i in pz[0]
         ], dtype=np.float64)  # fmt: skip
-        keys = stroke_keys(times[notes], pz[0] * len(ZONES) + pz[1], vel[notes],
+        keys = stroke_keys(times[notes], pz[0] * len(ZONES) + pz[1], lift_all[notes],
                            elasticity[pz[0]], sp)  # fmt: skip
         feet[side] = FootCurve(
             keys.time_s, keys.lift, np.where(keys.kind == CONTACT, 0.0, 1.0),
@@ -432,16 +439,18 @@ class _ArmKeys:
     signed: dict[int, np.ndarray]  # joint -> (n,) direction of the lift
     amps: dict[int, np.ndarray]  # joint -> (n,) full-lift rotation per note
     scales: dict[int, float]
+    bias: float = 0.0  # at the contacts (elsewhere the tension of 1 leaves no tangent)
 
     def curves(self) -> dict[int, JointCurve]:
         k = self.keys
         tension = np.where(k.kind == CONTACT, 0.0, 1.0)
         continuity = np.where(k.kind == CONTACT, -1.0, 0.0)
+        bias = np.where(k.kind == CONTACT, self.bias, 0.0) if self.bias else None
         out: dict[int, JointCurve] = {}
         every = np.arange(k.time_s.size)
         for j in self.base:
             rv = self.rotvecs(j, every)
-            out[j] = JointCurve(lagged_times(k, self.scales[j]), rv, tension, continuity)
+            out[j] = JointCurve(lagged_times(k, self.scales[j]), rv, tension, continuity, bias)
         return out
 
     def rotvecs(self, j: int, at: np.ndarray) -> np.ndarray:

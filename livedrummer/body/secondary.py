@@ -15,19 +15,25 @@ a function of time built from keys:
   with i counted from 0 next to the beat, so an empty side gives exactly 1; the larger side
   wins).
 * **Look-at** (head yaw and pitch): keyed slightly before each hand onset towards its target.
+* **Style** (:class:`TorsoStyle`, from the expression): sway and bob keyed on a grid of
+  ``frequency`` times the beats (0.5: every other beat, 2: on every half beat, interpolated
+  through the beats' own times, so it follows a changing tempo); a sideways sway (lower
+  back roll, about the forward axis) to one side on one beat of its grid and to the other
+  on the next; a constant sideways head tilt.
 
 Limits: the pelvis stays still on the throne; no breathing; look-at ignores the other hand.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from livedrummer.body import quat, spline
 
 X = np.array([1.0, 0.0, 0.0])
+Y = np.array([0.0, 1.0, 0.0])
 Z = np.array([0.0, 0.0, 1.0])
 
 #: Instrument kinds whose onsets count for the velocity cofactor (not ride or hi-hat).
@@ -43,6 +49,26 @@ class SecondaryParams:
     density_c: float = 1.0
     look_ahead_s: float = 0.12
     look_fraction: float = 0.6
+
+
+@dataclass(frozen=True, slots=True)
+class TorsoStyle:
+    """The expression's share of the torso (see the module docstring)."""
+
+    back_frequency: float = 1.0  # sways per beat
+    head_frequency: float = 1.0  # bobs per beat
+    side_sway_rad: float = 0.0
+    head_tilt_rad: float = 0.0
+
+
+def beat_grid(beats: np.ndarray, per_beat: float) -> np.ndarray:
+    """``per_beat`` keys per beat, placed through the beats' own times (linear in between)."""
+    if per_beat == 1.0 or beats.size < 2:
+        return beats
+    index = np.arange(beats.size, dtype=np.float64)
+    k = np.arange(0.0, (beats.size - 1) * per_beat + 1e-9) / per_beat
+    out: np.ndarray = np.interp(k, index, beats)
+    return out
 
 
 def rate_limited(times: np.ndarray, goal: np.ndarray, cap_per_s: float) -> np.ndarray:
@@ -125,6 +151,14 @@ class Torso:
     look_t: np.ndarray
     look_yaw: np.ndarray
     look_pitch: np.ndarray
+    roll_t: np.ndarray = field(default_factory=lambda: np.zeros(1))  # sideways sway keys
+    roll_rad: np.ndarray = field(default_factory=lambda: np.zeros(1))
+    tilt_rad: float = 0.0  # sideways head tilt
+
+    def roll(self, times: np.ndarray) -> np.ndarray:
+        if not self.roll_rad.any():
+            return np.zeros_like(times)
+        return spline.evaluate(self.roll_t, self.roll_rad, times)
 
     def twist(self, times: np.ndarray) -> np.ndarray:
         if self.twist_t.size == 0:
@@ -137,7 +171,8 @@ class Torso:
         twist = self.twist(times)
         sway = spline.evaluate(self.sway_t, self.sway_rad, times)
         half = quat.from_axis_angle(Z, 0.5 * twist)
-        lower = quat.mul_x(half, -(self.lean_rad + sway))
+        turned = quat.mul(half, quat.from_axis_angle(Y, self.roll(times)))
+        lower = quat.mul_x(turned, -(self.lean_rad + sway))
         chest = quat.mul_x(half, np.full_like(times, self.lean_rad * 0.3))
         return lower, chest
 
@@ -152,16 +187,17 @@ class Torso:
         else:
             yaw = pitch = np.zeros_like(times)
         # forward lean and sway tip +z towards +y: a negative turn about +x
-        lower = quat.mul(
-            quat.from_axis_angle(Z, 0.5 * twist),
-            quat.from_axis_angle(X, -(self.lean_rad + sway)),
-        )
+        turned = quat.mul(quat.from_axis_angle(Z, 0.5 * twist),
+                          quat.from_axis_angle(Y, self.roll(times)))  # fmt: skip
+        lower = quat.mul(turned, quat.from_axis_angle(X, -(self.lean_rad + sway)))
         chest = quat.mul(
             quat.from_axis_angle(Z, 0.5 * twist),
             quat.from_axis_angle(X, np.full_like(times, self.lean_rad * 0.3)),
         )
         neck = quat.from_axis_angle(X, -bob + self.lean_rad * 1.3)
         head = quat.mul(quat.from_axis_angle(Z, yaw), quat.from_axis_angle(X, -pitch))
+        if self.tilt_rad:
+            head = quat.mul(head, quat.from_axis_angle(Y, np.full_like(times, self.tilt_rad)))
         return {"lower_back": lower, "chest": chest, "neck": neck, "head": head}
 
 
@@ -183,19 +219,25 @@ def build_torso(
     bob_s: np.ndarray,
     bob_velocity: np.ndarray,
     all_onset_s: np.ndarray,
+    style: TorsoStyle | None = None,
 ) -> Torso:
     """Torso keys from the hands' onsets (sorted) and their targets, and the beat grid."""
+    st = style or TorsoStyle()
     cap = np.radians(params.twist_cap_deg_s)
     lim = np.radians(params.twist_max_deg)
     goal = np.clip(twist_fraction * azimuth(hand_targets), -lim, lim)
     twist_rad = rate_limited(hand_s, goal, cap)
-    length = np.diff(beats, append=beats[-1] + 0.5) if beats.size else beats
-    sway_t, sway_v = _beat_keys(beats, np.full(beats.size, back_amp_rad))
-    factor = velocity_cofactor(beats, bob_s, bob_velocity, params.strike_range_s)
+    back_beats = beat_grid(beats, st.back_frequency)
+    sway_t, sway_v = _beat_keys(back_beats, np.full(back_beats.size, back_amp_rad))
+    roll_t = back_beats if back_beats.size else np.zeros(1)
+    roll_v = st.side_sway_rad * np.where(np.arange(roll_t.size) % 2 == 0, 1.0, -1.0)
+    bob_beats = beat_grid(beats, st.head_frequency)
+    length = np.diff(bob_beats, append=bob_beats[-1] + 0.5) if bob_beats.size else bob_beats
+    factor = velocity_cofactor(bob_beats, bob_s, bob_velocity, params.strike_range_s)
     factor = factor * density_cofactor(
-        beats, length, all_onset_s, params.strike_range_s, params.density_c
+        bob_beats, length, all_onset_s, params.strike_range_s, params.density_c
     )
-    bob_t, bob_v = _beat_keys(beats, head_amp_rad * np.clip(factor, 0.0, 1.5))
+    bob_t, bob_v = _beat_keys(bob_beats, head_amp_rad * np.clip(factor, 0.0, 1.5))
     rel = hand_targets - head_m
     look_pitch = params.look_fraction * np.arctan2(-rel[:, 2], np.hypot(rel[:, 0], rel[:, 1]))
     return Torso(
@@ -209,4 +251,7 @@ def build_torso(
         look_t=hand_s - params.look_ahead_s,
         look_yaw=params.look_fraction * azimuth(rel),
         look_pitch=look_pitch,
+        roll_t=roll_t,
+        roll_rad=roll_v,
+        tilt_rad=st.head_tilt_rad,
     )

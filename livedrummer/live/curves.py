@@ -30,9 +30,11 @@ import numpy as np
 
 from livedrummer.body import fk, quat
 from livedrummer.body.animation import Animation, ClearanceMemo, Openness, animate
+from livedrummer.body.expression import Expression
 from livedrummer.body.rig import Rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.strokes import StrokeParams
+from livedrummer.live.style import StyleChange
 from livedrummer.sticking.result import Sticking
 
 Answer = Callable[[], None]
@@ -47,6 +49,25 @@ class Curves:
     key: tuple[object, ...]
     contacts_s: np.ndarray  # committed contacts (performance time), sorted
     chokes: list[np.ndarray] | None = None  # per piece, choke (grab) times in the window
+    #: a change of expression under way: the window animated with the old expression too
+    style: tuple[StyleChange, Animation] | None = None
+
+
+def sample_one(curves: Curves, times: np.ndarray, answer: Answer | None = None) -> np.ndarray:
+    """Pose records of ``curves`` at ``times``, blended from the old expression's animation
+    while a change of expression is under way (see :mod:`livedrummer.live.style`)."""
+    rows = sample_poses(curves.anim, curves.sticking, times, curves.chokes)
+    if curves.style is None:
+        return rows
+    change, old_anim = curves.style
+    w = change.weight(times)
+    mixed = w < 1.0
+    if mixed.any():
+        if answer is not None:
+            answer()
+        prev = sample_poses(old_anim, curves.sticking, times[mixed], curves.chokes)
+        rows[mixed] = blend_rows(curves.anim.rig, prev, rows[mixed], w[mixed])
+    return rows
 
 
 @dataclass(frozen=True)
@@ -67,7 +88,7 @@ def sample_curves(view: CurveView, times: np.ndarray, answer: Answer | None = No
     curves = view.curves
     if curves is None:
         raise ValueError("no curves to sample yet")
-    rows = sample_poses(curves.anim, curves.sticking, times, curves.chokes)
+    rows = sample_one(curves, times, answer)
     old = view.old
     if old is None:
         return rows, True
@@ -78,7 +99,7 @@ def sample_curves(view: CurveView, times: np.ndarray, answer: Answer | None = No
         return rows, True
     if answer is not None:
         answer()
-    prev = sample_poses(old.anim, old.sticking, times[fading], old.chokes)
+    prev = sample_one(old, times[fading])
     rows[fading] = blend_rows(curves.anim.rig, prev, rows[fading], w[fading])
     return rows, False
 
@@ -114,6 +135,7 @@ class CurveSet:
     def reset(self) -> None:
         self._view = CurveView(None)
         self._memo: ClearanceMemo = {}  # the clearance search's settings, window to window
+        self._memo_old: ClearanceMemo = {}  # the same for the old expression during a change
         self.animations = 0  # how many times the body was re-run (for benchmarks)
         self.built_at = -np.inf  # the committed horizon of the last rebuild
 
@@ -135,15 +157,24 @@ class CurveSet:
         start_s: float,
         horizon_s: float,
         answer: Answer | None = None,
+        expression: Expression | None = None,
+        change: StyleChange | None = None,
     ) -> Curves:
-        """Animate ``sticking`` (``answer`` is called between the steps) and make it current,
-        fading from the old curves from ``start_s`` until the first of ``contacts_s`` (the
-        sorted times of its committed notes, guesses left out) after it, at most ``blend_s``."""
-        anim = animate(self.rig, sticking, beats, openness, strokes=self.strokes, pause=answer,
-                       memo=self._memo)  # fmt: skip
+        """Animate ``sticking`` with ``expression`` (``answer`` is called between the steps)
+        and, while a ``change`` of expression is under way, with its old expression too; make
+        it current, fading from the old curves from ``start_s`` until the first of
+        ``contacts_s`` (the sorted times of its committed notes, guesses left out) after it,
+        at most ``blend_s``."""
+        anim = animate(self.rig, sticking, beats, openness, expression, strokes=self.strokes,
+                       pause=answer, memo=self._memo)  # fmt: skip
         self.animations += 1
+        style = None
+        if change is not None:
+            old_anim = animate(self.rig, sticking, beats, openness, change.old,
+                               strokes=self.strokes, pause=answer, memo=self._memo_old)  # fmt: skip
+            style = (change, old_anim)
         self.built_at = horizon_s
-        new = Curves(anim, sticking, key, contacts_s, chokes)
+        new = Curves(anim, sticking, key, contacts_s, chokes, style)
         old = self._view.curves
         if old is None:
             self._view = CurveView(new)

@@ -56,6 +56,11 @@ cymbal's wobble in the live poses as :func:`~livedrummer.body.sample.sample_pose
 offline; a choke re-animates the window at once (it is rare) so the held samples after it
 are replaced.
 
+Style. The window is animated with the expression in force (a preset: SMED's gains, shares
+and secondary motion); :meth:`LiveSynth.set_expression` changes it while playing, eased in
+over ``style_ramp_s`` (:mod:`livedrummer.live.style`: the window is animated with both
+expressions and the poses blended along the ramp, so no joint jumps).
+
 Idle. With no notes the torso still sways on a slow "breathing" beat (the body's sway keyed on
 ``idle_period_s``), so the drummer never freezes.
 
@@ -78,12 +83,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.body.animation import hihat_openness
+from livedrummer.body.expression import Expression, with_param
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import Rig
 from livedrummer.body.strokes import StrokeParams
 from livedrummer.live.curves import Answer, CurveSet
 from livedrummer.live.ledger import SampleLedger
 from livedrummer.live.quick import QuickState, quick_contact
+from livedrummer.live.style import StyleRamp
 from livedrummer.live.window import NoteWindow, WindowParams
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.timeline.events import ONSET_DTYPE
@@ -104,6 +111,7 @@ class SynthParams:
     provisional: bool = True  # publish up to now with pending notes' guessed hands; resend
     control_every_s: float = 0.1  # pedal (CC4) changes alone re-animate at most this often
     max_notes: int = 128  # the window's most notes (a flood's re-animations stay cheap)
+    style_ramp_s: float = 0.5  # a change of expression is eased in over this long (style.py)
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.lookahead_s <= self.delay_s:
@@ -139,6 +147,7 @@ class LiveSynth:
         strokes: StrokeParams | None = None,
         cc_open: np.ndarray | None = None,
         note_map: NoteMap | None = None,
+        expression: Expression | None = None,
     ) -> None:
         self.rig = rig
         self.params = p = params or SynthParams()
@@ -150,6 +159,7 @@ class LiveSynth:
         self.window = NoteWindow(rig, wp, note_map)
         self.curves = CurveSet(rig, p.blend_s, strokes)
         self.ledger = SampleLedger(self.dtype)
+        self.style = StyleRamp(expression, p.style_ramp_s)
         self.reset()
 
     def reset(self) -> None:
@@ -184,6 +194,16 @@ class LiveSynth:
     def control(self, row: np.ndarray | np.void) -> None:
         """One controller event (CONTROL_DTYPE record): the hi-hat pedal and chokes."""
         self.window.control(row)
+
+    def set_expression(self, expression: Expression, now_s: float) -> None:
+        """Play with ``expression`` from clock time ``now_s`` on, eased in (see
+        :mod:`livedrummer.live.style`): the window is re-animated at each step of the ramp."""
+        self.style.set(expression, now_s)
+
+    def set_param(self, name: str, value: float, now_s: float) -> None:
+        """One expression parameter (:data:`~livedrummer.body.expression.PARAMS`) set from
+        clock time ``now_s`` on, eased in like a preset; ValueError names a bad name or value."""
+        self.set_expression(with_param(self.style.target, name, value), now_s)
 
     def quick_state(self) -> QuickState:
         """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
@@ -274,14 +294,18 @@ class LiveSynth:
         window = self.window
         window.prune(horizon)
         content = window.content(horizon)
+        # a change of expression shapes what may still be (re-)sent: from ``start`` on
+        change = self.style.change(start)
+        key = (*content.key, self.style.target, change)
         current = self.curves.current
-        if current is not None and current.key[:4] == content.key[:4]:
+        if current is not None and current.key[:4] == key[:4] and current.key[5:] == key[5:]:
             # only the pedal moved: its openness joins at most every ``control_every_s``
             # (each hi-hat CC4 step would otherwise cost a whole re-animation)
             if (content.key[4] == current.key[4]
                     or horizon - self.curves.built_at < self.params.control_every_s):  # fmt: skip
                 return False
         openness = hihat_openness(content.sticking.onsets, content.controls, cc_open=self.cc_open)
-        self.curves.rebuild(content.sticking, content.beats_s, openness, content.key,
-                            content.contacts_s, content.chokes, start, horizon, answer)  # fmt: skip
+        self.curves.rebuild(content.sticking, content.beats_s, openness, key, content.contacts_s,
+                            content.chokes, start, horizon, answer, self.style.target,
+                            change)  # fmt: skip
         return True

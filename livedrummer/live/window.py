@@ -9,7 +9,9 @@ at most one per hand, at its expected next onset, so the upswing starts on time)
 controller events (hi-hat pedal, cymbal chokes) of the same stretch of time. This module
 keeps them and turns them into what the curves are built from (:meth:`NoteWindow.content`):
 one time-ordered :class:`~livedrummer.sticking.result.Sticking` of notes and guesses, the
-committed contacts, the torso's beats, the window's controls and chokes, and a key that
+committed contacts, the torso's beats (the music's, from an online
+:class:`~livedrummer.live.beat.BeatTracker` fed every onset, once it has a tempo; before, the
+hands' pulse), the window's controls and chokes, and a key that
 changes exactly when the curves would.
 
 Guesses. When the committed horizon gets within ``guard_s`` of a guess and no onset has
@@ -40,6 +42,7 @@ import numpy as np
 from livedrummer.body.rig import Rig
 from livedrummer.body.sample import kit_choke_times
 from livedrummer.kit.vocabulary import INSTRUMENTS
+from livedrummer.live.beat import BeatTracker, instrument_weights
 from livedrummer.live.predict import Guess, HandPredictor
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.sticking.online import Decision, OnlineSticker
@@ -99,11 +102,14 @@ class NoteWindow:
         self.note_map = note_map
         self.sticker = OnlineSticker(rig.kit, params.lookahead_s, keep_onsets=False)
         self.predictor = HandPredictor()
+        self.beat = BeatTracker()  # the music's beat, for the torso (see _beats)
+        self._beat_share = instrument_weights()
         self.reset()
 
     def reset(self) -> None:
         self.sticker.reset()
         self.predictor.reset()
+        self.beat.reset()
         self._notes: list[Note] = []  # every note since the window start, by stream index
         self._first = 0  # stream index of self._notes[0]
         self._controls: list[np.ndarray] = []
@@ -119,6 +125,9 @@ class NoteWindow:
             self._notes.append(note)
             notes.append(note)
             self._apply(self.sticker.process(rec))
+            inst = min(max(int(rec["instrument"]), 0), self._beat_share.size - 1)
+            weight = float(rec["velocity"]) / 127.0 * float(self._beat_share[inst])
+            self.beat.process(float(rec["time_s"]), weight)
         if recs.size:  # also while no poses are asked for (a re-animation answering a flood)
             self.prune(float(recs["time_s"].max()) - self.params.lookahead_s)
         return notes
@@ -279,8 +288,14 @@ class NoteWindow:
         return WindowContent(sticking, contacts, beats, controls, chokes, key)
 
     def _beats(self, horizon: float, keep: list[tuple[np.ndarray, int, int]]) -> np.ndarray:
-        """Beat times for the torso's sway: the hands' pulse while playing, breathing when idle."""
+        """Beat times for the torso's sway and the head's bob: the beat tracker's
+        (:mod:`livedrummer.live.beat`) while playing, else the hands' pulse, breathing when
+        idle."""
         p = self.params
+        lo, hi = horizon - p.window_s - 1.0, horizon + 2 * p.epoch_s
+        last = float(keep[-1][0]["time_s"]) if keep else -math.inf
+        if self.beat.period_s is not None and horizon - last < 1.0:
+            return self.beat.beats(lo, hi)
         times = np.array([float(r["time_s"]) for r, li, _ in keep if li in (0, 1)])
         period = p.idle_period_s
         anchor = math.floor(horizon / p.epoch_s) * p.epoch_s

@@ -271,8 +271,15 @@ def main(argv: list[str]) -> int:
                         "would spare: llvmpipe draws on the pipeline's cores)")  # fmt: skip
     parser.add_argument("--no-provisional", action="store_true",
                         help="the synth publishes a hit only once its hand is decided")  # fmt: skip
+    parser.add_argument(
+        "--osc",
+        action="store_true",
+        help="synth and display read an OSC port too (show control on)",
+    )
     args = parser.parse_args(argv)
     synth_args = ["--no-provisional"] if args.no_provisional else []
+    osc = ["--osc", "0"] if args.osc else []  # a port the system picks: polled, never sent to
+    synth_args += osc
     input_args = ["--realtime", str(args.realtime)] if args.realtime else []
     jack = Jack()
     try:
@@ -294,7 +301,7 @@ def main(argv: list[str]) -> int:
                           f"{'pose - bus':>15}")  # fmt: skip
                 r = run_rate(jack, label, schedule, delay_ms, lookahead_ms,
                              Path(tmp), synth_args, input_args,
-                             ["--no-render"] if args.no_render else [])  # fmt: skip
+                             (["--no-render"] if args.no_render else []) + osc)  # fmt: skip
                 print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
                       f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
                       f"{_pct(r['pose'])} | {_pct(r['frame'])} | "

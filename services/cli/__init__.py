@@ -38,6 +38,7 @@ COMMANDS: dict[str, str] = {
     "map": "learn a note map for a new module by hitting its pads",
     "calibrate": "measure the kit's input offset by hitting along to a click",
     "practice": "play along with a reference, scored note by note",
+    "control": "map a MIDI controller's faders and pads to show parameters, cameras and cues",
     "sessions": "list journaled live sessions or export one to MIDI",
     "check": "check contact, penetration and joint limits of the motion",
     "export": "export the drummer's motion as BVH",

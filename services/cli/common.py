@@ -320,6 +320,11 @@ def add_sticking_options(p: argparse.ArgumentParser) -> None:
 def add_motion_options(p: argparse.ArgumentParser) -> None:
     """How the body is animated (check, export, render, display): sticking, strokes, preset."""
     add_sticking_options(p)
+    add_style_options(p)
+
+
+def add_style_options(p: argparse.ArgumentParser) -> None:
+    """``--preset`` and ``--strokes``: how the body plays, the same for files and live."""
     p.add_argument(
         "--preset", default=None, help="expression preset name or .toml path (default: neutral)"
     )
@@ -329,6 +334,52 @@ def add_motion_options(p: argparse.ArgumentParser) -> None:
         choices=("livedrummer", "paper", "smed"),
         help="stroke overlap rules (default livedrummer)",
     )
+
+
+def add_osc_options(p: argparse.ArgumentParser, what: str) -> None:
+    """``--osc PORT`` and ``--osc-allow ADDR,...`` (see :mod:`services.osc`)."""
+    p.add_argument("--osc", type=int, metavar="PORT",
+                   help=f"OSC show control on this UDP port ({what}; no authentication: "
+                   "loopback only unless --osc-allow) (default: none)")  # fmt: skip
+    p.add_argument(
+        "--osc-allow",
+        metavar="ADDR,...",
+        help="also take OSC from these sender addresses (default: loopback only)",
+    )
+    p.add_argument("--cues", type=Path, metavar="FILE",
+                   help="cue list (TOML) whose cues OSC /livedrummer/cue NAME fires "
+                   "(default: none)")  # fmt: skip
+
+
+def cues_of(args: argparse.Namespace) -> dict[str, Any]:
+    """``--cues FILE`` loaded (one line naming the file, cue and key when it is bad)."""
+    if getattr(args, "cues", None) is None:
+        return {}
+    from livedrummer.live.cues import load_cues
+
+    return dict(load_cues(args.cues))
+
+
+def osc_allow(args: argparse.Namespace) -> tuple[str, ...]:
+    """``--osc-allow`` checked: one line naming a bad address."""
+    from livedrummer.errors import ConfigError
+
+    from ..osc import parse_allow
+
+    if args.osc is not None and not 0 <= args.osc <= 65535:
+        raise ConfigError(f"--osc: expected a UDP port 0..65535 (got {args.osc})")
+    try:
+        return parse_allow(args.osc_allow)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
+def style_argv(args: argparse.Namespace) -> list[str]:
+    """``--preset``/``--strokes`` as given, for a child process (``up``)."""
+    out = ["--strokes", args.strokes]
+    if args.preset is not None:
+        out += ["--preset", str(args.preset)]
+    return out
 
 
 def sticking_of(args: argparse.Namespace, performance: Performance, kit: Kit) -> Sticking:

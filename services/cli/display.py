@@ -29,11 +29,14 @@ from .common import (
     add_command,
     add_kit_option,
     add_motion_options,
+    add_osc_options,
     add_renamed,
     avatar_of,
     background_of,
     check_aa,
+    cues_of,
     demo_groove,
+    osc_allow,
     read_performance,
 )
 from .keys import add_curve_options, security_from_args
@@ -94,6 +97,7 @@ def register(sub: Subparsers) -> None:
                       help="only log frames (benchmarks without a GPU context)")  # fmt: skip
     live.add_argument("--no-render-ahead", action="store_true",
                       help="draw each frame for when it is begun, not when it is done")  # fmt: skip
+    add_osc_options(p, "--live: camera, camera/cut, blackout, state")
     add_curve_options(p, server=False, client=True)
 
 
@@ -183,7 +187,8 @@ def run_live(args: argparse.Namespace) -> int:
         display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
         png=not args.no_png, security=security_from_args(args), window=window,
         video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
-        control=args.control, avatar=avatar,
+        control=args.control, avatar=avatar, osc_port=args.osc, osc_allow=osc_allow(args),
+        cues=cues_of(args),
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     if args.synth_control is not None:  # one line when the synth plays another avatar

@@ -24,7 +24,7 @@ import re
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from livedrummer.errors import LivedrummerError
 from livedrummer.render.camera import CAMERA_NAMES
@@ -90,6 +90,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--x264-preset", default="veryfast", help="x264 speed")
     p.add_argument("--overlay", default="", metavar="LIST",
                    help="bottom strips: score, joints or score,joints (default: none)")  # fmt: skip
+    p.add_argument("--cues", type=Path, metavar="FILE",
+                   help="cue list (TOML): presets, parameters, camera and blackout at times or "
+                   "bars (default: none)")  # fmt: skip
     p.add_argument("--soundfont", type=Path, metavar="SF2",
                    help="drum sounds from this General MIDI SoundFont via FluidSynth "
                    "(default: the built-in kit)")  # fmt: skip
@@ -115,6 +118,34 @@ def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, not
     done = perform(performance, rig_for(kit, avatar), note_map, expression,
                    StrokeParams(model=args.strokes), sticking=sticking)  # fmt: skip
     return BodyScene(kit, done)
+
+
+def cued(args: argparse.Namespace, performance: Performance, note_map: NoteMap,
+         body: BodyScene) -> tuple[BodyScene, Any]:  # fmt: skip
+    """``--cues``: the body with the cue list's style changes and the frames' stage (camera and
+    blackout by time); bars are counted on the file's grid."""
+    from livedrummer.body.expression import Expression, load_expression
+    from livedrummer.body.perform import perform
+    from livedrummer.body.strokes import StrokeParams
+    from livedrummer.live.cues import CuedStage, cue_times, load_cues, style_changes
+    from livedrummer.live.stage import Stage
+    from livedrummer.render.cued import CuedBodyScene
+
+    cues = load_cues(args.cues)
+    grid = performance.grid
+    timed = cue_times(cues, grid.beat_s[grid.beat_in_bar == 0])
+    base = load_expression(args.preset) if args.preset else Expression()
+    p = body.performed
+    rig = p.animation.rig
+    styled = tuple(
+        (at, perform(performance, rig, note_map, expression,
+                     StrokeParams(model=args.strokes), sticking=p.sticking))
+        for at, expression in style_changes(timed, base)[1:]
+    )  # fmt: skip
+    scene = CuedBodyScene(body.kit, p, styled)
+    print(f"livedrummer: {args.cues}: {len(timed)} timed cues ({len(styled)} change the style)",
+          file=sys.stderr)  # fmt: skip
+    return scene, CuedStage(Stage(body.kit, args.camera), timed).at
 
 
 def first_seconds(performance: Performance, seconds: float) -> Performance:
@@ -206,6 +237,10 @@ def run(args: argparse.Namespace) -> int:
     avatar = avatar_of(args)
     background = background_of(args)
     get_strategy(args.sticking)
+    if args.cues is not None:  # checked now, applied once the file is animated
+        from livedrummer.live.cues import load_cues
+
+        load_cues(args.cues)
     out = args.output
     if out is None and args.frames_dir is None:
         out = Path(source.stem + (".mov" if background.transparent else ".mp4"))
@@ -224,12 +259,15 @@ def run(args: argparse.Namespace) -> int:
         except ValueError as exc:
             raise RenderOptionError(f"{source}: --start/--end: {exc}") from None
     body = body_scene(args, performance, kit, note_map, avatar)
+    staging = None
+    if args.cues is not None:
+        body, staging = cued(args, performance, note_map, body)
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=samples, fxaa=fxaa, progress=bar,
         overlays=overlays, soundfont=args.soundfont, avatar=avatar, background=background,
-        span=span,
+        span=span, staging=staging,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(

@@ -19,7 +19,9 @@ def register(sub: Subparsers) -> None:
     ex = actions.add_parser("export", help="write a session as a Standard MIDI File")
     ex.add_argument("session", help="session id, unique id prefix, or journal path")
     ex.add_argument("-o", "--output", type=Path, required=True, help="output .mid file")
-    ex.add_argument("--tempo", type=float, default=120.0, help="file tempo in bpm")
+    ex.add_argument("--tempo", type=float, metavar="BPM",
+                    help="one file tempo in bpm (default: the tempo map the live beat tracker "
+                    "detects in the playing; 120 when it finds no beat)")  # fmt: skip
     ex.set_defaults(func=run_export)
 
 
@@ -51,7 +53,9 @@ def run_export(args: argparse.Namespace) -> int:
     from ..journal import export_session, find_session
 
     path = find_session(args.session, args.sessions_dir)
-    journal = export_session(path, args.output, bpm=args.tempo)
+    detect = args.tempo is None
+    journal = export_session(path, args.output, bpm=120.0 if detect else args.tempo,
+                             detect=detect)  # fmt: skip
     print(f"{args.output}: {journal.onsets.size} onsets, {journal.controls.size} controls")
     if journal.stop_reason:
         print(f"  note: {journal.stop_reason}; {journal.discarded_bytes} bytes skipped")

@@ -15,7 +15,11 @@ from .common import (
     add_avatar_option,
     add_command,
     add_kit_option,
+    add_osc_options,
+    add_style_options,
     avatar_of,
+    cues_of,
+    osc_allow,
     rig_for,
 )
 from .keys import add_curve_options, security_from_args
@@ -43,6 +47,8 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--no-provisional", action="store_true",
                    help="publish a hit only once its hand is decided, L after it")  # fmt: skip
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
+    add_style_options(p)
+    add_osc_options(p, "preset, param, state")
     add_curve_options(p, server=True, client=True)
 
 
@@ -50,6 +56,8 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import zmq
 
+    from livedrummer.body.expression import load_expression
+    from livedrummer.body.strokes import StrokeParams
     from livedrummer.errors import ConfigError
     from livedrummer.kit.loader import load_kit
     from livedrummer.live.calibration import Calibration
@@ -81,12 +89,16 @@ def run(args: argparse.Namespace) -> int:
     cc_open = np.array([note_map.openness(v) for v in range(128)])
     avatar = avatar_of(args)
     rig = rig_for(load_kit(args.kit), avatar)
-    synth = LiveSynth(rig, params, cc_open=cc_open, note_map=note_map)
+    expression = load_expression(args.preset) if args.preset else None
+    synth = LiveSynth(rig, params, strokes=StrokeParams(model=args.strokes), cc_open=cc_open,
+                      note_map=note_map, expression=expression)  # fmt: skip
     calibration = Calibration.load()
     config = SynthConfig(
         sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
         tick_hz=args.tick_hz, input_offset_s=calibration.input_ms / 1000.0,
         security=security_from_args(args), avatar="" if avatar is None else avatar.digest,
+        osc_port=args.osc, osc_allow=osc_allow(args), preset=args.preset or "neutral",
+        cues=cues_of(args),
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)
@@ -96,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "
           f"{s['pose_samples']} pose samples in {s['pose_messages']} messages, "
           f"{s['animations']} re-animations, {s['quick_contacts']} quick contacts, "
-          f"answered in {p50}/{p99} ms p50/p99, {s['late_contacts']} contacts late",
+          f"answered in {p50}/{p99} ms p50/p99, {s['late_contacts']} contacts late; "
+          f"played with preset {args.preset or 'neutral'}, {args.strokes} strokes",
           file=sys.stderr)  # fmt: skip
     return code

@@ -46,13 +46,18 @@ from .common import (
     add_background_option,
     add_command,
     add_kit_option,
+    add_osc_options,
     add_renamed,
+    add_style_options,
     avatar_argv,
     avatar_of,
     background_of,
+    cues_of,
     demo_groove,
     has_screen,
     kit_source,
+    osc_allow,
+    style_argv,
 )
 from .keys import add_curve_options
 
@@ -61,6 +66,7 @@ if TYPE_CHECKING:
 
 RECORD_GRACE_S = 60.0  # how long past --seconds a set-length recording may take to finish
 SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscribe_protocol)
+OSC_SYNTH, OSC_DISPLAY = 12, 13  # their loopback OSC ports (UDP), from --port-base
 
 
 def register(sub: Subparsers) -> None:
@@ -89,7 +95,8 @@ def register(sub: Subparsers) -> None:
         help="headless frames folder"))  # fmt: skip
     p.add_argument("--fps", type=float, default=30.0, help="display frames per second")
     p.add_argument("--port-base", type=int, default=5710,
-                   help="TCP ports PORT..PORT+11 on --bind (default 5710)")  # fmt: skip
+                   help="TCP ports PORT..PORT+11 on --bind, and UDP PORT+12 and +13 on "
+                   "loopback with --osc or --control (default 5710)")  # fmt: skip
     p.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
                    help="address the input and synth serve on (default 127.0.0.1)")  # fmt: skip
     p.add_argument("--png", action="store_true",
@@ -114,6 +121,20 @@ def register(sub: Subparsers) -> None:
                    help="wait for a --midi port or --serial device that is not there yet "
                         "(default: one line naming what exists, exit 2)")  # fmt: skip
     p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
+    add_style_options(p)
+    add_osc_options(
+        p,
+        "every /livedrummer address, forwarded to the synth and the display "
+        "on UDP ports PORT_BASE+12 and +13",
+    )
+    p.add_argument("--control", type=Path, metavar="FILE",
+                   help="MIDI controller map (livedrummer control learn) applied from "
+                   "--control-midi (default: none)")  # fmt: skip
+    p.add_argument(
+        "--control-midi",
+        metavar="PORT",
+        help="the MIDI controller's port, for --control (default: none)",
+    )
     add_curve_options(p, server=True, client=False)
     # what "left at its default" means for the rig profile (see apply_profile)
     p.set_defaults(up_defaults={a.dest: a.default for a in p._actions})
@@ -195,12 +216,19 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     synth_argv = [*me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
                   "--control", ep["syn_ctl"], "--kit", args.kit, "--map", map_name,
                   "--lookahead-ms", str(args.lookahead_ms),
-                  "--delay-ms", str(args.delay_ms), *avatar_argv(args),
+                  "--delay-ms", str(args.delay_ms), *avatar_argv(args), *style_argv(args),
                   *curve["synth"]]  # fmt: skip
     display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], "--kit", args.kit,
                     "--camera", args.camera,
                     "--fps", str(args.fps), "--size", frame_size(args), *avatar_argv(args),
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
+    if args.osc is not None or args.control is not None:  # up's OSC port forwards here
+        synth_argv += ["--osc", str(base + OSC_SYNTH)]
+        display_argv += ["--osc", str(base + OSC_DISPLAY)]
+        if args.cues is not None:
+            cues = ["--cues", str(args.cues.resolve())]
+            synth_argv += cues
+            display_argv += cues
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
         display_argv += ["--background", args.background] if args.background else []
@@ -264,7 +292,20 @@ def run(args: argparse.Namespace) -> int:
         logging.getLogger("livedrummer.up").warning(
             "--background %s: no window here; the headless recording keeps the hall",
             args.background)  # fmt: skip
+    if args.preset is not None:  # and a bad --preset
+        from livedrummer.body.expression import load_expression
+
+        load_expression(args.preset)
     check_before_start(args)
+    allow = osc_allow(args)
+    cues_of(args)  # a bad cue list is one line before anything starts
+    mapping = None
+    if (args.control is None) != (args.control_midi is None):
+        raise ConfigError("--control FILE and --control-midi PORT go together")
+    if args.control is not None:
+        from livedrummer.live.controlmap import load_control_map
+
+        mapping = load_control_map(args.control)
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:
         sessions = None
         if args.video is not None:
@@ -273,7 +314,34 @@ def run(args: argparse.Namespace) -> int:
             sessions = Path(tmp) if args.demo else sessions_dir()
             args.video.parent.mkdir(parents=True, exist_ok=True)
         started = time.time()
-        code = _supervise(args, Supervisor(specs(args, sessions)))
+        router = bridge = None
+        if args.osc is not None or mapping is not None:
+            import logging
+
+            from ..osc import DISPLAY_ADDRESSES, SYNTH_ADDRESSES, OscRouter
+
+            routes = {"synth": (SYNTH_ADDRESSES, args.port_base + OSC_SYNTH),
+                      "display": (DISPLAY_ADDRESSES, args.port_base + OSC_DISPLAY)}  # fmt: skip
+            # a controller alone gets a loopback port of its own (0: the system picks one)
+            port = args.osc if args.osc is not None else 0
+            router = OscRouter(port, routes, logging.getLogger("livedrummer.up"), allow)
+            print(f"up: OSC on udp port {router.port} "
+                  f"({'loopback and ' + ', '.join(allow) if allow else 'loopback only'})",
+                  flush=True)  # fmt: skip
+            router.start()
+        if mapping is not None and router is not None:
+            from ..controller import ControllerBridge
+
+            bridge = ControllerBridge(args.control_midi, mapping, router.port, args.api).start()
+            print(f"up: controller {args.control_midi} steers the show ({args.control})",
+                  flush=True)  # fmt: skip
+        try:
+            code = _supervise(args, Supervisor(specs(args, sessions)))
+        finally:
+            if bridge is not None:
+                bridge.stop()
+            if router is not None:
+                router.stop()
         if code == 0 and args.video is not None and sessions is not None:
             add_drum_track(args, sessions, started)
     return code

@@ -43,7 +43,7 @@ from livedrummer.audio.soundfont import render_soundfont
 from livedrummer.avatar.model import Avatar
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
-from livedrummer.render.camera import pick_camera
+from livedrummer.render.camera import Camera, pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
@@ -53,6 +53,7 @@ from .context import DisplayError, headless_context
 from .png import write_png
 from .record import spooled_track
 from .renderer import Renderer, i420_ok
+from .showctl import darken
 from .video import VideoSettings, VideoWriter, check_video_target
 
 log = logging.getLogger("livedrummer.render")
@@ -99,6 +100,7 @@ def export(
     span: tuple[float, float] | None = None,
     background: Background | None = None,
     fxaa: bool = False,
+    staging: Callable[[float], tuple[Camera, float]] | None = None,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
@@ -108,7 +110,9 @@ def export(
     ``span`` = (start_s, end_s) renders only that part (``render --start/--end``): frame ``i``
     shows ``start_s + i / fps``, the motion is the whole performance's (strokes that begin
     before the cut are already in the air), and the track is the whole mix's slice, so a
-    cymbal struck before the cut still rings into it."""
+    cymbal struck before the cut still rings into it. ``staging``: each frame's camera and
+    darkness by its time (a cue list's :class:`~livedrummer.live.cues.CuedStage`), instead
+    of ``camera``."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
     start = time.perf_counter()
@@ -149,7 +153,12 @@ def export(
         gpu_yuv = i420_ok(settings.size) and not alpha
         strips = overlay_image(settings.size, overlays, OverlayModels(body, first_s + n / fps))
         for i, frame in enumerate(body.frames(times)):
-            renderer.draw(frame, cam)
+            if staging is None:
+                renderer.draw(frame, cam)
+            else:
+                view, dark = staging(float(times[i]))
+                renderer.draw(frame, view)
+                darken(renderer, dark)
             if not strips.empty:
                 r = strips.rect
                 renderer.draw_overlay(strips.paint(float(times[i])), (r.x, r.y, r.width, r.height))

@@ -45,6 +45,10 @@ ticks (a machine loaded by other work), the missed frames are scheduled too, ``1
 drawing time after the show (about 90 s for the 30 s demo here). Open-ended recordings are
 still drawn live.
 
+Show control. With ``config.osc_port``, OSC camera, blackout and cue commands are applied
+before each frame (:mod:`services.display.showctl`); frames.jsonl then also names each
+frame's camera and darkness.
+
 Life cycle: the service base's (:mod:`services.service`); readiness comes after the first
 frame that drew the drummer, and a control socket answering HELLO with READY (service
 "display", role "frames", the pose format) is bound only when ``config.control`` names one,
@@ -84,6 +88,7 @@ from ..badmsg import BadMessages
 from ..net import Security, connect, socket, subscribe_protocol
 from ..service import OnReady, Service
 from .record import LiveRecorder
+from .showctl import DisplayShow
 from .surface import HeadlessSurface, WindowSurface
 from .video import VideoSettings
 from .window import WindowOptions
@@ -170,6 +175,9 @@ class LiveConfig:
     security: Security = field(default_factory=Security)
     control: str | None = None  # HELLO/READY endpoint (none unless asked: up runs many displays)
     avatar: Avatar | None = None  # who is drawn (None: the built-in character); READY says which
+    osc_port: int | None = None  # OSC camera and blackout (services.display.showctl)
+    osc_allow: tuple[str, ...] = ()
+    cues: dict[str, Any] = field(default_factory=dict)  # livedrummer.live.cues, by name
 
 
 @dataclass
@@ -221,6 +229,7 @@ class LiveDisplay(Service):
         self.late = BehindCounter("pose messages arrived after every frame they cover",
                                   "the avatar is behind: raise the synth's --delay-ms")  # fmt: skip
         self.held = BehindCounter("frames drawn with a stale pose (the pose stream stalled)")
+        self.show: DisplayShow | None = None
 
     def open(self) -> None:
         """Connect to the synth's poses (the base binds the control socket, if one is asked)."""
@@ -228,8 +237,16 @@ class LiveDisplay(Service):
         subscribe_protocol(self._sub)
         connect(self._sub, self.config.sub, "sub endpoint", self.config.security)
         self.endpoints["sub"] = self.config.sub
+        port = self.config.osc_port
+        if port is not None:
+            self.show = DisplayShow(self.kit, self.config.camera, port, self.config.osc_allow,
+                                    self.config.cues)  # fmt: skip
+            self.endpoints["osc"] = f"udp://127.0.0.1:{self.show.osc.port}"
 
     def release(self) -> None:
+        if self.show is not None:
+            self.show.close()
+            self.show = None
         if self._sub is not None:
             self._sub.close(0)
             self._sub = None
@@ -252,6 +269,8 @@ class LiveDisplay(Service):
                 surface = WindowSurface(self.kit, cfg.window, cfg.avatar)
             elif cfg.render:
                 surface = HeadlessSurface(self.kit, cfg.size, cfg.camera, cfg.avatar)
+            if surface is not None and self.show is not None:
+                surface.stage = self.show.stage
             # A set-length headless recording is drawn after the show from what arrived (see
             # the module docstring): every frame at full rate, and no drawing during the show.
             deferred = (cfg.video is not None and isinstance(surface, HeadlessSurface)
@@ -294,6 +313,10 @@ class LiveDisplay(Service):
                 record: dict[str, Any] = {"frame": self.stats.frames, "render_s": now,
                                           "show_s": show, "pose_s": None,
                                           "newest_s": self.track.newest_s}  # fmt: skip
+                if self.show is not None:  # OSC commands reach this very frame
+                    self.show.apply(now)
+                    record["camera"] = self.show.stage.camera
+                    record["dark"] = round(self.show.stage.darkness(now), 3)
                 if got is not None:
                     pose_s, row = got
                     record["pose_s"] = pose_s

@@ -20,12 +20,14 @@ from typing import Any
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
+from livedrummer.live.stage import Stage
 from livedrummer.render.body_scene import BODY_SKELETON
 from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.scene import SceneFrame
 
 from .renderer import Renderer
+from .showctl import darken
 from .viewcontrol import ViewControl
 from .window import (
     Readout,
@@ -49,9 +51,13 @@ class HeadlessSurface:
         self.renderer = Renderer(self._ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0,
                                  avatar=avatar)  # fmt: skip
         self._camera = pick_camera(kit, camera)
+        self.stage: Stage | None = None  # show control: camera and blackout (showctl)
 
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
-        self.renderer.draw(frame, self._camera)
+        stage = self.stage
+        self.renderer.draw(frame, self._camera if stage is None else stage.view(now_s))
+        if stage is not None:
+            darken(self.renderer, stage.darkness(now_s))
 
     def present(self) -> bool:
         return True
@@ -82,6 +88,7 @@ class WindowSurface:
         self._options = options
         self.camera = options.camera
         self.state = "waiting for poses"  # set by the live loop each frame
+        self.stage: Stage | None = None  # show control: camera and blackout (showctl)
         self._readout = Readout()
         self._show_readout, self._show_help = True, False
 
@@ -97,8 +104,16 @@ class WindowSurface:
         fb = self._glfw.get_framebuffer_size(self._window)
         if fb != self.renderer.size and fb[0] > 0 and fb[1] > 0:
             self.renderer.size = fb
-        self._move = self._view.mouse(self._move, now_s, self.renderer.size)
-        self.renderer.draw(frame, self._move.at(now_s), target=self._ctx.screen)
+        stage = self.stage
+        if stage is None:
+            self._move = self._view.mouse(self._move, now_s, self.renderer.size)
+            view = self._move.at(now_s)
+        else:
+            view = stage.view(now_s)
+        self.renderer.draw(frame, view, target=self._ctx.screen)
+        if stage is not None:
+            darken(self.renderer, stage.darkness(now_s), self._ctx.screen)
+            self.camera = stage.camera
         if self._show_readout or self._show_help:
             from livedrummer.render.hud import live_lines
 
@@ -118,6 +133,8 @@ class WindowSurface:
                 self._show_readout = not self._show_readout
             elif name == "f":
                 toggle_fullscreen(glfw, self._window, self._options)
+            elif self.stage is not None and name.isdigit() and 1 <= int(name) <= 8:
+                self.stage.set_camera(name, self._now)
             else:
                 self._move, label = self._view.key(name, self._move, self._cameras, self._now)
                 self.camera = label or self.camera

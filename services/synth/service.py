@@ -24,6 +24,11 @@ checked; a bad one is dropped, counted per kind (``bad_events``, ``bad_control``
 :class:`~services.badmsg.BadMessages`, logged once per kind, totals logged at exit and in
 ``summary()["bad_messages"]``) and the loop carries on with the next message.
 
+Show control. With ``config.osc_port`` the loop also reads an OSC port
+(:mod:`services.osc`) before each tick: a preset, a parameter or a cue changes the style
+(eased in, :mod:`livedrummer.live.style`), ``/livedrummer/state`` is answered with the preset,
+every parameter and the performer's state.
+
 Limits: the pose socket is a plain PUB (a slow display loses samples past the high-water
 mark; it sees the gap in the sequence numbers); one performer per synth.
 
@@ -46,6 +51,7 @@ import zmq
 
 from livedrummer.errors import ProtocolError
 from livedrummer.live.behind import BehindCounter
+from livedrummer.live.cues import Cue
 from livedrummer.live.synth import LiveSynth, PoseBatch
 from livedrummer.protocol import (
     Hello,
@@ -69,6 +75,7 @@ from ..net import (
     socket,
     subscribe_protocol,
 )
+from ..osc import CUE, PREFIX, STATE, SYNTH_ADDRESSES, Command, OscEndpoint, state_pairs
 from ..service import OnReady, Service
 
 log = logging.getLogger("livedrummer.synth")
@@ -90,6 +97,10 @@ class SynthConfig:
     input_offset_s: float = 0.0
     security: Security = field(default_factory=Security)
     avatar: str = ""  # digest of the avatar whose proportions the rig has, announced in READY
+    osc_port: int | None = None  # OSC show control (services.osc): preset, param, state
+    osc_allow: tuple[str, ...] = ()  # OSC senders besides loopback
+    preset: str = "neutral"  # the expression's name, for the state reply
+    cues: dict[str, Cue] = field(default_factory=dict)  # fired by OSC /livedrummer/cue
 
 
 @dataclass
@@ -135,6 +146,9 @@ class SynthService(Service):
             "the avatar is behind the sound: raise --delay-ms or lighten the machine",
         )
         self._ticked = 0  # onsets heard when the last tick began
+        self.osc: OscEndpoint | None = None
+        self.preset = config.preset
+        self._last_onset_s = -math.inf
 
     def open(self) -> None:
         """Bind the pose socket, connect to the input daemon (the base binds the control)."""
@@ -145,6 +159,10 @@ class SynthService(Service):
         subscribe_protocol(self._sub)
         connect(self._sub, cfg.sub, "sub endpoint", cfg.security)
         self.endpoints["sub"] = cfg.sub
+        if cfg.osc_port is not None:
+            self.osc = OscEndpoint(cfg.osc_port, SYNTH_ADDRESSES, "synth", log, cfg.osc_allow)
+            host = "0.0.0.0" if cfg.osc_allow else "127.0.0.1"
+            self.endpoints["osc"] = f"udp://{host}:{self.osc.port}"
 
     def hello(self) -> Hello:
         return Hello(self.name, "poses", self.config.performer, dict(self.endpoints), self.format,
@@ -166,6 +184,9 @@ class SynthService(Service):
                 wait_ms = 0 if waiting else max(0, math.ceil((wake - self.clock.now()) * 1000))
                 if self._sub.poll(wait_ms):
                     self._drain()  # every hit's contact goes out at once
+                if self.osc is not None:
+                    for cmd in self.osc.take():
+                        self.command(cmd)
                 now = self.clock.now()
                 # a hit's stroke follows with its provisional hand (SynthParams.provisional)
                 fresh = provisional and self.stats.onsets != self._ticked
@@ -181,6 +202,54 @@ class SynthService(Service):
         finally:
             self.shutdown()
         return 0
+
+    def command(self, cmd: Command) -> None:
+        """One OSC command (see :mod:`services.osc`): a preset, a parameter or the state."""
+        from livedrummer.body.expression import load_expression
+        from livedrummer.errors import LivedrummerError
+
+        osc = self.osc
+        if osc is None:
+            return
+        now = self.clock.now()
+        if cmd.address == STATE:
+            osc.reply(cmd.sender, STATE, state_pairs(self.state(now)))
+            return
+        args = cmd.args
+        try:
+            if cmd.address == CUE:
+                name = args[0] if len(args) == 1 else None
+                cue = self.config.cues.get(name) if isinstance(name, str) else None
+                if cue is None:
+                    raise ValueError(f"no cue of that name (known: {', '.join(self.config.cues)})")
+                self.synth.set_expression(cue.apply(self.synth.style.target), now)
+                self.preset = cue.preset or self.preset
+            elif cmd.address == PREFIX + "preset":
+                if len(args) != 1 or not isinstance(args[0], str):
+                    raise ValueError("expected one preset name")
+                self.synth.set_expression(load_expression(args[0]), now)
+                self.preset = args[0]
+            else:
+                name = cmd.address.removeprefix(PREFIX + "param/")
+                if len(args) != 1 or isinstance(args[0], str | bool):
+                    raise ValueError("expected one number")
+                self.synth.set_param(name, float(args[0]), now)
+            log.info("synth: %s %s", cmd.address, " ".join(str(a) for a in args))
+        except (ValueError, LivedrummerError) as exc:
+            osc.argument(cmd, str(exc))
+
+    def state(self, now: float) -> dict[str, str | float | int]:
+        """The synth's share of ``/livedrummer/state``: the preset, every expression
+        parameter and the performer's state."""
+        from livedrummer.body.expression import PARAMS, param_value
+
+        expression = self.synth.style.target
+        out: dict[str, str | float | int] = {"preset": self.preset}
+        out.update({f"param/{p.name}": param_value(expression, p.name) for p in PARAMS})
+        out["playing"] = int(now - self._last_onset_s < 2.0)
+        out["onsets"] = self.stats.onsets
+        out["performer"] = self.config.performer
+        return out
 
     def _say(self, line: str | None) -> None:
         if line is not None:
@@ -270,6 +339,7 @@ class SynthService(Service):
             if self.config.input_offset_s:
                 rows["time_s"] += self.config.input_offset_s
             self.stats.onsets += rows.size
+            self._last_onset_s = self.clock.now()
             return rows
         if msg.kind is Kind.CONTROL and isinstance(msg.body, np.ndarray):
             for row in msg.body:
@@ -278,6 +348,9 @@ class SynthService(Service):
         return None
 
     def release(self) -> None:
+        if self.osc is not None:
+            self.osc.stop()
+            self.osc = None
         for s in (self._sub, self._pub):
             if s is not None:
                 s.close(0)
@@ -306,4 +379,6 @@ class SynthService(Service):
     def bad_messages(self) -> dict[str, dict[str, int]]:
         """Dropped messages by socket ("events", "control") and kind; sockets with none left out."""
         out = {"events": self.bad_events.summary(), "control": self.bad_control.summary()}
+        if self.osc is not None:
+            out["osc"] = self.osc.bad.summary()
         return {k: v for k, v in out.items() if v}

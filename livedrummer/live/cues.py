@@ -1,0 +1,175 @@
+"""Cue lists: SMED's "local control" per section, as a TOML file of named cues.
+
+A cue sets any of: an expression preset, expression parameters (on top of the preset, or of
+what is playing), the camera (a smooth move, or a cut) and the blackout. It fires at a time
+(``at_s``, seconds from the start of a file), at a bar (``bar``, 1-based, on the file's bar
+grid), or only when called by name (OSC ``/livedrummer/cue NAME``)::
+
+    [[cue]]
+    name = "verse"
+    bar = 5
+    preset = "relaxed"
+    camera = "front"        # a name or 1-8
+    cut = false             # true: cut to the camera, no move
+    blackout = false
+    [cue.params]
+    head_amplitude_deg = 10.0
+
+Why this shape. A cue is plain data (:class:`Cue`, loaded strictly: unknown keys, a bad
+parameter or camera name the file and the cue); :func:`cue_times` puts them on a timeline,
+and :func:`expression_at` folds the ones fired so far into the expression in force, so the
+file renderer and the live services apply the same cue the same way: the synth takes its
+preset and parameters, the display its camera and blackout.
+
+Limits: bars are counted on a file's tempo map and meter (live, bars are not counted: cues
+fire by name); a cue's preset is read when the list is loaded.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from livedrummer.body.expression import PARAM_NAMES, Expression, load_expression, with_param
+from livedrummer.config import Table, read_toml
+from livedrummer.errors import ConfigError, LivedrummerError
+from livedrummer.live.stage import Stage, camera_name
+from livedrummer.render.camera import Camera
+
+
+class CueError(ConfigError):
+    """A cue list that cannot be used (file, cue and key named)."""
+
+
+@dataclass(frozen=True)
+class Cue:
+    name: str
+    at_s: float | None = None
+    bar: int | None = None
+    preset: str | None = None
+    expression: Expression | None = None  # the preset, loaded
+    params: tuple[tuple[str, float], ...] = ()
+    camera: str | None = None
+    cut: bool = False
+    blackout: bool | None = None
+
+    def apply(self, base: Expression) -> Expression:
+        """The expression after this cue: its preset (else ``base``) with its parameters."""
+        out = self.expression if self.expression is not None else base
+        for name, value in self.params:
+            out = with_param(out, name, value)
+        return out
+
+    @property
+    def styles(self) -> bool:
+        return self.expression is not None or bool(self.params)
+
+
+def parse_cues(data: dict[str, object], source: str) -> dict[str, Cue]:
+    root = Table(data, source, "", CueError)
+    out: dict[str, Cue] = {}
+    for t in root.tables("cue", "name"):
+        name = t.text("name")
+        if name in out:
+            raise t.fail("name", "a second cue of that name", name)
+        at_s = t.number("at_s", None, lo=0.0)
+        bar = t.integer("bar", None, lo=1)
+        if at_s is not None and bar is not None:
+            raise t.fail("bar", "give at_s or bar, not both")
+        preset = t.text("preset", None)
+        expression = None
+        if preset is not None:
+            try:
+                expression = load_expression(preset)
+            except LivedrummerError as exc:
+                raise t.fail("preset", str(exc)) from None
+        params: list[tuple[str, float]] = []
+        pt = t.table("params") if t.has("params") else Table({}, source, "", CueError)
+        for key in pt.keys():
+            if key not in PARAM_NAMES:
+                raise pt.fail(key, "no such expression parameter")
+            p = PARAM_NAMES[key]
+            params.append((key, pt.number(key, lo=p.lo, hi=p.hi)))
+        pt.done()
+        try:
+            camera = t.text("camera", None)
+        except CueError:  # a number 1-8, as the window's keys
+            camera = str(t.integer("camera", lo=1, hi=8))
+        if camera is not None:
+            try:
+                camera = camera_name(camera)
+            except ValueError as exc:
+                raise t.fail("camera", str(exc)) from None
+        cut = t.boolean("cut", False)
+        blackout = t.boolean("blackout") if t.has("blackout") else None
+        t.done()
+        out[name] = Cue(name, at_s, bar, preset, expression, tuple(params), camera, cut, blackout)
+    root.done()
+    return out
+
+
+def load_cues(path: Path | str) -> dict[str, Cue]:
+    """The cues of a TOML file, by name (see the module docstring)."""
+    return parse_cues(read_toml(Path(path), CueError), str(path))
+
+
+def cue_times(cues: dict[str, Cue], bar_s: np.ndarray | None = None) -> list[tuple[float, Cue]]:
+    """The timed cues, by time: ``at_s``, or the start of bar ``bar`` (``bar_s``: each bar's
+    start in seconds, bar 1 first); a bar past the end never fires."""
+    out: list[tuple[float, Cue]] = []
+    for cue in cues.values():
+        if cue.at_s is not None:
+            out.append((cue.at_s, cue))
+        elif cue.bar is not None and bar_s is not None and cue.bar <= bar_s.size:
+            out.append((float(bar_s[cue.bar - 1]), cue))
+    out.sort(key=lambda tc: tc[0])
+    return out
+
+
+def expression_at(timed: list[tuple[float, Cue]], t: float, base: Expression) -> Expression:
+    """The expression in force at ``t`` after the cues fired by then."""
+    out = base
+    for at, cue in timed:
+        if at > t:
+            break
+        out = cue.apply(out)
+    return out
+
+
+def style_changes(timed: list[tuple[float, Cue]], base: Expression
+                  ) -> list[tuple[float, Expression]]:  # fmt: skip
+    """(time, expression from then on) at each cue that changes the style, from -inf."""
+    out = [(-math.inf, base)]
+    for at, cue in timed:
+        if cue.styles:
+            out.append((at, cue.apply(out[-1][1])))
+    return out
+
+
+class CuedStage:
+    """A :class:`~livedrummer.live.stage.Stage` driven by timed cues: :meth:`at` fires the
+    cues due by a frame's time (frames asked in time order) and gives its camera and
+    darkness."""
+
+    def __init__(self, stage: Stage, timed: list[tuple[float, Cue]]) -> None:
+        self.stage = stage
+        self._pending = [(t, c) for t, c in timed if c.camera is not None or c.blackout is not None]
+        self._next = 0
+
+    def at(self, t: float) -> tuple[Camera, float]:
+        while self._next < len(self._pending) and self._pending[self._next][0] <= t:
+            at, cue = self._pending[self._next]
+            fire_stage(self.stage, cue, at)
+            self._next += 1
+        return self.stage.view(t), self.stage.darkness(t)
+
+
+def fire_stage(stage: Stage, cue: Cue, now_s: float) -> None:
+    """A cue's camera and blackout, applied at ``now_s``."""
+    if cue.camera is not None:
+        stage.set_camera(cue.camera, now_s, cut=cue.cut)
+    if cue.blackout is not None:
+        stage.set_blackout(cue.blackout, now_s)
