@@ -48,6 +48,7 @@ COMMANDS: dict[str, str] = {
     "keys": "make and list CURVE key pairs for remote streams",
     "avatar": "describe an avatar file: bones, proportions, triangles, textures",
     "avatars": "list the avatars --avatar NAME can pick",
+    "transcribe": "transcribe a drum recording (audio file) to a MIDI file",
 }
 
 
