@@ -1,0 +1,103 @@
+"""``input --audio``: rendered drums played into the daemon through a real JACK server.
+
+A player process writes a rendered groove (TimGM6mb, room, noise) to JACK; the daemon, a
+PortAudio client of the same ``jackd -d dummy`` server, recognises it and publishes onsets on
+the ZeroMQ bus, where the test subscribes (:mod:`services.bench._audiolive`). The live hits
+must be the offline twin's; bad devices are one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from livedrummer.acoustic.detector import detect
+from livedrummer.acoustic.pieces import GM_NOTES
+from livedrummer.acoustic.profile import load_profile
+from services.bench._audiolive import play_into_daemon
+from services.bench._drumaudio import DEFAULT_SF2, SR, excerpt, render_mix, render_stems
+from services.bench._jack import JackError, dummy_jack, jack_env
+
+REPO = Path(__file__).resolve().parent.parent
+HELD_OUT = "drummer1/eval_session/7_pop-groove7_138_beat_4-4.mid"
+
+
+@pytest.fixture(scope="module")
+def groove(groove_dir: Path):  # type: ignore[no-untyped-def]
+    if not DEFAULT_SF2.is_file():
+        pytest.skip(f"{DEFAULT_SF2} missing (Debian: apt-get install timgm6mb-soundfont)")
+    ex = excerpt(groove_dir / HELD_OUT, 4.0, 5.0)
+    return ex, render_mix(ex, seed=5), render_stems(ex, seed=5)
+
+
+def _same_hits(live: np.ndarray, offline: np.ndarray) -> float:
+    """Share of hits that agree in note and velocity, both in time order (the live stamps
+    are on the monotonic clock, the offline ones from the file's start; the samples, hence
+    the decisions, are the same)."""
+    notes = np.array(GM_NOTES)[offline["cls"].astype(int)]
+    mine = sorted(zip(np.round(offline["time_s"], 4).tolist(), notes.tolist(),
+                      offline["velocity"].tolist(), strict=True))  # fmt: skip
+    t0 = float(live["time_s"].min()) - mine[0][0] if len(live) else 0.0
+    theirs = sorted(zip(np.round(live["time_s"] - t0, 2).tolist(), live["note"].tolist(),
+                        live["velocity"].tolist(), strict=True))  # fmt: skip
+    same = sum(a[1:] == b[1:] for a, b in zip(mine, theirs, strict=False))
+    return same / max(len(mine), 1)
+
+
+def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, groove) -> None:  # type: ignore[no-untyped-def]
+    _ex, mix, (stems, names) = groove
+    profile = load_profile(None)
+    run = play_into_daemon(mix)
+    offline = detect(mix, SR, profile)
+    assert len(offline) > 15
+    assert "input:" in run.stderr
+    assert len(run.onsets) == len(offline), run.stderr
+    assert _same_hits(run.onsets, offline) >= 0.95
+    assert set(run.onsets["channel"].tolist()) == {9}
+    # attack (the player's JACK cycle) to onset on the bus: positive and bounded
+    attacks = run.attack_times(np.sort(offline["time_s"]))
+    arrivals = np.sort(run.arrival_s)
+    latency = arrivals - attacks
+    assert (latency > 0).all() and np.median(latency) < 0.2, latency
+    # one microphone per drum, two of them on the daemon's two JACK inputs
+    two = stems[:, :2]
+    spec = f"1={names[0]},2={names[1]}"
+    run = play_into_daemon(two, ["--channels", spec])
+    offline = detect(two, SR, profile, [0, 1] if names[:2] == ["kick", "snare"] else None)
+    assert names[:2] == ["kick", "snare"]
+    assert len(run.onsets) == len(offline) and len(offline) > 8
+    assert set(run.onsets["note"].tolist()) <= {36, 38}
+
+
+def _input(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "services", "input", *args], cwd=REPO,
+                          capture_output=True, text=True, timeout=60)  # fmt: skip
+
+
+def test_bad_audio_devices_are_one_line(jack_server: str) -> None:
+    r = _input("--audio", "no-such-card", "--no-journal")
+    assert r.returncode == 2
+    assert r.stderr.strip().splitlines() == [
+        "livedrummer: error: audio device 'no-such-card': no such audio input (inputs: 'system')"
+    ]
+    r = _input("--audio", "system", "--channels", "3=kick", "--no-journal")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    assert "refuses 48000 Hz, 3 channel(s)" in r.stderr and "it has 2 inputs" in r.stderr
+
+
+def test_a_device_at_another_rate_is_refused_in_one_line(tmp_path: Path) -> None:
+    try:
+        with dummy_jack("acoustic-rate", rate=44_100) as name:
+            env = {**os.environ, **jack_env(name)}
+            r = subprocess.run([sys.executable, "-m", "services", "input", "--audio", "system",
+                                "--no-journal"], cwd=REPO, capture_output=True, text=True,
+                               timeout=60, env=env)  # fmt: skip
+    except JackError as exc:
+        pytest.skip(str(exc))
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "refuses 48000 Hz" in r.stderr and "default rate 44100 Hz" in r.stderr
