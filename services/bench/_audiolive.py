@@ -39,6 +39,13 @@ class LiveRun:
         k = np.clip(k, 0, len(self.block_starts) - 1)
         return np.asarray(self.block_times[k] + (idx - self.block_starts[k]) / sr)
 
+    def file_times(self, stamps_s: np.ndarray, sr: int = 48_000) -> np.ndarray:
+        """The inverse: the time in the played audio of each monotonic time ``stamps_s``."""
+        k = np.searchsorted(self.block_times, np.asarray(stamps_s), side="right") - 1
+        k = np.clip(k, 0, len(self.block_times) - 1)
+        samples = self.block_starts[k] + (np.asarray(stamps_s) - self.block_times[k]) * sr
+        return np.asarray(samples / sr)
+
 
 def _ports() -> list[str]:
     return subprocess.run(["jack_lsp"], capture_output=True, text=True, timeout=10).stdout.split(
