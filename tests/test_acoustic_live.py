@@ -101,3 +101,54 @@ def test_a_device_at_another_rate_is_refused_in_one_line(tmp_path: Path) -> None
         pytest.skip(str(exc))
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "refuses 48000 Hz" in r.stderr and "default rate 44100 Hz" in r.stderr
+
+
+def _strokes(notes: list[tuple[float, int, int]], seconds: float) -> np.ndarray:
+    """Mono audio of (time, GM note, velocity) strokes through TimGM6mb (no room, no noise)."""
+    from livedrummer.audio.soundfont import render_soundfont
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.timeline.events import ONSET_DTYPE
+
+    gm = load_note_map("general-midi")
+    rows = np.zeros(len(notes), ONSET_DTYPE)
+    for row, (t, note, velocity) in zip(rows, notes, strict=True):
+        spec = gm.notes[note]
+        row["time_s"], row["note"], row["velocity"], row["channel"] = t, note, velocity, 9
+        row["instrument"], row["zone"], row["hihat"] = (
+            spec.instrument_code,
+            spec.zone.code,
+            spec.hihat.code,
+        )
+    return render_soundfont(rows, seconds, DEFAULT_SF2, SR).mean(axis=1)
+
+
+def test_audio_learn_hears_each_drum_and_its_profile_tells_them_apart(
+    jack_server: str, tmp_path: Path
+) -> None:
+    if not DEFAULT_SF2.is_file():
+        pytest.skip(f"{DEFAULT_SF2} missing (Debian: apt-get install timgm6mb-soundfont)")
+    from livedrummer.acoustic.pieces import CLASSES
+    from services.bench._audiolive import learn_from
+
+    velocities = [120, 100, 80, 110, 90, 70]
+    hits = [(0.3 + 0.4 * i, 36, v) for i, v in enumerate(velocities)]
+    hits += [(4.0 + 0.4 * i, 38, v) for i, v in enumerate(velocities)]
+    out = tmp_path / "mykit-audio.toml"
+    r = learn_from(_strokes(hits, 7.0), ["-o", str(out), "--drums", "kick,snare", "--hits", "6"])
+    assert r.returncode == 0, r.stderr
+    assert "hit the kick about 6 times" in r.stdout and "snare: 6 hits" in r.stdout
+    learnt = load_profile(out)
+    assert sorted(set(learnt.template_class.tolist())) == [0, 1]
+    # a kick-snare pattern the profile never heard, told apart with it
+    pattern = [(0.3 + 0.25 * i, 36 if i % 2 == 0 else 38, 60 + 7 * (i % 9)) for i in range(16)]
+    found = detect(_strokes(pattern, 4.8), SR, learnt)
+    from livedrummer.acoustic.score import score
+
+    times = np.array([t for t, _n, _v in pattern])
+    classes = np.array([CLASSES.index("kick" if n == 36 else "snare") for _t, n, _v in pattern])
+    s = score(found["time_s"], found["cls"], times, classes, np.full(len(times), 100))
+    assert s["kick"].f >= 0.9 and s["snare"].f >= 0.9, s
+    r = subprocess.run([sys.executable, "-m", "services", "audio", "learn", "--audio", "system",
+                        "-o", str(out), "--drums", "kick,cowbell"], cwd=REPO,
+                       capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert r.returncode == 2 and "unknown drum 'cowbell'" in r.stderr

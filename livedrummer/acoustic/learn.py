@@ -29,14 +29,11 @@ class LearnError(LivedrummerError):
 
 def hit_rises(audio: np.ndarray, sr: int, settings: DetectorSettings | None = None) -> np.ndarray:
     """The band rise (hits, N_BANDS) of every onset in mono ``audio``."""
-    flat = AudioProfile(
-        "learn", np.full((1, N_BANDS), 1.0 / N_BANDS), np.zeros(1, np.int64),
-        np.zeros(len(CLASSES)), settings or DetectorSettings(),
-    )  # fmt: skip
-    det = OnlineDetector(flat, sr)
-    det.features = []
-    det.process(np.concatenate([np.asarray(audio, np.float64), np.zeros(tail_samples())]))
-    return np.array(det.features).reshape(-1, N_BANDS)
+    collector = HitCollector(sr, settings)
+    rises = collector.process(
+        np.concatenate([np.asarray(audio, np.float64), np.zeros(tail_samples())])
+    )
+    return np.array(rises).reshape(-1, N_BANDS)
 
 
 def build_profile(
@@ -98,3 +95,30 @@ def soundfont_profile(sf2: object, sr: int, name: str = "general-midi") -> Audio
         found = hit_rises(audio, sr)
         rises.setdefault(code, []).extend(found)
     return build_profile(name, {c: np.array(r) for c, r in rises.items()})
+
+
+class HitCollector:
+    """Online: the band rise of every onset in a stream (what ``audio learn`` listens with).
+
+    ``process(block)`` (mono float samples) returns the rises of the onsets decided in it;
+    :meth:`reset` starts over. The same picking as the detector's, so each rise is the feature
+    the detector will see for that hit.
+    """
+
+    def __init__(self, sr: int, settings: DetectorSettings | None = None) -> None:
+        flat = AudioProfile(
+            "learn", np.full((1, N_BANDS), 1.0 / N_BANDS), np.zeros(1, np.int64),
+            np.zeros(len(CLASSES)), settings or DetectorSettings(),
+        )  # fmt: skip
+        self._det = OnlineDetector(flat, sr)
+        self.reset()
+
+    def reset(self) -> None:
+        self._det.reset()
+        self._features: list[np.ndarray] = []
+        self._det.features = self._features
+
+    def process(self, block: np.ndarray) -> list[np.ndarray]:
+        before = len(self._features)
+        self._det.process(block)
+        return self._features[before:]

@@ -18,6 +18,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -80,23 +81,9 @@ def play_into_daemon(audio: np.ndarray, extra: list[str] | None = None) -> LiveR
             sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
             sub.connect(endpoints["pub"])
             mine = _wait_ports(before, "in_", channels)
-            path = Path(tmp) / "audio.npy"
-            np.save(path, audio.astype(np.float32))
-            stamps = Path(tmp) / "stamps.json"
-            before = set(_ports())
-            player = subprocess.Popen(
-                [sys.executable, "-m", "services.bench._audioplayer", str(path), str(stamps)],
-                cwd=WORKDIR,
-                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-            )  # fmt: skip
-            assert player.stdout is not None and player.stdin is not None
-            json.loads(player.stdout.readline())
-            theirs = _wait_ports(before, "out_", channels)
-            for inp, out in zip(mine, theirs, strict=True):
-                for port in _connections(inp):
-                    subprocess.run(["jack_disconnect", port, inp], timeout=10, check=False)
-                subprocess.run(["jack_connect", out, inp], timeout=10, check=True)
+            player, stamps = _start_player(audio, mine, Path(tmp))
             time.sleep(0.3)  # the subscription settles (nothing is played yet)
+            assert player.stdin is not None
             player.stdin.write("go\n")
             player.stdin.flush()
             rows: list[np.ndarray] = []
@@ -130,6 +117,60 @@ def play_into_daemon(audio: np.ndarray, extra: list[str] | None = None) -> LiveR
     onsets = np.concatenate(rows) if rows else np.zeros(0, ONSET_DTYPE)
     b = np.array(blocks, float).reshape(-1, 2)
     return LiveRun(onsets, np.array(arrivals), b[:, 0].astype(np.int64), b[:, 1], err)
+
+
+def _start_player(audio: np.ndarray, inputs: list[str], tmp: Path) -> tuple[Any, Path]:
+    """The player process, its outputs connected to ``inputs`` (and only to them), waiting
+    for "go" on its stdin; and the file its block stamps will be written to."""
+    channels = 1 if audio.ndim == 1 else audio.shape[1]
+    path = tmp / "audio.npy"
+    np.save(path, audio.astype(np.float32))
+    stamps = tmp / "stamps.json"
+    before = set(_ports())
+    player = subprocess.Popen(
+        [sys.executable, "-m", "services.bench._audioplayer", str(path), str(stamps)],
+        cwd=WORKDIR, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True,
+    )  # fmt: skip
+    assert player.stdout is not None
+    json.loads(player.stdout.readline())
+    theirs = _wait_ports(before, "out_", channels)
+    for inp, out in zip(inputs, theirs, strict=True):
+        for port in _connections(inp):
+            subprocess.run(["jack_disconnect", port, inp], timeout=10, check=False)
+        subprocess.run(["jack_connect", out, inp], timeout=10, check=True)
+    return player, stamps
+
+
+def learn_from(audio: np.ndarray, args: list[str]) -> subprocess.CompletedProcess[str]:
+    """``livedrummer audio learn --audio system ARGS`` hearing ``audio`` played through JACK."""
+    channels = 1 if audio.ndim == 1 else audio.shape[1]
+    before = set(_ports())
+    cmd = [sys.executable, "-m", "services", "audio", "learn", "--audio", "system", *args]
+    learn = subprocess.Popen(cmd, cwd=WORKDIR, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True)  # fmt: skip
+    player = None
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            assert learn.stdout is not None
+            first = learn.stdout.readline()  # "hit the ...": the stream is open
+            if not first:
+                out, err = learn.communicate()
+                return subprocess.CompletedProcess(cmd, learn.returncode, out, err)
+            mine = _wait_ports(before, "in_", channels)
+            player, _stamps = _start_player(audio, mine, Path(tmp))
+            assert player.stdin is not None
+            player.stdin.write("go\n")
+            player.stdin.flush()
+            out, err = learn.communicate(timeout=len(audio) / 48_000 + 60)
+            return subprocess.CompletedProcess(cmd, learn.returncode, first + out, err)
+        finally:
+            if player is not None and player.poll() is None:
+                player.kill()
+                player.wait()
+            if learn.poll() is None:
+                learn.kill()
+                learn.wait()
 
 
 def _wait_ports(before: set[str], kind: str, n: int) -> list[str]:

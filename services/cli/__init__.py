@@ -49,6 +49,7 @@ COMMANDS: dict[str, str] = {
     "avatar": "describe an avatar file: bones, proportions, triangles, textures",
     "avatars": "list the avatars --avatar NAME can pick",
     "transcribe": "transcribe a drum recording (audio file) to a MIDI file",
+    "audio": "learn an acoustic kit's sound (audio profile) for transcribe and input --audio",
 }
 
 
