@@ -85,6 +85,10 @@ def test_bad_audio_devices_are_one_line(jack_server: str) -> None:
     assert r.stderr.strip().splitlines() == [
         "livedrummer: error: audio device 'no-such-card': no such audio input (inputs: 'system')"
     ]
+    up = subprocess.run([sys.executable, "-m", "services", "up", "--audio", "no-such-card",
+                         "--headless"], cwd=REPO, capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert up.returncode == 2 and len(up.stderr.strip().splitlines()) == 1
+    assert "audio device 'no-such-card': no such audio input" in up.stderr
     r = _input("--audio", "system", "--channels", "3=kick", "--no-journal")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
     assert "refuses 48000 Hz, 3 channel(s)" in r.stderr and "it has 2 inputs" in r.stderr

@@ -173,8 +173,8 @@ def learn_from(audio: np.ndarray, args: list[str]) -> subprocess.CompletedProces
                 learn.wait()
 
 
-def _wait_ports(before: set[str], kind: str, n: int) -> list[str]:
-    deadline = time.monotonic() + 10
+def _wait_ports(before: set[str], kind: str, n: int, timeout_s: float = 10.0) -> list[str]:
+    deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         new = sorted(p for p in set(_ports()) - before if kind in p.rsplit(":", 1)[-1])
         if len(new) >= n:
