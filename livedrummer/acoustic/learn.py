@@ -3,7 +3,8 @@
 A drum's templates are the band rises (:mod:`.detector`'s classification feature) of its hits,
 each normalised to sum 1, averaged within three loudness groups (soft, middle, loud: a drum's
 spectrum brightens as it is struck harder, so one average would fit neither end); its level is
-the median rise of its loudest third, taken as a full-strength (velocity 127) hit. Hits are
+the median rise of its loudest third, taken as a full-strength (velocity 127) hit. Onsets
+under :data:`WOBBLE` of the drum's loudest are left out (a ringing cymbal's decay). Hits are
 found by the same onset picking as the detector's, so a template is exactly the feature the
 detector will see; the picking settings used are the profile's own.
 """
@@ -21,6 +22,9 @@ from livedrummer.acoustic.spectrum import N_BANDS
 from livedrummer.errors import LivedrummerError
 
 GROUPS = 3
+#: A rise under this share of a drum's loudest is its ring wobbling, not a hit: a cymbal's
+#: decay makes small onsets (up to 40 of them after six crash hits of a SoundFont).
+WOBBLE = 0.1
 
 
 class LearnError(LivedrummerError):
@@ -48,8 +52,8 @@ def build_profile(
     levels = np.zeros(len(CLASSES))
     for code, r in sorted(rises.items()):
         sums = r.sum(axis=1)
-        r = r[sums > 0]
-        sums = sums[sums > 0]
+        real = sums >= WOBBLE * sums.max() if len(sums) else sums > 0
+        r, sums = r[real & (sums > 0)], sums[real & (sums > 0)]
         if len(r) < min_hits:
             raise LearnError(f"{CLASSES[code]}: heard {len(r)} hits, need at least {min_hits}")
         order = np.argsort(sums)

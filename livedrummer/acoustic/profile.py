@@ -44,7 +44,7 @@ class DetectorSettings:
 
     delta: float = 2.0  # onset-function units above the moving mean
     floor: float = 3.0  # minimum onset-function value of an onset
-    poly: float = 0.12  # a class sounds if its activation is this share of its full-strength level
+    poly: float = 0.2  # a class sounds if its activation is this share of its full-strength level
     min_level: float = 0.02  # activation below which a class is not reported
     offset_ms: float = 3.0  # frame end to attack, subtracted from onset times
     leak: float = 0.15  # multi-mic: largest crosstalk amplitude ratio between two channels
