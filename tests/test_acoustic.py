@@ -230,7 +230,11 @@ def test_transcribe_cli_writes_a_drum_file_inspect_reads(held_out, tmp_path: Pat
     assert "one mic per drum" in r.stdout
 
 
-def test_transcribe_bad_input_is_one_line(tmp_path: Path) -> None:
+def test_transcribe_bad_input_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from services.cli import main
+
     empty = tmp_path / "empty.wav"
     empty.write_bytes(b"")
     text = tmp_path / "notes.wav"
@@ -248,12 +252,15 @@ def test_transcribe_bad_input_is_one_line(tmp_path: Path) -> None:
         (["transcribe", str(mono), "-o", out, "--channels", "kick"], "is not CHANNEL=DRUM"),
         (["transcribe", str(mono), "-o", out, "--audio-profile", "nope"], "'nope' not found"),
     ]  # fmt: skip
+    capsys.readouterr()
     for argv, message in cases:
-        r = _cli(*argv)
-        assert r.returncode == 2, (argv, r.stderr)
-        lines = r.stderr.strip().splitlines()
-        assert len(lines) == 1 and message in lines[0], (argv, r.stderr)
+        assert main(argv) == 2, argv
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0], (argv, lines)
+    # through the installed entry point too: one line, status 2
+    r = _cli("transcribe", str(empty), "-o", out)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
     clipped = _write_wav(tmp_path / "loud.wav", np.clip(np.sin(np.arange(SR) / 3.0) * 3, -1, 1))
-    r = _cli("transcribe", str(clipped), "-o", out)
-    assert r.returncode == 0, r.stderr
-    assert "samples clipped" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert main(["transcribe", str(clipped), "-o", out]) == 0
+    err = capsys.readouterr().err
+    assert "samples clipped" in err and len(err.strip().splitlines()) == 1

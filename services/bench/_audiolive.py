@@ -165,9 +165,12 @@ def learn_from(audio: np.ndarray, args: list[str]) -> subprocess.CompletedProces
             out, err = learn.communicate(timeout=len(audio) / 48_000 + 60)
             return subprocess.CompletedProcess(cmd, learn.returncode, first + out, err)
         finally:
-            if player is not None and player.poll() is None:
-                player.kill()
-                player.wait()
+            if player is not None:
+                try:  # let it finish its audio: a JACK client killed mid-cycle stalls jackd
+                    player.wait(timeout=len(audio) / 48_000 + 5)
+                except subprocess.TimeoutExpired:
+                    player.kill()
+                    player.wait()
             if learn.poll() is None:
                 learn.kill()
                 learn.wait()
