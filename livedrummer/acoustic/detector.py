@@ -10,9 +10,10 @@ same hits; the online one gives each hit ``L`` frames after the frame that saw i
 **Onsets.** A causal 256-sample spectrum every 128 samples (2.67 ms at 48 kHz); the onset
 function is SuperFlux (log magnitudes, each bin's rise over the max of its neighbours two
 frames earlier, summed). Frame ``p`` is an onset when its value is above every value in the
-30 ms before it and not below the :data:`LOOKAHEAD` frames after it (the only future the
-online twin waits for), above the mean of the last 100 ms plus ``delta``, above ``floor``, and
-30 ms after the previous onset (same-drum strokes closer than that are one onset).
+30 ms before it and not below the ``lookahead`` frames after it (the profile's setting, 2 by
+default: the only future the online twin waits for), above the mean of the last 100 ms plus
+``delta``, above ``floor``, and 30 ms after the previous onset (strokes closer than that are
+one onset).
 
 **Classes: templates as fixed NMF bases.** A hit's feature is what it *adds* to the 21 ms band
 spectrum: bands ``L`` frames after the onset minus bands two frames before it, clipped at
@@ -20,19 +21,22 @@ zero, so a cymbal still ringing from an earlier hit is subtracted away. The feat
 explained as a non-negative sum of the profile's templates (KL-divergence multiplicative
 updates, 60 iterations; the bases stay fixed, only activations are solved): this is why NMF
 with fixed bases rather than nearest-template matching — a kick and a hi-hat struck together
-are a sum of two templates, and the solve gives both activations; every class whose
-activation is at least ``poly`` of the strongest (and ``min_level``) is a hit. Templates are a
-few numbers per drum, so learning a kit is a few hits per drum (:mod:`.learn`), where trained
-models would need a corpus. Velocity: ``127 * sqrt(activation / level)`` with ``level`` the
-profile's full-strength activation (a SoundFont's amplitude grows about as velocity squared).
+are a sum of two templates, and the solve gives both activations; the strongest class, and
+every class whose activation is at least ``poly`` of its own full-strength ``level`` (and
+``min_level``), is a hit. Templates are a few numbers per drum, so learning a kit is a few
+hits per drum (:mod:`.learn`), where trained models would need a corpus. Velocity:
+``127 * sqrt(activation / level)`` with ``level`` the profile's full-strength activation (a
+SoundFont's amplitude grows about as velocity squared).
 
 **One microphone per drum** (``channels`` given): each channel has its own onset function and
-its own class; crosstalk is rejected by comparing, at the same instant, the rise each channel
-saw: an onset on channel ``c`` is dropped when another channel rose by more than
-``rise_c / leak`` (the loudest crosstalk the profile allows, ``leak`` in amplitude).
-Velocity as above, from the channel's rise.
+its own class; crosstalk is rejected by comparing, at the same instant, the band rise each
+channel saw: from channel ``c``'s rise, band by band, ``leak`` times the largest rise any other
+channel saw is taken away (``leak``: the loudest crosstalk the profile allows, in amplitude;
+0.15 by default), and the onset is dropped when less than :data:`OWN_SHARE` of it is left (a
+hi-hat's high bands survive a kick heard through its microphone; the kick's own leak does
+not). Velocity as above, from the channel's rise.
 
-Limits: the lookahead is :data:`LOOKAHEAD` frames (5.3 ms) plus the attack's position in the
+Limits: the lookahead is ``lookahead`` frames (5.3 ms) plus the attack's position in the
 256-sample window (up to 5.3 ms): decisions come 5.3-10.7 ms after the attack, times are
 corrected by ``offset_ms``; a drum hit while a louder one of the same spectrum rings is
 missed; three toms are told apart by pitch only as well as their templates differ.
@@ -128,7 +132,7 @@ class _Channel:
         self.bands.append(band)
 
     def onset_rise(self, frame: int, delta: float, floor: float) -> np.ndarray | None:
-        """If the frame ``LOOKAHEAD`` frames ago is an onset: the band rise it brought."""
+        """If the frame ``lookahead`` frames ago is an onset: the band rise it brought."""
         f = list(self.flux)
         p = len(f) - 1 - self.lookahead
         value = f[p]

@@ -66,7 +66,7 @@ def bands(spectra: np.ndarray, sr: int) -> np.ndarray:
 @cache
 def flux_edges(sr: int) -> np.ndarray:
     """Bin edges of the onset function's bands on a :data:`FLUX_SIZE` FFT: log-spaced from
-    :data:`BAND_LO_HZ`, at least one bin each (the low ones are single bins)."""
+    :data:`FLUX_LO_HZ`, at least one bin each (the low ones are single bins)."""
     hz = np.geomspace(FLUX_LO_HZ, min(BAND_HI_HZ, 0.45 * sr), FLUX_BANDS + 1)
     edges = np.clip(np.round(hz * FLUX_SIZE / sr).astype(np.int64), 0, FLUX_SIZE // 2)
     for i in range(1, len(edges)):
