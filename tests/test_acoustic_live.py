@@ -156,3 +156,24 @@ def test_audio_learn_hears_each_drum_and_its_profile_tells_them_apart(
                         "-o", str(out), "--drums", "kick,cowbell"], cwd=REPO,
                        capture_output=True, text=True, timeout=60)  # fmt: skip
     assert r.returncode == 2 and "unknown drum 'cowbell'" in r.stderr
+
+
+def test_the_daemon_keeps_waiting_for_an_absent_audio_device(jack_server: str) -> None:
+    import json
+    import time
+
+    daemon = subprocess.Popen([sys.executable, "-m", "services", "input", "--audio", "usb-mics",
+                               "--wait", "--no-journal", "--pub", "tcp://127.0.0.1:*",
+                               "--control", "tcp://127.0.0.1:*"], cwd=REPO,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        assert daemon.stdout is not None
+        assert json.loads(daemon.stdout.readline())["service"] == "input"
+        time.sleep(1.5)
+        assert daemon.poll() is None  # still serving, reopening every 0.1 s
+    finally:
+        daemon.terminate()
+        _out, err = daemon.communicate(timeout=20)
+    assert daemon.returncode == 0
+    warned = [line for line in err.splitlines() if "source unavailable" in line]
+    assert len(warned) == 1 and "audio device 'usb-mics': no such audio input" in warned[0]
