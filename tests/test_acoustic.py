@@ -102,9 +102,9 @@ def test_mix_accuracy_on_a_held_out_groove(held_out) -> None:  # type: ignore[no
     s = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
               ex.onsets["velocity"], GROUPS_MIX)  # fmt: skip
     assert s["kick"].tp + s["kick"].fn > 10 and s["snare"].tp + s["snare"].fn > 10
-    assert s["kick"].f >= 0.78, s["kick"]  # measured 0.865 (kick, 21 onsets)
-    assert s["snare"].f >= 0.78, s["snare"]  # 0.87 (13)
-    assert s["hihat"].f >= 0.60, s["hihat"]  # 0.68 (55)
+    assert s["kick"].f >= 0.80, s["kick"]  # measured 0.895 (kick, 21 onsets)
+    assert s["snare"].f >= 0.80, s["snare"]  # 0.917 (13)
+    assert s["hihat"].f >= 0.62, s["hihat"]  # 0.742 (55)
     # times: matched hits within a few ms of the MIDI
     truth = ex.onsets["time_s"][ex.classes == CLASSES.index("kick")]
     kicks = hits["time_s"][hits["cls"] == CLASSES.index("kick")]

@@ -68,9 +68,14 @@ HIT_DTYPE = np.dtype(
 )
 BEFORE = 2  # the "before" band spectrum: frames before the onset frame
 MU = 2  # SuperFlux: compare with the frame this many hops earlier
-PRE_MAX_S = 0.030
+#: Peak picking windows: before an onset, its value must top the last PRE_MAX_S, and the last
+#: onset must be COMBINE_S back. One drum per channel: 30 ms (a drum is not struck twice
+#: faster). A mix: 15 and 10 ms, since a drummer's kick and hi-hat land 5-25 ms apart and the
+#: second must be an onset of its own; a drum is still not reported twice within SAME_DRUM_S.
+PRE_MAX_S = {"mix": 0.015, "mics": 0.030}
 PRE_AVG_S = 0.100
-COMBINE_S = 0.030
+COMBINE_S = {"mix": 0.010, "mics": 0.030}
+SAME_DRUM_S = 0.030
 NMF_ITERATIONS = 60
 OWN_SHARE = 0.3  # multi-mic: share of a rise that crosstalk must not explain
 BATCH = 2048  # frames per FFT batch (bounds memory for a long file)
@@ -107,10 +112,12 @@ def velocity_of(level: float, ref: float) -> int:
 class _Channel:
     """One channel's frames and onset function, with the short history picking needs."""
 
-    def __init__(self, sr: int, lookahead: int) -> None:
+    def __init__(self, sr: int, lookahead: int, mode: str) -> None:
         self.sr = sr
         self.lookahead = lookahead
-        keep = max(int(PRE_AVG_S * sr / HOP), int(PRE_MAX_S * sr / HOP)) + lookahead + 2
+        self.pre_max = int(PRE_MAX_S[mode] * sr / HOP)
+        self.combine = int(COMBINE_S[mode] * sr / HOP)
+        keep = max(int(PRE_AVG_S * sr / HOP), self.pre_max) + lookahead + 2
         self.flux: deque[float] = deque([0.0] * keep, maxlen=keep)
         self.bands: deque[np.ndarray] = deque(
             [np.zeros(N_BANDS)] * (BEFORE + lookahead + 1), maxlen=BEFORE + lookahead + 1
@@ -136,11 +143,10 @@ class _Channel:
         f = list(self.flux)
         p = len(f) - 1 - self.lookahead
         value = f[p]
-        pre_max = int(PRE_MAX_S * self.sr / HOP)
         pre_avg = int(PRE_AVG_S * self.sr / HOP)
-        if value < floor or frame - self.last_onset < int(COMBINE_S * self.sr / HOP):
+        if value < floor or frame - self.last_onset < self.combine:
             return None
-        if value <= max(f[p - pre_max : p]) or value < max(f[p + 1 :]):
+        if value <= max(f[p - self.pre_max : p]) or value < max(f[p + 1 :]):
             return None
         if value < float(np.mean(f[p - pre_avg : p + 1])) + delta:
             return None
@@ -173,7 +179,9 @@ class OnlineDetector:
 
     def reset(self) -> None:
         n = 1 if self.channel_class is None else len(self.channel_class)
-        self._chans = [_Channel(self.sr, self.profile.settings.lookahead) for _ in range(n)]
+        mode = "mix" if self.channel_class is None else "mics"
+        self._chans = [_Channel(self.sr, self.profile.settings.lookahead, mode) for _ in range(n)]
+        self._last_hit = np.full(len(CLASSES), -(10**9))  # frame of each drum's last hit
         self._history = np.zeros((CLASS_SIZE, n), np.float64)  # the last samples seen
         self._pending = 0  # samples after the last frame end, at the end of _history
         self._frame = -1  # index of the newest frame
@@ -226,7 +234,9 @@ class OnlineDetector:
             levels = self.profile.levels
             need = np.where(levels > 0, s.poly * levels, s.poly * top)
             found = (act >= np.maximum(need, s.min_level)) | (act == top)
-            for cls in np.flatnonzero(found).tolist():
+            recent = p - self._last_hit < int(SAME_DRUM_S * self.sr / HOP)
+            for cls in np.flatnonzero(found & ~recent).tolist():
+                self._last_hit[cls] = p
                 level = float(act[cls])
                 hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, 0))
             return hits
