@@ -44,6 +44,7 @@ missed; three toms are told apart by pitch only as well as their templates diffe
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Sequence
 
@@ -76,6 +77,12 @@ PRE_MAX_S = {"mix": 0.015, "mics": 0.030}
 PRE_AVG_S = 0.100
 COMBINE_S = {"mix": 0.010, "mics": 0.030}
 SAME_DRUM_S = 0.030
+#: An onset within SAME_DRUM_S of the last must be at least this share of its value: a second
+#: drum struck just after the first is as strong, the first one's own decay bumps are not.
+CLOSE_SHARE = 0.5
+#: The strongest drum of an onset is reported from this share of its full-strength level
+#: (velocity 127 * sqrt(0.005) = 9); below it the onset is a ring's wobble, not a hit.
+QUIETEST = 0.005
 NMF_ITERATIONS = 60
 OWN_SHARE = 0.3  # multi-mic: share of a rise that crosstalk must not explain
 BATCH = 2048  # frames per FFT batch (bounds memory for a long file)
@@ -124,6 +131,8 @@ class _Channel:
         )
         self.logs: deque[np.ndarray] = deque([np.zeros(FLUX_BANDS)] * MU, maxlen=MU)
         self.last_onset = -(10**9)
+        self.last_value = 0.0
+        self.close = math.ceil(SAME_DRUM_S * sr / HOP)
 
     def frames(self, signal: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Onset function and band spectra of the frames ending at ``ends``."""
@@ -146,11 +155,17 @@ class _Channel:
         pre_avg = int(PRE_AVG_S * self.sr / HOP)
         if value < floor or frame - self.last_onset < self.combine:
             return None
+        if frame - self.last_onset < self.close and value < CLOSE_SHARE * self.last_value:
+            return None
         if value <= max(f[p - self.pre_max : p]) or value < max(f[p + 1 :]):
             return None
         if value < float(np.mean(f[p - pre_avg : p + 1])) + delta:
             return None
         return self.rise()
+
+    def value_at_onset(self) -> float:
+        """The onset function at the frame just decided."""
+        return float(self.flux[len(self.flux) - 1 - self.lookahead])
 
     def rise(self) -> np.ndarray:
         out: np.ndarray = np.maximum(self.bands[-1] - self.bands[0], 0.0)
@@ -162,11 +177,20 @@ class OnlineDetector:
 
     ``channels``: ``None`` for a mix (every class from one signal; a multi-channel block is
     averaged to mono), or the class code of each input channel (one microphone per drum).
+    ``one_drum``: a mix known to hold one drum at a time (learning): the one-drum picking
+    windows (see :data:`PRE_MAX_S`).
     """
 
-    def __init__(self, profile: AudioProfile, sr: int, channels: Sequence[int] | None = None):
+    def __init__(
+        self,
+        profile: AudioProfile,
+        sr: int,
+        channels: Sequence[int] | None = None,
+        one_drum: bool = False,
+    ):
         self.profile = profile
         self.sr = sr
+        self.one_drum = one_drum
         self.channel_class = None if channels is None else list(channels)
         #: When a list: the band rise of every mix-mode onset is appended (for learning).
         self.features: list[np.ndarray] | None = None
@@ -179,7 +203,7 @@ class OnlineDetector:
 
     def reset(self) -> None:
         n = 1 if self.channel_class is None else len(self.channel_class)
-        mode = "mix" if self.channel_class is None else "mics"
+        mode = "mix" if self.channel_class is None and not self.one_drum else "mics"
         self._chans = [_Channel(self.sr, self.profile.settings.lookahead, mode) for _ in range(n)]
         self._last_hit = np.full(len(CLASSES), -(10**9))  # frame of each drum's last hit
         self._history = np.zeros((CLASS_SIZE, n), np.float64)  # the last samples seen
@@ -231,10 +255,12 @@ class OnlineDetector:
             if top < s.min_level:
                 return hits
             self._chans[0].last_onset = p
+            self._chans[0].last_value = self._chans[0].value_at_onset()
             levels = self.profile.levels
             need = np.where(levels > 0, s.poly * levels, s.poly * top)
-            found = (act >= np.maximum(need, s.min_level)) | (act == top)
-            recent = p - self._last_hit < int(SAME_DRUM_S * self.sr / HOP)
+            quietest = np.where(levels > 0, QUIETEST * levels, 0.0)  # a hit at velocity ~9
+            found = (act >= np.maximum(need, s.min_level)) | ((act == top) & (act >= quietest))
+            recent = p - self._last_hit < math.ceil(SAME_DRUM_S * self.sr / HOP)
             for cls in np.flatnonzero(found & ~recent).tolist():
                 self._last_hit[cls] = p
                 level = float(act[cls])
@@ -251,6 +277,7 @@ class OnlineDetector:
             if level < s.min_level or own < OWN_SHARE * level:
                 continue  # crosstalk: most of this rise is another channel's, heard through
             self._chans[c].last_onset = p
+            self._chans[c].last_value = self._chans[c].value_at_onset()
             cls = self.channel_class[c]
             hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, c))
         return hits

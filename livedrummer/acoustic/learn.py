@@ -114,7 +114,7 @@ class HitCollector:
             "learn", np.full((1, N_BANDS), 1.0 / N_BANDS), np.zeros(1, np.int64),
             np.zeros(len(CLASSES)), settings or DetectorSettings(),
         )  # fmt: skip
-        self._det = OnlineDetector(flat, sr)
+        self._det = OnlineDetector(flat, sr, one_drum=True)
         self.reset()
 
     def reset(self) -> None:
