@@ -10,10 +10,12 @@ same hits; the online one gives each hit ``L`` frames after the frame that saw i
 **Onsets.** A causal 256-sample spectrum every 128 samples (2.67 ms at 48 kHz); the onset
 function is SuperFlux (log magnitudes, each bin's rise over the max of its neighbours two
 frames earlier, summed). Frame ``p`` is an onset when its value is above every value in the
-30 ms before it and not below the ``lookahead`` frames after it (the profile's setting, 2 by
-default: the only future the online twin waits for), above the mean of the last 100 ms plus
-``delta``, above ``floor``, and 30 ms after the previous onset (strokes closer than that are
-one onset).
+last :data:`PRE_MAX_S` and not below the ``lookahead`` frames after it (the profile's setting,
+2 by default: the only future the online twin waits for), above the mean of the last 100 ms
+plus ``delta``, above ``floor``, at least :data:`COMBINE_S` after the previous onset, and,
+within 32 ms of it, at least :data:`CLOSE_SHARE` of its value (a second drum, not the first
+one's decay). One drum per channel: 30 ms windows; a mix: 15 and 10 ms, since a drummer's kick
+and hi-hat land 5-25 ms apart, and a drum is not reported twice within 32 ms.
 
 **Classes: templates as fixed NMF bases.** A hit's feature is what it *adds* to the 21 ms band
 spectrum: bands ``L`` frames after the onset minus bands two frames before it, clipped at
