@@ -70,7 +70,8 @@ def register(sub: Subparsers) -> None:
                      help="serial trigger board (default: the rig profile's source)")  # fmt: skip
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
     src.add_argument("--audio", metavar="DEVICE",
-                     help="an acoustic kit heard through an audio input (as input)")  # fmt: skip
+                     help="audio input of an acoustic kit's microphones (default: the rig "
+                          "profile's source)")  # fmt: skip
     from .transcribe import add_audio_options
 
     add_audio_options(p)
