@@ -32,11 +32,13 @@ def dummy_jack(
     log: IO[str] | None = None,
     sync: bool = True,
     realtime: bool = False,
+    rate: int = 48_000,
 ) -> Iterator[str]:
     """Run a server named ``PREFIX-xxxxxxxx`` while the block runs; yields its name.
 
     ``sync=False`` runs JACK's default asynchronous mode, ``realtime=True`` asks for realtime
-    scheduling (``-R``; it falls back to normal scheduling where that is not permitted).
+    scheduling (``-R``; it falls back to normal scheduling where that is not permitted); ``rate``
+    is the sample rate in Hz.
     """
     if shutil.which("jackd") is None or shutil.which("jack_wait") is None:
         raise JackError("jackd not installed (Debian: apt-get install jackd2)")
@@ -47,7 +49,7 @@ def dummy_jack(
     out = log if log is not None else subprocess.DEVNULL
     proc = subprocess.Popen(
         ["jackd", "-R" if realtime else "--no-realtime", *(["-S"] if sync else []), "-n", name,
-         "-d", "dummy", "-r", "48000", "-p", str(period)],
+         "-d", "dummy", "-r", str(rate), "-p", str(period)],
         stdout=out, stderr=subprocess.STDOUT, env=env,
     )  # fmt: skip
     try:

@@ -51,6 +51,8 @@ COMMANDS: dict[str, str] = {
     "keys": "make and list CURVE key pairs for remote streams",
     "avatar": "describe an avatar file: bones, proportions, triangles, textures",
     "avatars": "list the avatars --avatar NAME can pick",
+    "transcribe": "transcribe a drum recording (audio file) to a MIDI file",
+    "audio": "learn an acoustic kit's sound (audio profile) for transcribe and input --audio",
 }
 
 

@@ -27,6 +27,11 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--remote", metavar="ENDPOINT", help="another site's input daemon (pub)")
     src.add_argument("--virtual", metavar="NAME",
                      help="open a virtual MIDI input NAME for a keyboard or DAW")  # fmt: skip
+    src.add_argument("--audio", metavar="DEVICE",
+                     help="drums heard through an audio input (name or index)")  # fmt: skip
+    from .transcribe import add_audio_options
+
+    add_audio_options(p)
     p.add_argument("--wait", action="store_true",
                    help="wait for a --midi port or --serial device that is not there yet "
                         "(default: one line naming what exists, exit 2)")  # fmt: skip
@@ -98,7 +103,17 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--channel: {exc}") from None
     channels = None if channel in ("all", "auto") else frozenset({int(channel)})
     source: Source
-    if args.file is not None:
+    if args.audio is not None:
+        from livedrummer.acoustic.pieces import parse_channel_map
+        from livedrummer.acoustic.profile import load_profile
+
+        from ..input.audioport import AudioSource
+
+        mapping = parse_channel_map(args.channels) if args.channels else None
+        source = AudioSource(args.audio, clock, load_profile(args.audio_profile), mapping,
+                             args.performer)  # fmt: skip
+        note_map = load_note_map("general-midi")  # what its onsets' notes mean
+    elif args.file is not None:
         from ..input.fileplayer import FileSource
 
         source = FileSource(args.file, clock, note_map, args.performer, loop=args.loop,

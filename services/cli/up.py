@@ -77,6 +77,12 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--serial", metavar="DEV",
                      help="serial trigger board (default: the rig profile's source)")  # fmt: skip
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
+    src.add_argument("--audio", metavar="DEVICE",
+                     help="audio input of an acoustic kit's microphones (default: the rig "
+                          "profile's source)")  # fmt: skip
+    from .transcribe import add_audio_options
+
+    add_audio_options(p)
     add_kit_option(p)
     add_avatar_option(p)
     add_background_option(p, transparent=False)
@@ -201,6 +207,11 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         source = ["--file", str(demo_groove()), "--loop"]
     elif args.serial:
         source = ["--serial", args.serial, "--baud", str(args.baud)]
+    elif args.audio:
+        source = ["--audio", args.audio]
+        source += ["--channels", args.channels] if args.channels else []
+        source += ["--audio-profile", args.audio_profile] if args.audio_profile else []
+        map_name = "general-midi"  # the notes input --audio writes
     else:
         source = ["--midi", args.midi, "--api", args.api]
     if sessions is not None:
@@ -255,17 +266,17 @@ def apply_profile(args: argparse.Namespace, defaults: dict[str, object]) -> Path
     used: Path | None = None
     if args.rig is not None or path.exists():
         profile = RigProfile.load(path)
-        source_given = bool(args.midi or args.serial or args.demo)
+        source_given = bool(args.midi or args.serial or args.demo or args.audio)
         for key, value in profile.options.items():
             if key in ("midi", "serial", "demo") and source_given:
                 continue
             if getattr(args, key) == defaults.get(key):
                 setattr(args, key, value)
         used = path
-    if not (args.midi or args.serial or args.demo):
+    if not (args.midi or args.serial or args.demo or args.audio):
         where = f" (none in {used})" if used is not None else ""
-        raise ConfigError(f"up: give --midi PORT, --serial DEV or --demo, or a [source] in "
-                          f"rig.toml{where}")  # fmt: skip
+        raise ConfigError(f"up: give --midi PORT, --serial DEV or --demo (or --audio DEVICE), or "
+                          f"a [source] in rig.toml{where}")  # fmt: skip
     return used
 
 
@@ -368,6 +379,17 @@ def check_before_start(args: argparse.Namespace) -> None:
     if not 0 < args.port_base <= 65535 - 11:
         raise ConfigError(f"--port-base: expected 1..65524 (got {args.port_base})")
     if args.demo or args.wait:
+        return
+    if args.audio:
+        from livedrummer.acoustic.pieces import parse_channel_map
+        from livedrummer.acoustic.profile import load_profile
+        from livedrummer.timeline.clock import MonotonicClock
+
+        from ..input.audioport import AudioSource
+
+        mapping = parse_channel_map(args.channels) if args.channels else None
+        profile = load_profile(args.audio_profile)
+        AudioSource(args.audio, MonotonicClock(), profile, mapping).check()
         return
     from livedrummer.midi.decode import MessageDecoder
     from livedrummer.midi.notemap import load_note_map

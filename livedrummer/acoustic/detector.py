@@ -1,0 +1,295 @@
+"""Hits from audio: SuperFlux onsets, online peak picking, templates with fixed NMF bases.
+
+**Three layers, one path.** :class:`OnlineDetector` is the detector: ``reset()`` and
+``process(block)`` (float32 samples, ``(n,)`` or ``(n, channels)``, any block size) return the
+hits decided in that block. :func:`detect` is its offline twin: the whole signal pushed as
+one block (plus :data:`tail_samples` of silence, so the last hits are decided too). Frames go
+through :func:`~.spectrum.frames_at` in batches whatever the block size, so the twins give the
+same hits; the online one gives each hit ``L`` frames after the frame that saw its attack.
+
+**Onsets.** A causal 256-sample spectrum every 128 samples (2.67 ms at 48 kHz); the onset
+function is SuperFlux (log magnitudes, each bin's rise over the max of its neighbours two
+frames earlier, summed). Frame ``p`` is an onset when its value is above every value in the
+last :data:`PRE_MAX_S` and not below the ``lookahead`` frames after it (the profile's setting,
+2 by default: the only future the online twin waits for), above the mean of the last 100 ms
+plus ``delta``, above ``floor``, at least :data:`COMBINE_S` after the previous onset, and,
+within 32 ms of it, at least :data:`CLOSE_SHARE` of its value (a second drum, not the first
+one's decay). One drum per channel: 30 ms windows; a mix: 15 and 10 ms, since a drummer's kick
+and hi-hat land 5-25 ms apart, and a drum is not reported twice within 32 ms.
+
+**Classes: templates as fixed NMF bases.** A hit's feature is what it *adds* to the 21 ms band
+spectrum: bands ``L`` frames after the onset minus bands two frames before it, clipped at
+zero, so a cymbal still ringing from an earlier hit is subtracted away. The feature is
+explained as a non-negative sum of the profile's templates (KL-divergence multiplicative
+updates, 60 iterations; the bases stay fixed, only activations are solved): this is why NMF
+with fixed bases rather than nearest-template matching — a kick and a hi-hat struck together
+are a sum of two templates, and the solve gives both activations; the strongest class, and
+every class whose activation is at least ``poly`` of its own full-strength ``level`` (and
+``min_level``), is a hit. Templates are a few numbers per drum, so learning a kit is a few
+hits per drum (:mod:`.learn`), where trained models would need a corpus. Velocity:
+``127 * sqrt(activation / level)`` with ``level`` the profile's full-strength activation (a
+SoundFont's amplitude grows about as velocity squared).
+
+**One microphone per drum** (``channels`` given): each channel has its own onset function and
+its own class; crosstalk is rejected by comparing, at the same instant, the band rise each
+channel saw: from channel ``c``'s rise, band by band, ``leak`` times the largest rise any other
+channel saw is taken away (``leak``: the loudest crosstalk the profile allows, in amplitude;
+0.15 by default), and the onset is dropped when less than :data:`OWN_SHARE` of it is left (a
+hi-hat's high bands survive a kick heard through its microphone; the kick's own leak does
+not). Velocity as above, from the channel's rise.
+
+Limits: the lookahead is ``lookahead`` frames (5.3 ms) plus the attack's position in the
+256-sample window (up to 5.3 ms): decisions come 5.3-10.7 ms after the attack, times are
+corrected by ``offset_ms``; a drum hit while a louder one of the same spectrum rings is
+missed; three toms are told apart by pitch only as well as their templates differ.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Sequence
+
+import numpy as np
+
+from livedrummer.acoustic.pieces import CLASSES
+from livedrummer.acoustic.profile import AudioProfile
+from livedrummer.acoustic.spectrum import (
+    CLASS_SIZE,
+    FLUX_BANDS,
+    FLUX_SIZE,
+    HOP,
+    N_BANDS,
+    bands,
+    frames_at,
+    log_flux_spectra,
+    superflux,
+)
+
+HIT_DTYPE = np.dtype(
+    [("time_s", "<f8"), ("cls", "<i2"), ("velocity", "u1"), ("level", "<f4"), ("channel", "u1")]
+)
+BEFORE = 2  # the "before" band spectrum: frames before the onset frame
+MU = 2  # SuperFlux: compare with the frame this many hops earlier
+#: Peak picking windows: before an onset, its value must top the last PRE_MAX_S, and the last
+#: onset must be COMBINE_S back. One drum per channel: 30 ms (a drum is not struck twice
+#: faster). A mix: 15 and 10 ms, since a drummer's kick and hi-hat land 5-25 ms apart and the
+#: second must be an onset of its own; a drum is still not reported twice within SAME_DRUM_S.
+PRE_MAX_S = {"mix": 0.015, "mics": 0.030}
+PRE_AVG_S = 0.100
+COMBINE_S = {"mix": 0.010, "mics": 0.030}
+SAME_DRUM_S = 0.030
+#: An onset within SAME_DRUM_S of the last must be at least this share of its value: a second
+#: drum struck just after the first is as strong, the first one's own decay bumps are not.
+CLOSE_SHARE = 0.5
+#: The strongest drum of an onset is reported from this share of its full-strength level
+#: (velocity 127 * sqrt(0.005) = 9); below it the onset is a ring's wobble, not a hit.
+QUIETEST = 0.005
+NMF_ITERATIONS = 60
+OWN_SHARE = 0.3  # multi-mic: share of a rise that crosstalk must not explain
+BATCH = 2048  # frames per FFT batch (bounds memory for a long file)
+_EPS = 1e-9
+
+
+def tail_samples(lookahead: int = 8) -> int:
+    """Silence :func:`detect` appends so the hits of the last frames are decided."""
+    return (lookahead + 1) * HOP
+
+
+def activations(feature: np.ndarray, profile: AudioProfile) -> np.ndarray:
+    """Per-class activation of one band feature: KL-NMF with the profile's fixed bases (each
+    template sums to 1, so an activation is the band-sum of what its class added)."""
+    w = profile.templates.T  # (N_BANDS, K)
+    total = float(feature.sum())
+    if total <= 0:
+        return np.zeros(len(CLASSES))
+    k = w.shape[1]
+    h = np.full(k, total / k)
+    for _ in range(NMF_ITERATIONS):
+        h *= w.T @ (feature / (w @ h + _EPS))
+    out = np.zeros(len(CLASSES))
+    np.add.at(out, profile.template_class, h)
+    return out
+
+
+def velocity_of(level: float, ref: float) -> int:
+    if ref <= 0:
+        ref = level if level > 0 else 1.0
+    return int(np.clip(round(127.0 * np.sqrt(max(level, 0.0) / ref)), 1, 127))
+
+
+class _Channel:
+    """One channel's frames and onset function, with the short history picking needs."""
+
+    def __init__(self, sr: int, lookahead: int, mode: str) -> None:
+        self.sr = sr
+        self.lookahead = lookahead
+        self.pre_max = int(PRE_MAX_S[mode] * sr / HOP)
+        self.combine = int(COMBINE_S[mode] * sr / HOP)
+        keep = max(int(PRE_AVG_S * sr / HOP), self.pre_max) + lookahead + 2
+        self.flux: deque[float] = deque([0.0] * keep, maxlen=keep)
+        self.bands: deque[np.ndarray] = deque(
+            [np.zeros(N_BANDS)] * (BEFORE + lookahead + 1), maxlen=BEFORE + lookahead + 1
+        )
+        self.logs: deque[np.ndarray] = deque([np.zeros(FLUX_BANDS)] * MU, maxlen=MU)
+        self.last_onset = -(10**9)
+        self.last_value = 0.0
+        self.close = math.ceil(SAME_DRUM_S * sr / HOP)
+
+    def frames(self, signal: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Onset function and band spectra of the frames ending at ``ends``."""
+        logs = log_flux_spectra(frames_at(signal, ends, FLUX_SIZE), self.sr)
+        before = np.concatenate([np.array(self.logs), logs])[: len(logs)]
+        flux = superflux(logs, before)
+        for row in logs[-MU:]:
+            self.logs.append(row)
+        return flux, bands(frames_at(signal, ends, CLASS_SIZE), self.sr)
+
+    def push(self, flux: float, band: np.ndarray) -> None:
+        self.flux.append(flux)
+        self.bands.append(band)
+
+    def onset_rise(self, frame: int, delta: float, floor: float) -> np.ndarray | None:
+        """If the frame ``lookahead`` frames ago is an onset: the band rise it brought."""
+        f = list(self.flux)
+        p = len(f) - 1 - self.lookahead
+        value = f[p]
+        pre_avg = int(PRE_AVG_S * self.sr / HOP)
+        if value < floor or frame - self.last_onset < self.combine:
+            return None
+        if frame - self.last_onset < self.close and value < CLOSE_SHARE * self.last_value:
+            return None
+        if value <= max(f[p - self.pre_max : p]) or value < max(f[p + 1 :]):
+            return None
+        if value < float(np.mean(f[p - pre_avg : p + 1])) + delta:
+            return None
+        return self.rise()
+
+    def value_at_onset(self) -> float:
+        """The onset function at the frame just decided."""
+        return float(self.flux[len(self.flux) - 1 - self.lookahead])
+
+    def rise(self) -> np.ndarray:
+        out: np.ndarray = np.maximum(self.bands[-1] - self.bands[0], 0.0)
+        return out
+
+
+class OnlineDetector:
+    """Hits from a live stream, block by block (see the module docstring).
+
+    ``channels``: ``None`` for a mix (every class from one signal; a multi-channel block is
+    averaged to mono), or the class code of each input channel (one microphone per drum).
+    ``one_drum``: a mix known to hold one drum at a time (learning): the one-drum picking
+    windows (see :data:`PRE_MAX_S`).
+    """
+
+    def __init__(
+        self,
+        profile: AudioProfile,
+        sr: int,
+        channels: Sequence[int] | None = None,
+        one_drum: bool = False,
+    ):
+        self.profile = profile
+        self.sr = sr
+        self.one_drum = one_drum
+        self.channel_class = None if channels is None else list(channels)
+        #: When a list: the band rise of every mix-mode onset is appended (for learning).
+        self.features: list[np.ndarray] | None = None
+        self.reset()
+
+    @property
+    def latency_s(self) -> float:
+        """Decision delay after the frame whose window first holds the attack's peak."""
+        return self.profile.settings.lookahead * HOP / self.sr
+
+    def reset(self) -> None:
+        n = 1 if self.channel_class is None else len(self.channel_class)
+        mode = "mix" if self.channel_class is None and not self.one_drum else "mics"
+        self._chans = [_Channel(self.sr, self.profile.settings.lookahead, mode) for _ in range(n)]
+        self._last_hit = np.full(len(CLASSES), -(10**9))  # frame of each drum's last hit
+        self._history = np.zeros((CLASS_SIZE, n), np.float64)  # the last samples seen
+        self._pending = 0  # samples after the last frame end, at the end of _history
+        self._frame = -1  # index of the newest frame
+        self.frames_seen = 0
+
+    def process(self, block: np.ndarray) -> np.ndarray:
+        """Hits decided by the samples of ``block`` (HIT_DTYPE, sorted by time)."""
+        data = np.asarray(block, np.float64)
+        if data.ndim == 1:
+            data = data[:, None]
+        if self.channel_class is None and data.shape[1] != 1:
+            data = data.mean(axis=1, keepdims=True)
+        elif self.channel_class is not None and data.shape[1] != len(self.channel_class):
+            raise ValueError(f"block has {data.shape[1]} channels, expected "
+                             f"{len(self.channel_class)}")  # fmt: skip
+        signal = np.concatenate([self._history, data])
+        start = self._history.shape[0] - self._pending  # first new sample after a frame end
+        n_frames = (self._pending + data.shape[0]) // HOP
+        out: list[tuple[float, int, int, float, int]] = []
+        for b0 in range(0, n_frames, BATCH):
+            ends = start + HOP * np.arange(b0 + 1, min(n_frames, b0 + BATCH) + 1)
+            per_chan = [ch.frames(signal[:, c], ends) for c, ch in enumerate(self._chans)]
+            for i in range(len(ends)):
+                self._frame += 1
+                for c, ch in enumerate(self._chans):
+                    ch.push(float(per_chan[c][0][i]), per_chan[c][1][i])
+                out.extend(self._decide())
+        self.frames_seen = self._frame + 1
+        self._pending = (self._pending + data.shape[0]) % HOP
+        self._history = signal[-CLASS_SIZE:]
+        return np.array(out, HIT_DTYPE)
+
+    def _decide(self) -> list[tuple[float, int, int, float, int]]:
+        s = self.profile.settings
+        p = self._frame - s.lookahead
+        time_s = (p + 1) * HOP / self.sr - s.offset_ms / 1000.0
+        rises = [ch.onset_rise(p, s.delta, s.floor) for ch in self._chans]
+        hits: list[tuple[float, int, int, float, int]] = []
+        if self.channel_class is None:
+            rise = rises[0]
+            if rise is None:
+                return hits
+            if self.features is not None:
+                self.features.append(rise)
+            act = activations(rise, self.profile)
+            top = float(act.max())
+            if top < s.min_level:
+                return hits
+            self._chans[0].last_onset = p
+            self._chans[0].last_value = self._chans[0].value_at_onset()
+            levels = self.profile.levels
+            need = np.where(levels > 0, s.poly * levels, s.poly * top)
+            quietest = np.where(levels > 0, QUIETEST * levels, 0.0)  # a hit at velocity ~9
+            found = (act >= np.maximum(need, s.min_level)) | ((act == top) & (act >= quietest))
+            recent = p - self._last_hit < math.ceil(SAME_DRUM_S * self.sr / HOP)
+            for cls in np.flatnonzero(found & ~recent).tolist():
+                self._last_hit[cls] = p
+                level = float(act[cls])
+                hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, 0))
+            return hits
+        all_rises = [ch.rise() for ch in self._chans]
+        for c, rise in enumerate(rises):
+            if rise is None:
+                continue
+            level = float(rise.sum())
+            others = [all_rises[d] for d in range(len(all_rises)) if d != c]
+            leaked = s.leak * np.max(others, axis=0) if others else np.zeros_like(rise)
+            own = float(np.maximum(rise - leaked, 0.0).sum())
+            if level < s.min_level or own < OWN_SHARE * level:
+                continue  # crosstalk: most of this rise is another channel's, heard through
+            self._chans[c].last_onset = p
+            self._chans[c].last_value = self._chans[c].value_at_onset()
+            cls = self.channel_class[c]
+            hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, c))
+        return hits
+
+
+def detect(
+    audio: np.ndarray, sr: int, profile: AudioProfile, channels: Sequence[int] | None = None
+) -> np.ndarray:
+    """The offline twin: every hit of ``audio`` ((n,) or (n, channels) float)."""
+    det = OnlineDetector(profile, sr, channels)
+    data = np.asarray(audio, np.float64)
+    pad = np.zeros((tail_samples(profile.settings.lookahead), *data.shape[1:]))
+    return det.process(np.concatenate([data, pad]))

@@ -1,0 +1,149 @@
+"""``livedrummer bench transcribe``: accuracy, speed and load of the percussion recogniser.
+
+Renders excerpts of Groove MIDI Dataset performances of one split (``--split test``, the
+files not used to tune; info.csv's split column) through a General MIDI SoundFont
+(:mod:`._drumaudio`: room, noise, one-mic stems with crosstalk), transcribes them as a mix and
+one microphone per drum, and prints onset F-measure against the MIDI per drum and overall,
+counted as :mod:`livedrummer.acoustic.score` says (±25 ms, ghost notes 30 dB down and pedal
+chicks don't care, same-drum notes within 30 ms one onset). Then the offline twin's real-time
+factor (seconds of computing per second of audio) and the online detector's CPU load fed
+256-sample blocks (process time per second of audio, as a share of one core), medians over
+the excerpts. ``--live`` instead plays the mixes into ``input --audio`` through a private ``jackd -d
+dummy`` (:mod:`._audiolive`) and prints attack → onset-on-the-bus latency (the attack placed
+by the player's JACK cycle; median and 99th percentile over every hit) and live accuracy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ._paths import DEFAULT_CORPUS, corpus
+
+GROUPS_MIX = {
+    "kick": ("kick",), "snare": ("snare",), "hihat": ("hihat_closed", "hihat_open"),
+    "toms": ("tom_high", "tom_mid", "tom_low"), "cymbals": ("crash", "ride"),
+}  # fmt: skip
+
+
+def pick_files(root: Path, split: str, count: int, seed: int = 1) -> list[Path]:
+    """``count`` beat (not fill) performances of ``split`` longer than 25 s, seeded choice."""
+    with (root / "info.csv").open() as f:
+        rows = [r for r in csv.DictReader(f) if r["split"] == split
+                and r["beat_type"] == "beat" and float(r["duration"]) > 25]  # fmt: skip
+    rng = np.random.default_rng(seed)
+    chosen = rng.choice(len(rows), min(count, len(rows)), replace=False)
+    return [root / rows[i]["midi_filename"] for i in sorted(chosen.tolist())]
+
+
+def main(argv: list[str]) -> int:
+    from livedrummer.acoustic.detector import OnlineDetector, detect
+    from livedrummer.acoustic.pieces import CLASSES
+    from livedrummer.acoustic.profile import load_profile
+    from livedrummer.acoustic.score import Counts, score
+
+    from ._drumaudio import MICS, SR, excerpt, render_mix, render_stems
+
+    ap = argparse.ArgumentParser(prog="livedrummer bench transcribe")
+    ap.add_argument("--corpus", type=Path, default=DEFAULT_CORPUS)
+    ap.add_argument("--split", default="test", choices=("train", "validation", "test"))
+    ap.add_argument("--files", type=int, default=8, help="excerpts (default 8)")
+    ap.add_argument("--seconds", type=float, default=15.0, help="excerpt length (default 15)")
+    ap.add_argument("--audio-profile", default=None)
+    ap.add_argument("--live", action="store_true",
+                    help="play the excerpts into input --audio through a JACK dummy server and "
+                    "measure attack -> onset-on-the-bus latency")  # fmt: skip
+    args = ap.parse_args(argv)
+    if args.live:
+        return live(args)
+    root = corpus(args.corpus)
+    profile = load_profile(args.audio_profile)
+    mix_tot: dict[str, Counts] = {}
+    mic_tot: dict[str, Counts] = {}
+    rtf: list[float] = []
+    load: list[float] = []
+    files = pick_files(root, args.split, args.files)
+    for i, path in enumerate(files):
+        ex = excerpt(path, 5.0, args.seconds)
+        mix = render_mix(ex, seed=i)
+        t0 = time.perf_counter()
+        hits = detect(mix, SR, profile)
+        rtf.append((time.perf_counter() - t0) / ex.duration_s)
+        ref = (ex.onsets["time_s"], ex.classes, ex.onsets["velocity"])
+        for k, v in score(hits["time_s"], hits["cls"], *ref, GROUPS_MIX).items():
+            mix_tot[k] = mix_tot.get(k, Counts(0, 0, 0)) + v
+        online = OnlineDetector(profile, SR)
+        t0 = time.process_time()
+        for start in range(0, len(mix), 256):
+            online.process(mix[start : start + 256])
+        load.append((time.process_time() - t0) / ex.duration_s)
+        stems, names = render_stems(ex, seed=i)
+        chans = [CLASSES.index(MICS[n][0]) for n in names]
+        hits = detect(stems, SR, profile, chans)
+        for k, v in score(hits["time_s"], hits["cls"], *ref, {n: MICS[n] for n in names}).items():
+            mic_tot[k] = mic_tot.get(k, Counts(0, 0, 0)) + v
+    print(f"bench transcribe: {len(files)} excerpts of {args.seconds:g} s from the "
+          f"{args.split} split, profile {profile.name}")  # fmt: skip
+    for title, tot in (("mix", mix_tot), ("one mic per drum", mic_tot)):
+        print(f"  {title}: onset F-measure (precision / recall, true onsets counted)")
+        for k, c in tot.items():
+            print(
+                f"    {k:<10} F {c.f:.3f}  P {c.precision:.3f}  R {c.recall:.3f}  n {c.tp + c.fn}"
+            )
+    print(f"  offline twin real-time factor: median {np.median(rtf):.4f} "
+          f"({1 / np.median(rtf):.0f}x faster than real time)")  # fmt: skip
+    print(
+        f"  online detector CPU load (256-sample blocks): median {100 * np.median(load):.1f} "
+        "% of one core"
+    )
+    return 0
+
+
+def live(args: argparse.Namespace) -> int:
+    import os
+
+    from livedrummer.acoustic.detector import detect
+    from livedrummer.acoustic.pieces import classes_of
+    from livedrummer.acoustic.profile import load_profile
+    from livedrummer.acoustic.score import Counts, score
+
+    from ._audiolive import play_into_daemon
+    from ._drumaudio import SR, excerpt, render_mix
+    from ._jack import dummy_jack, jack_env
+
+    root = corpus(args.corpus)
+    profile = load_profile(args.audio_profile)
+    latencies: list[float] = []
+    tot: dict[str, Counts] = {}
+    files = pick_files(root, args.split, args.files)
+    with dummy_jack("bench-transcribe") as name:
+        os.environ.update(jack_env(name))
+        for i, path in enumerate(files):
+            ex = excerpt(path, 5.0, args.seconds)
+            mix = render_mix(ex, seed=i)
+            run = play_into_daemon(mix)
+            offline = np.sort(detect(mix, SR, profile)["time_s"])
+            if len(run.onsets) != len(offline):
+                print(f"  {path.name}: {len(run.onsets)} live hits, {len(offline)} offline")
+                continue
+            latencies += (np.sort(run.arrival_s) - run.attack_times(offline)).tolist()
+            # live stamps back on the file's time line through the player's JACK cycles
+            on = run.onsets
+            ref = (ex.onsets["time_s"], ex.classes, ex.onsets["velocity"])
+            got = score(run.file_times(on["time_s"]), classes_of(on), *ref, GROUPS_MIX)
+            for k, v in got.items():
+                tot[k] = tot.get(k, Counts(0, 0, 0)) + v
+    lat = np.array(latencies) * 1000
+    print(f"bench transcribe --live: {len(files)} excerpts of {args.seconds:g} s ({args.split}), "
+          "input --audio through jackd -d dummy (128 frames, 48 kHz)")  # fmt: skip
+    if len(lat):
+        p50, p99 = np.percentile(lat, 50), np.percentile(lat, 99)
+        print(f"  attack -> onset on the bus: p50 {p50:.1f} ms, p99 {p99:.1f} ms, "
+              f"max {lat.max():.1f} ms ({len(lat)} hits)")  # fmt: skip
+    for k, c in tot.items():
+        print(f"    {k:<10} F {c.f:.3f}  P {c.precision:.3f}  R {c.recall:.3f}  n {c.tp + c.fn}")
+    return 0

@@ -1,0 +1,83 @@
+"""``livedrummer transcribe FILE.wav -o out.mid``: a recording's drum hits as a MIDI file.
+
+The offline twin of ``input --audio``: the same detector (:mod:`livedrummer.acoustic.detector`)
+over the whole file, from a mix (every class from one signal: the channels are averaged) or,
+with ``--channels 1=kick,2=snare,...``, one microphone per drum. Prints what it found per
+drum; a file it cannot read, a silent file and a channel map that names a channel the file
+does not have are one line and exit status 2; clipping is one warning line (the hits are
+still transcribed, their velocities capped).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .common import Subparsers, add_command
+
+SILENCE_DBFS = -70.0
+
+
+def add_audio_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--audio-profile", metavar="P", default=None,
+        help="audio profile name or .toml path (from livedrummer audio learn); default the "
+        "generic General MIDI profile",
+    )  # fmt: skip
+    p.add_argument(
+        "--channels", metavar="MAP", default=None,
+        help="one microphone per drum: 1=kick,2=snare,3=hihat,... (channels from 1; drums: "
+        "kick snare hihat hihat_open tom_high tom_mid tom_low crash ride); default: a mix",
+    )  # fmt: skip
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "transcribe", run)
+    p.add_argument("file", type=Path, help="recording (WAV, FLAC, MP3, ... any FFmpeg reads)")
+    p.add_argument("-o", "--output", type=Path, required=True, help="General MIDI drum file")
+    add_audio_options(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from livedrummer.acoustic.detector import detect
+    from livedrummer.acoustic.pieces import CLASSES, parse_channel_map
+    from livedrummer.acoustic.profile import load_profile
+    from livedrummer.acoustic.transcribe import hits_to_midi
+    from livedrummer.errors import LivedrummerError
+
+    from ..audiofile import SAMPLE_RATE, read_audio
+
+    profile = load_profile(args.audio_profile)
+    mapping = parse_channel_map(args.channels) if args.channels else None
+    rec = read_audio(args.file)
+    peak = float(np.max(np.abs(rec.samples)))
+    if peak <= 10 ** (SILENCE_DBFS / 20):
+        level = f"{20 * np.log10(peak):.0f} dBFS" if peak > 0 else "digital silence"
+        raise LivedrummerError(f"{args.file}: silent (peak {level}): no hits to transcribe")
+    if rec.clipped:
+        share = 100.0 * rec.clipped / rec.samples.size
+        print(f"livedrummer: warning: {args.file}: {rec.clipped:,} samples clipped "
+              f"({share:.2f} %): loud hits read as full strength", file=sys.stderr)  # fmt: skip
+    if mapping is not None:
+        wanted = max(mapping) + 1
+        if wanted > rec.channels:
+            raise LivedrummerError(
+                f"--channels: channel {wanted} named, but {args.file} has {rec.channels}"
+            )
+        chans = sorted(mapping)
+        hits = detect(rec.samples[:, chans], SAMPLE_RATE, profile, [mapping[c] for c in chans])
+    else:
+        hits = detect(rec.samples.mean(axis=1), SAMPLE_RATE, profile)
+    try:
+        hits_to_midi(hits).save(args.output)
+    except OSError as exc:
+        raise LivedrummerError(f"{args.output}: cannot write: {exc.strerror or exc}") from None
+    counts = np.bincount(hits["cls"].astype(np.int64), minlength=len(CLASSES))
+    detail = ", ".join(f"{CLASSES[c]} {n}" for c, n in enumerate(counts.tolist()) if n)
+    mode = "one mic per drum" if mapping else "mix"
+    print(f"{args.output}: {len(hits)} hits in {rec.duration_s:.1f} s ({mode}, profile "
+          f"{profile.name}): {detail or 'none'}")  # fmt: skip
+    return 0

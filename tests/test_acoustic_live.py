@@ -1,0 +1,179 @@
+"""``input --audio``: rendered drums played into the daemon through a real JACK server.
+
+A player process writes a rendered groove (TimGM6mb, room, noise) to JACK; the daemon, a
+PortAudio client of the same ``jackd -d dummy`` server, recognises it and publishes onsets on
+the ZeroMQ bus, where the test subscribes (:mod:`services.bench._audiolive`). The live hits
+must be the offline twin's; bad devices are one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from livedrummer.acoustic.detector import detect
+from livedrummer.acoustic.pieces import GM_NOTES
+from livedrummer.acoustic.profile import load_profile
+from services.bench._audiolive import play_into_daemon
+from services.bench._drumaudio import DEFAULT_SF2, SR, excerpt, render_mix, render_stems
+from services.bench._jack import JackError, dummy_jack, jack_env
+
+REPO = Path(__file__).resolve().parent.parent
+HELD_OUT = "drummer1/eval_session/7_pop-groove7_138_beat_4-4.mid"
+
+
+@pytest.fixture(scope="module")
+def groove(groove_dir: Path):  # type: ignore[no-untyped-def]
+    if not DEFAULT_SF2.is_file():
+        pytest.skip(f"{DEFAULT_SF2} missing (Debian: apt-get install timgm6mb-soundfont)")
+    ex = excerpt(groove_dir / HELD_OUT, 4.0, 3.0)
+    return ex, render_mix(ex, seed=5), render_stems(ex, seed=5)
+
+
+def _same_hits(live: np.ndarray, offline: np.ndarray) -> float:
+    """Share of hits that agree in note and velocity, both in time order (the live stamps
+    are on the monotonic clock, the offline ones from the file's start; the samples, hence
+    the decisions, are the same)."""
+    notes = np.array(GM_NOTES)[offline["cls"].astype(int)]
+    mine = sorted(zip(np.round(offline["time_s"], 4).tolist(), notes.tolist(),
+                      offline["velocity"].tolist(), strict=True))  # fmt: skip
+    t0 = float(live["time_s"].min()) - mine[0][0] if len(live) else 0.0
+    theirs = sorted(zip(np.round(live["time_s"] - t0, 2).tolist(), live["note"].tolist(),
+                        live["velocity"].tolist(), strict=True))  # fmt: skip
+    same = sum(a[1:] == b[1:] for a, b in zip(mine, theirs, strict=False))
+    return same / max(len(mine), 1)
+
+
+def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, groove) -> None:  # type: ignore[no-untyped-def]
+    _ex, mix, (stems, names) = groove
+    profile = load_profile(None)
+    run = play_into_daemon(mix)
+    offline = detect(mix, SR, profile)
+    assert len(offline) > 10
+    assert "input:" in run.stderr
+    assert len(run.onsets) == len(offline), run.stderr
+    assert _same_hits(run.onsets, offline) >= 0.95
+    assert set(run.onsets["channel"].tolist()) == {9}
+    # attack (the player's JACK cycle) to onset on the bus: positive and bounded
+    attacks = run.attack_times(np.sort(offline["time_s"]))
+    arrivals = np.sort(run.arrival_s)
+    latency = arrivals - attacks
+    assert (latency > 0).all() and np.median(latency) < 0.2, latency
+    # one microphone per drum, two of them on the daemon's two JACK inputs
+    two = stems[:, :2]
+    spec = f"1={names[0]},2={names[1]}"
+    run = play_into_daemon(two, ["--channels", spec])
+    offline = detect(two, SR, profile, [0, 1] if names[:2] == ["kick", "snare"] else None)
+    assert names[:2] == ["kick", "snare"]
+    assert len(run.onsets) == len(offline) and len(offline) > 4
+    assert set(run.onsets["note"].tolist()) <= {36, 38}
+
+
+def _input(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "services", "input", *args], cwd=REPO,
+                          capture_output=True, text=True, timeout=60)  # fmt: skip
+
+
+def test_bad_audio_devices_are_one_line(jack_server: str) -> None:
+    r = _input("--audio", "no-such-card", "--no-journal")
+    assert r.returncode == 2
+    assert r.stderr.strip().splitlines() == [
+        "livedrummer: error: audio device 'no-such-card': no such audio input (inputs: 'system')"
+    ]
+    up = subprocess.run([sys.executable, "-m", "services", "up", "--audio", "no-such-card",
+                         "--headless"], cwd=REPO, capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert up.returncode == 2 and len(up.stderr.strip().splitlines()) == 1
+    assert "audio device 'no-such-card': no such audio input" in up.stderr
+    r = _input("--audio", "system", "--channels", "3=kick", "--no-journal")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+    assert "refuses 48000 Hz, 3 channel(s)" in r.stderr and "it has 2 inputs" in r.stderr
+
+
+def test_a_device_at_another_rate_is_refused_in_one_line(tmp_path: Path) -> None:
+    try:
+        with dummy_jack("acoustic-rate", rate=44_100) as name:
+            env = {**os.environ, **jack_env(name)}
+            r = subprocess.run([sys.executable, "-m", "services", "input", "--audio", "system",
+                                "--no-journal"], cwd=REPO, capture_output=True, text=True,
+                               timeout=60, env=env)  # fmt: skip
+    except JackError as exc:
+        pytest.skip(str(exc))
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "refuses 48000 Hz" in r.stderr and "default rate 44100 Hz" in r.stderr
+
+
+def _strokes(notes: list[tuple[float, int, int]], seconds: float) -> np.ndarray:
+    """Mono audio of (time, GM note, velocity) strokes through TimGM6mb (no room, no noise)."""
+    from livedrummer.audio.soundfont import render_soundfont
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.timeline.events import ONSET_DTYPE
+
+    gm = load_note_map("general-midi")
+    rows = np.zeros(len(notes), ONSET_DTYPE)
+    for row, (t, note, velocity) in zip(rows, notes, strict=True):
+        spec = gm.notes[note]
+        row["time_s"], row["note"], row["velocity"], row["channel"] = t, note, velocity, 9
+        row["instrument"], row["zone"], row["hihat"] = (
+            spec.instrument_code,
+            spec.zone.code,
+            spec.hihat.code,
+        )
+    return render_soundfont(rows, seconds, DEFAULT_SF2, SR).mean(axis=1)
+
+
+def test_audio_learn_hears_each_drum_and_its_profile_tells_them_apart(
+    jack_server: str, tmp_path: Path
+) -> None:
+    if not DEFAULT_SF2.is_file():
+        pytest.skip(f"{DEFAULT_SF2} missing (Debian: apt-get install timgm6mb-soundfont)")
+    from livedrummer.acoustic.pieces import CLASSES
+    from services.bench._audiolive import learn_from
+
+    velocities = [120, 100, 80, 110, 90, 70]
+    hits = [(0.3 + 0.3 * i, 36, v) for i, v in enumerate(velocities)]
+    hits += [(2.8 + 0.3 * i, 38, v) for i, v in enumerate(velocities)]
+    out = tmp_path / "mykit-audio.toml"
+    r = learn_from(_strokes(hits, 5.0), ["-o", str(out), "--drums", "kick,snare", "--hits", "6"])
+    assert r.returncode == 0, r.stderr
+    assert "hit the kick about 6 times" in r.stdout and "snare: 6 hits" in r.stdout
+    learnt = load_profile(out)
+    assert sorted(set(learnt.template_class.tolist())) == [0, 1]
+    # a kick-snare pattern the profile never heard, told apart with it
+    pattern = [(0.3 + 0.25 * i, 36 if i % 2 == 0 else 38, 60 + 7 * (i % 9)) for i in range(16)]
+    found = detect(_strokes(pattern, 4.8), SR, learnt)
+    from livedrummer.acoustic.score import score
+
+    times = np.array([t for t, _n, _v in pattern])
+    classes = np.array([CLASSES.index("kick" if n == 36 else "snare") for _t, n, _v in pattern])
+    s = score(found["time_s"], found["cls"], times, classes, np.full(len(times), 100))
+    assert s["kick"].f >= 0.9 and s["snare"].f >= 0.9, s
+    r = subprocess.run([sys.executable, "-m", "services", "audio", "learn", "--audio", "system",
+                        "-o", str(out), "--drums", "kick,cowbell"], cwd=REPO,
+                       capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert r.returncode == 2 and "unknown drum 'cowbell'" in r.stderr
+
+
+def test_the_daemon_keeps_waiting_for_an_absent_audio_device(jack_server: str) -> None:
+    import json
+    import time
+
+    daemon = subprocess.Popen([sys.executable, "-m", "services", "input", "--audio", "usb-mics",
+                               "--wait", "--no-journal", "--pub", "tcp://127.0.0.1:*",
+                               "--control", "tcp://127.0.0.1:*"], cwd=REPO,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        assert daemon.stdout is not None
+        assert json.loads(daemon.stdout.readline())["service"] == "input"
+        time.sleep(1.5)
+        assert daemon.poll() is None  # still serving, reopening every 0.1 s
+    finally:
+        daemon.terminate()
+        _out, err = daemon.communicate(timeout=20)
+    assert daemon.returncode == 0
+    warned = [line for line in err.splitlines() if "source unavailable" in line]
+    assert len(warned) == 1 and "audio device 'usb-mics': no such audio input" in warned[0]
