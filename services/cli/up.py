@@ -69,6 +69,8 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--serial", metavar="DEV",
                      help="serial trigger board (default: the rig profile's source)")  # fmt: skip
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
+    src.add_argument("--stage", type=Path, metavar="FILE",
+                     help="a live stage: every performer of FILE with a source")  # fmt: skip
     add_kit_option(p)
     add_avatar_option(p)
     p.add_argument("--map", help="note map (default roland-td)")
@@ -242,6 +244,10 @@ def run(args: argparse.Namespace) -> int:
 
     from ..supervisor import Supervisor
 
+    if args.stage is not None:  # several performers: services.cli.up_stage
+        from .up_stage import run_stage
+
+        return run_stage(args)
     apply_profile(args, args.up_defaults)
 
     if args.seconds is not None and not args.seconds > 0:
