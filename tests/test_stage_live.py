@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -197,3 +198,66 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
     seen = img.sum(axis=2) > 120  # drummers and kits under their spots, not the dark stage
     thirds = [int(seen[:, k * 110 : (k + 1) * 110].sum()) for k in range(3)]
     assert min(thirds) > 100, thirds  # three drummers side by side
+
+
+@pytest.mark.usefixtures("gl_ok")
+def test_one_pass_depth_tested_drawing_is_the_offline_merge_by_depth(tmp_path: Path) -> None:
+    """The live stage draws its drummers into one framebuffer; ``render --stage`` draws each
+    into its own and merges by depth in numpy: the same picture."""
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.render.body_scene import BODY_SKELETON
+    from livedrummer.render.kitmesh import build_kit_mesh
+    from livedrummer.stage.formation import Formation, place
+    from services.display.context import headless_context
+    from services.display.renderer import Renderer
+    from services.display.stage_export import group_camera_for, local_camera, merge_by_depth
+    from services.display.stage_live import StagePainter, StagePerformer
+
+    kit = load_kit("rock5")
+    spots = place(Formation("arc", radius=4.0, facing="center"), 3)  # overlapping kits
+    who = [StagePerformer(f"p{k}", k, "tcp://127.0.0.1:1", kit, s) for k, s in enumerate(spots)]
+    w, h = 240, 136
+    ctx = headless_context()
+    try:
+        painter = StagePainter(ctx, who, (w, h), "front")
+        painter.draw([None, None, None])
+        live = painter.read_rgba().astype(int)
+        world = group_camera_for(kit, spots, "front", w / h)
+        colours, depths = [], []
+        for s in spots:
+            r = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, (w, h), samples=0,
+                         offscreen=False)  # fmt: skip
+            fbo = ctx.framebuffer(color_attachments=[ctx.texture((w, h), 4)],
+                                  depth_attachment=ctx.depth_texture((w, h)))  # fmt: skip
+            r.draw(None, local_camera(world, s), target=fbo)
+            colours.append(np.frombuffer(fbo.read(components=4), np.uint8).reshape(h, w, 4))
+            depths.append(np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4"),
+                                        np.float32).reshape(h, w))  # fmt: skip
+        offline = merge_by_depth(colours, depths).astype(int)
+    finally:
+        ctx.release()
+    drawn = live[..., :3].sum(axis=2) > 60
+    assert drawn.mean() > 0.02  # kits on the stage, not an empty frame
+    differ = np.abs(live[..., :3] - offline[..., :3]).max(axis=2) > 3
+    assert differ.mean() < 0.002, differ.mean()  # depth ties at most
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
+def test_the_stage_display_draws_in_a_window_under_xvfb(tmp_path: Path) -> None:
+    stage = tmp_path / "s.toml"
+    stage.write_text('[[performer]]\nid = "a"\nsource = "virtual:a"\n\n'
+                     '[[performer]]\nid = "b"\nsource = "midi:TD"\n')  # fmt: skip
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", sys.executable, "-m", "services",
+         "display", "--live", "--stage", str(stage), "--sub",
+         "tcp://127.0.0.1:1,tcp://127.0.0.1:2", "--size", "320x180", "--max-frames", "6",
+         "--fps", "30"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "display: 6 stage frames; a: 0 pose samples" in run.stderr, run.stderr
+    short = subprocess.run([sys.executable, "-m", "services", "display", "--live", "--stage",
+                            str(stage), "--sub", "tcp://127.0.0.1:1", "--headless"],
+                           capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert short.returncode == 2 and "1 endpoints for 2 live performers" in short.stderr
+    assert short.stderr.strip().count("\n") == 0
