@@ -8,7 +8,8 @@ demo groove) reached through the jitter relay and clock-exchange proxy of
 ``--remote-control``. Performer A plays only the snare, B only the high tom: the frames log
 of the one stage display must show A's contacts only on A's drummer and B's only on B's, the
 remote groove on C's, every stream without a loss; a recorded frame shows three drummers
-side by side in the recorded video. Also the ``source`` syntax of a stage file and the display's per-stream
+side by side in the recorded video. When B's synth is killed, it is restarted alone: A's
+and C's streams lose nothing and A's drummer keeps moving meanwhile. Also the ``source`` syntax of a stage file and the display's per-stream
 checks (sequence gaps per performer, a pose of the wrong performer refused) on real sockets.
 """
 
@@ -95,9 +96,10 @@ def test_each_stream_keeps_its_own_sequence_and_refuses_another_performer() -> N
         now = clock.now()
         for seq in (0, 1, 2, 5, 6):  # a: 3 and 4 lost
             pubs[0].send_multipart(_pose_message(3, seq, now + seq * 0.01, n))
-        for seq in range(4):  # b: in order, and one pose claiming to be performer 3's
+        for seq in range(4):  # b: in order, one pose claiming to be performer 3's, a restart
             pubs[1].send_multipart(_pose_message(4, seq, now + seq * 0.01, n))
         pubs[1].send_multipart(_pose_message(3, 7, now, n))
+        pubs[1].send_multipart(_pose_message(4, 1, now + 0.05, n))  # b's synth restarted
         thread.join(10)
     finally:
         stop.set()
@@ -106,11 +108,38 @@ def test_each_stream_keeps_its_own_sequence_and_refuses_another_performer() -> N
             s.close(0)
         ctx.term()
     s = display.summary()["performers"]
-    assert (s["a"]["pose_messages"], s["a"]["missing"], s["a"]["bad"]) == (5, 2, 0), s
-    assert (s["b"]["pose_messages"], s["b"]["missing"], s["b"]["bad"]) == (4, 0, 1), s
+    a, b = s["a"], s["b"]
+    assert (a["pose_messages"], a["missing"], a["bad"], a["restarts"]) == (5, 2, 0, 0), s
+    assert (b["pose_messages"], b["missing"], b["bad"], b["restarts"]) == (5, 0, 1, 1), s
 
 
 rtmidi = pytest.importorskip("rtmidi")
+
+
+def _synth_pid(pub_port: int) -> int:
+    """The pid of the synth process publishing on ``pub_port`` (started by ``up --stage``)."""
+    for proc in Path("/proc").iterdir():
+        try:
+            argv = (proc / "cmdline").read_bytes().split(b"\0")
+        except OSError:
+            continue
+        if b"synth" in argv and f"tcp://127.0.0.1:{pub_port}".encode() in argv:
+            return int(proc.name)
+    raise AssertionError(f"no synth publishing on {pub_port}")
+
+
+def _newest(frames: Path, who: str) -> float:
+    """The newest pose time of performer ``who`` in the frames log so far."""
+    path = frames / "frames.jsonl"
+    if not path.exists():
+        return -1.0
+    newest = -1.0
+    for line in path.read_text().splitlines():
+        if line.endswith("}"):
+            for p in json.loads(line)["performers"]:
+                if p["id"] == who and p["newest_s"] is not None:
+                    newest = max(newest, p["newest_s"])
+    return newest
 
 
 @pytest.mark.usefixtures("gl_ok")
@@ -164,10 +193,21 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
         while "display running" not in (line := up.stdout.readline()):
             assert line and time.monotonic() < deadline, up.stderr.read() if up.stderr else ""
         outs = [player(wait_port(name)) for name in ("padsA", "padsB")]
-        for _ in range(16):  # A only the snare, B only the high tom, 4 a second
-            outs[0].send_message([0x99, 38, 110])
-            outs[1].send_message([0x99, 48, 110])
-            time.sleep(0.25)
+
+        def play(hits: int) -> None:  # A only the snare, B only the high tom, 4 a second
+            for _ in range(hits):
+                outs[0].send_message([0x99, 38, 110])
+                outs[1].send_message([0x99, 48, 110])
+                time.sleep(0.25)
+
+        play(8)
+        killed_at = time.monotonic()  # B's synth dies: only B's drummer may stop
+        os.kill(_synth_pid(7300 + 20 + 10), signal.SIGKILL)
+        deadline = time.monotonic() + 60
+        while _newest(frames, "b") < killed_at + 0.5:  # until B's restarted synth is seen
+            assert time.monotonic() < deadline, "B's synth did not come back"
+            play(1)
+        play(8)
         for out in outs:
             out.close_port()
         time.sleep(1.0)  # the last hits shown
@@ -189,8 +229,22 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
     assert lit["a"] == {"snare"}, (lit, err[-1500:])
     assert lit["b"] == {"tom1"}, lit
     assert len(lit["c"]) >= 2, lit  # the remote groove: kick, snare, hi-hat ...
-    for name in ("a", "b", "c"):  # every stream drawn, none lost a message or sent a bad one
-        assert re.search(rf"{name}: [1-9]\d* pose samples, 0 lost, 0 bad", err), err[-1500:]
+    # every stream drawn; A's and C's lost nothing while B's synth was restarted, alone
+    for name, lost in (("a", "0"), ("b", r"\d+"), ("c", "0")):
+        restarts = "1" if name == "b" else "0"
+        assert re.search(rf"{name}: [1-9]\d* pose samples, {lost} lost, 0 bad, {restarts} restarts",
+                         err), err[-1500:]  # fmt: skip
+    assert "up: stopped (1 restarts)" in err, err[-1500:]
+    # while B's stream was down, A's drummer kept getting poses; B drew its hits again after
+    b_at_kill = max(p["newest_s"] or 0.0 for r in log for p in r["performers"]
+                    if p["id"] == "b" and r["render_s"] <= killed_at)  # fmt: skip
+    outage = [r for r in log if r["render_s"] > killed_at
+              and r["performers"][1]["newest_s"] <= b_at_kill]  # fmt: skip
+    a_newest = [r["performers"][0]["newest_s"] for r in outage]
+    assert len(outage) >= 3 and a_newest[-1] - a_newest[0] > 0.2, (len(outage), a_newest)
+    back = {x for r in log if r["render_s"] > killed_at + 0.5
+            and r["performers"][1]["newest_s"] > b_at_kill for x in r["performers"][1]["lit"]}  # fmt: skip
+    assert back == {"tom1"}, back
     import av
 
     with av.open(str(tmp_path / "stage.mp4")) as c:

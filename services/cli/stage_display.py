@@ -70,6 +70,7 @@ def run_stage_live(args: argparse.Namespace) -> int:
     s = display.summary()
     where = f" into {args.frames_dir}" if args.frames_dir else ""
     each = "; ".join(f"{name}: {v['pose_samples']} pose samples, {v['missing']} lost, "
-                     f"{v['bad']} bad" for name, v in s["performers"].items())  # fmt: skip
+                     f"{v['bad']} bad, {v['restarts']} restarts"
+                     for name, v in s["performers"].items())  # fmt: skip
     print(f"display: {s['frames']} stage frames{where}; {each}", file=sys.stderr)
     return code

@@ -4,7 +4,8 @@ Streams. ``up --stage`` runs one synth per performer; this display subscribes to
 on its own SUB socket and keeps, per performer, its own
 :class:`~livedrummer.live.track.PoseTrack`, its own
 :class:`~livedrummer.protocol.SequenceTracker` (each stream numbers its messages on its own,
-so a gap on one performer's stream is that stream's loss, counted for it) and its own counts.
+so a gap on one performer's stream is that stream's loss, counted for it, and a restart of
+one performer's synth is seen on its stream alone) and its own counts.
 The POSE header carries the performer id: a message whose id is not the one the stream was
 opened for (a synth started with the wrong ``--performer``, or a miswired endpoint) is dropped
 and counted as bad on that stream, never drawn on another drummer.
@@ -104,6 +105,7 @@ class StreamStats:
     pose_samples: int = 0
     missing: int = 0
     bad: int = 0
+    restarts: int = 0  # its synth started again (sequence back to 0)
     lit_frames: int = 0  # frames that drew one of its pieces lit
 
 
@@ -142,6 +144,12 @@ class _Stream:
             report = self.tracker.observe_message(msg)
             if report.status is SeqStatus.GAP:
                 self.stats.missing += report.missing
+            elif report.status in (SeqStatus.RESTART, SeqStatus.DUPLICATE):
+                # One synth on one connection never repeats a number: an older one means it
+                # restarted and we reconnected after its first messages (its own tracker).
+                self.stats.restarts += 1
+                self.tracker.reset()
+                self.tracker.observe_message(msg)
             rows = msg.body.rows
             self.track.add(msg.body.time_s + rows["time_s"].astype(np.float64), rows)
             self.stats.pose_messages += 1
