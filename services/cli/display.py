@@ -74,7 +74,8 @@ def register(sub: Subparsers) -> None:
                       "--avatar (default: not asked)")  # fmt: skip
     live.add_argument("--stage", type=Path, metavar="FILE",
                       help="draw every live performer of this stage file; --sub lists their "
-                      "synths' pose endpoints, comma-separated, in the file's order")  # fmt: skip
+                      "synths' pose endpoints, comma-separated, in the file's order "
+                      "(default: one drummer)")  # fmt: skip
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
     add_renamed(live, "--frames", live.add_argument(
         "--max-frames", type=int, metavar="N",

@@ -70,7 +70,8 @@ def register(sub: Subparsers) -> None:
                      help="serial trigger board (default: the rig profile's source)")  # fmt: skip
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
     src.add_argument("--stage", type=Path, metavar="FILE",
-                     help="a live stage: every performer of FILE with a source")  # fmt: skip
+                     help="a live stage: every performer of FILE with a source "
+                     "(default: one kit)")  # fmt: skip
     add_kit_option(p)
     add_avatar_option(p)
     p.add_argument("--map", help="note map (default roland-td)")
