@@ -7,7 +7,8 @@ shifted by a fraction of a note so the four do not hit together. Prints each syn
 "answered in" p50/p99 (from its own summary: from an onset's arrival to the first pose
 message showing it) and what the stage display drew at ``--size`` (default 1280x720, llvmpipe
 where there is no GPU): frames per second actually drawn over the run, and the median and p90
-time to draw one frame (N renders, N read-backs and the depth merge), from ``frames.jsonl``.
+time to draw one frame (N renders into one depth-tested framebuffer), from ``frames.jsonl``;
+then the same drawing alone on the machine (:func:`draw_capacity`), without the synths.
 One run, figures only, no assertions; the machine's other load counts (every process of the
 stage shares its cores).
 """
@@ -49,6 +50,41 @@ def write_part(path: Path, rate_hz: float, seconds: float, shift: float) -> None
         last = at + 1
     mid.tracks.append(track)
     mid.save(path)
+
+
+def draw_capacity(performers: int, size: tuple[int, int], frames: int) -> np.ndarray:
+    """Milliseconds to draw each of ``frames`` stage frames of ``performers`` drummers (the
+    demo groove animated offline, every drummer on its spot of an arc) with the live stage
+    display's painter, alone on the machine: what the display could draw without the synths.
+    Each frame is finished (and read back, as for a recording) before the next is timed."""
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.stage.formation import Formation, place
+
+    from ..cli import build_parser
+    from ..cli.common import DEMO_MAP, demo_groove, read_performance
+    from ..cli.render import body_scene
+    from ..display.context import headless_context
+    from ..display.stage_live import StagePainter, StagePerformer
+
+    args = build_parser(["render"]).parse_args(["render", str(demo_groove())])
+    performance, note_map = read_performance(args, demo_groove(), DEMO_MAP, quiet=True)
+    kit = load_kit("rock5")
+    body = body_scene(args, performance, kit, note_map)
+    spots = place(Formation("arc", radius=6.0, facing="center"), performers)
+    who = [StagePerformer(f"p{k}", k, "", kit, spot) for k, spot in enumerate(spots)]
+    times = 2.0 + np.arange(frames) / 30.0
+    ctx = headless_context()
+    took = []
+    try:
+        painter = StagePainter(ctx, who, size, "stage")
+        for frame in body.frames(times):
+            start = time.perf_counter()
+            painter.draw([frame] * performers)
+            painter.read_rgba()
+            took.append(time.perf_counter() - start)
+    finally:
+        ctx.release()
+    return np.array(took[2:]) * 1000  # the first frames compile shaders
 
 
 def main(argv: list[str]) -> int:
@@ -108,4 +144,10 @@ def main(argv: list[str]) -> int:
         for line in text.splitlines():
             if line.startswith("display:"):
                 print(f"  {line}")
+    w, h = (int(v) for v in args.size.split("x"))
+    alone = draw_capacity(args.performers, (w, h), 32)
+    p50 = float(np.median(alone))
+    print(f"  display alone (no synths running): a {args.size} frame of {args.performers} "
+          f"drummers in p50 {p50:.0f} ms, p90 {np.percentile(alone, 90):.0f} ms = "
+          f"{1000 / p50:.1f} fps")  # fmt: skip
     return 0
