@@ -236,10 +236,13 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
                          err), err[-1500:]  # fmt: skip
     assert "up: stopped (1 restarts)" in err, err[-1500:]
     # while B's stream was down, A's drummer kept getting poses; B drew its hits again after
-    b_at_kill = max(p["newest_s"] or 0.0 for r in log for p in r["performers"]
-                    if p["id"] == "b" and r["render_s"] <= killed_at)  # fmt: skip
-    outage = [r for r in log if r["render_s"] > killed_at
-              and r["performers"][1]["newest_s"] <= b_at_kill]  # fmt: skip
+    after = [r for r in log if r["render_s"] > killed_at + 0.2]  # what was in flight drawn
+    b_at_kill = after[0]["performers"][1]["newest_s"]
+    outage = []
+    for r in after:
+        if r["performers"][1]["newest_s"] != b_at_kill:
+            break  # B's restarted synth is seen
+        outage.append(r)
     a_newest = [r["performers"][0]["newest_s"] for r in outage]
     assert len(outage) >= 3 and a_newest[-1] - a_newest[0] > 0.2, (len(outage), a_newest)
     back = {x for r in log if r["render_s"] > killed_at + 0.5
