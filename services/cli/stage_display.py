@@ -9,6 +9,10 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..display.live import FrameClock
 
 
 def run_stage_live(args: argparse.Namespace) -> int:
@@ -17,7 +21,6 @@ def run_stage_live(args: argparse.Namespace) -> int:
     from livedrummer.live.calibration import Calibration
     from livedrummer.stage.stagefile import load_stage
 
-    from ..display.live import MonotonicFrameClock
     from ..display.stage_live import StageConfig, StageDisplay, StagePerformer
     from ..service import serve
     from .keys import security_from_args
@@ -64,8 +67,8 @@ def run_stage_live(args: argparse.Namespace) -> int:
     import zmq
 
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    display = StageDisplay(performers, config, MonotonicFrameClock(calibration.audio_ms / 1000.0),
-                           ctx)  # fmt: skip
+    clock = _clock(args, window is not None, calibration.audio_ms)
+    display = StageDisplay(performers, config, clock, ctx)
     code = serve(display, lambda endpoints: ",".join(p.sub for p in performers))
     s = display.summary()
     where = f" into {args.frames_dir}" if args.frames_dir else ""
@@ -74,3 +77,21 @@ def run_stage_live(args: argparse.Namespace) -> int:
                      for name, v in s["performers"].items())  # fmt: skip
     print(f"display: {s['frames']} stage frames{where}; {each}", file=sys.stderr)
     return code
+
+
+def _clock(args: argparse.Namespace, windowed: bool, audio_ms: float) -> FrameClock:
+    """``--clock``, as for one drummer: a window follows the audio output where there is one."""
+    import logging
+
+    from ..display.context import DisplayError
+    from ..display.live import AudioFrameClock, MonotonicFrameClock
+
+    if args.clock == "audio" or (args.clock == "auto" and windowed):
+        try:
+            return AudioFrameClock(audio_ms / 1000.0)
+        except DisplayError as exc:
+            if args.clock == "audio":
+                raise
+            logging.getLogger("livedrummer.display").warning("%s: frames on the monotonic clock",
+                                                             exc)  # fmt: skip
+    return MonotonicFrameClock(audio_ms / 1000.0)
