@@ -26,8 +26,8 @@ Example::
 Every key is checked (:class:`~livedrummer.config.Table`): an unknown key, a wrong type or an
 out-of-range value is one line naming the file, the table and the key. Performer ids must be
 unique; ``file`` paths are resolved against the stage file's folder. A performer's live
-``source`` is kept as text here (``midi:PORT``, ``virtual:NAME``, ``remote:ENDPOINT``): the
-services open it.
+``source`` (``midi:PORT``, ``virtual:NAME``, ``remote:EP,control=EP``, ...) is checked here by
+:func:`livedrummer.stage.source.parse_source` and kept as text; ``up --stage`` opens it.
 
 Limits: one formation for the whole piece; performers of a shared file are told apart by
 channel, not by track.
@@ -42,6 +42,7 @@ from livedrummer.config import Table, read_toml
 from livedrummer.errors import ConfigError
 
 from .formation import FACINGS, SHAPES, Formation, Placement, place
+from .source import parse_source
 from .variation import MODES, Variation
 
 
@@ -87,6 +88,19 @@ class Stage:
                     (Performer(**{**performer.__dict__, "copy": c}), self.placements[k], var)
                 )
                 k += 1
+        return out
+
+    def live(self) -> list[tuple[int, Performer, Placement]]:
+        """The performers played live (with a ``source``), each with its performer id (its
+        index in the file, the id its input, synth and pose stream carry) and its spot.
+        Raises StageError when none has a source, or for an ensemble (copies are for render)."""
+        if self.copies > 1:
+            raise StageError(f"{self.source}: [ensemble] copies are for render --stage; a live "
+                             "stage plays each performer once")  # fmt: skip
+        out = [(k, p, self.placements[k]) for k, p in enumerate(self.performers)
+               if p.source is not None]  # fmt: skip
+        if not out:
+            raise StageError(f'{self.source}: no performer has a live source = "..."')
         return out
 
 
@@ -174,6 +188,11 @@ def _performer(t: Table, folder: Path) -> Performer:
     source = t.text("source", None)
     if file is None and source is None:
         raise t.fail(None, 'needs file = "part.mid" (render) or source = "..." (live)')
+    if source is not None:
+        try:
+            parse_source(source, folder)
+        except ValueError as exc:
+            raise t.fail("source", str(exc), source) from None
     position = tuple(t.vector("position", 2)) if t.has("position") else None
     channel = t.raw("channel", "auto")
     number = isinstance(channel, int) and not isinstance(channel, bool)

@@ -78,6 +78,10 @@ def register(sub: Subparsers) -> None:
     live.add_argument("--synth-control", metavar="ENDPOINT",
                       help="ask the synth here which avatar it plays; warn when it is not "
                       "--avatar (default: not asked)")  # fmt: skip
+    live.add_argument("--stage", type=Path, metavar="FILE",
+                      help="draw every live performer of this stage file; --sub lists their "
+                      "synths' pose endpoints, comma-separated, in the file's order "
+                      "(default: one drummer)")  # fmt: skip
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
     add_renamed(live, "--frames", live.add_argument(
         "--max-frames", type=int, metavar="N",
@@ -103,6 +107,10 @@ def register(sub: Subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_aa(args.aa)
+    if args.live and args.stage is not None:
+        from .stage_display import run_stage_live
+
+        return run_stage_live(args)
     if args.live:
         return run_live(args)
     from livedrummer.kit.loader import load_kit

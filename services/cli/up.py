@@ -83,6 +83,9 @@ def register(sub: Subparsers) -> None:
     from .transcribe import add_audio_options
 
     add_audio_options(p)
+    src.add_argument("--stage", type=Path, metavar="FILE",
+                     help="a live stage: every performer of FILE with a source "
+                     "(default: one kit)")  # fmt: skip
     add_kit_option(p)
     add_avatar_option(p)
     add_background_option(p, transparent=False)
@@ -285,6 +288,10 @@ def run(args: argparse.Namespace) -> int:
 
     from ..supervisor import Supervisor
 
+    if args.stage is not None:  # several performers: services.cli.up_stage
+        from .up_stage import run_stage
+
+        return run_stage(args)
     apply_profile(args, args.up_defaults)
 
     if args.seconds is not None and not args.seconds > 0:

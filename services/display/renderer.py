@@ -243,8 +243,10 @@ class Renderer:
         if self._ball_count:
             self._ball_buf.write(self._ball.tobytes())
 
-    def draw(self, frame: SceneFrame | None, camera: Camera, target: Any = None) -> None:
-        """Draw ``frame`` (None: the kit at rest and no drummer) seen from ``camera``."""
+    def draw(self, frame: SceneFrame | None, camera: Camera, target: Any = None,
+             clear: bool = True) -> None:  # fmt: skip
+        """Draw ``frame`` (None: the kit at rest and no drummer) seen from ``camera``;
+        ``clear=False`` draws over what ``target`` holds, depth-tested (a stage's drummers)."""
         import moderngl
 
         fbo = target if target is not None else self._fbo
@@ -254,11 +256,12 @@ class Renderer:
         self.ctx.viewport = (0, 0, w, h)
         self.ctx.enable(moderngl.DEPTH_TEST)
         self.ctx.disable(moderngl.CULL_FACE)
-        bg = self.background
-        fbo.clear(*bg.rgb, bg.alpha, depth=1.0)
-        if bg.image is not None:
-            self._draw_background_image(bg.image)
-            self.ctx.enable(moderngl.DEPTH_TEST)
+        if clear:
+            bg = self.background
+            fbo.clear(*bg.rgb, bg.alpha, depth=1.0)
+            if bg.image is not None:
+                self._draw_background_image(bg.image)
+                self.ctx.enable(moderngl.DEPTH_TEST)
         self.upload(frame)
         vp = camera.view_projection(w / h)
         centre = self.kit_mesh.model[0, :3, 3] if len(self.kit_mesh.model) else np.zeros(3)

@@ -36,6 +36,7 @@ import numpy as np
 
 from livedrummer.audio.mix import fit_headroom, mix_onsets
 from livedrummer.avatar.model import Avatar
+from livedrummer.kit.model import Kit
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import Camera, pick_camera
@@ -69,9 +70,15 @@ def group_camera(drummers: Sequence[StageDrummer], name: str, aspect: float) -> 
     """The camera ``name`` of the first drummer's kit, aimed at the group's centre and pulled
     back until the group (each drummer with its kit, about :data:`KIT_HALF_M` around its
     spot) fits the frame's width and height as one kit fits the single-kit camera."""
-    base = pick_camera(drummers[0].body.kit, name)
-    xs = np.array([d.placement.x for d in drummers])
-    ys = np.array([d.placement.y for d in drummers])
+    return group_camera_for(drummers[0].body.kit, [d.placement for d in drummers], name, aspect)
+
+
+def group_camera_for(kit: Kit, placements: Sequence[Placement], name: str,
+                     aspect: float) -> Camera:  # fmt: skip
+    """:func:`group_camera` from the first kit and the spots alone (the live stage display)."""
+    base = pick_camera(kit, name)
+    xs = np.array([p.x for p in placements])
+    ys = np.array([p.y for p in placements])
     centre = np.array([(xs.max() + xs.min()) / 2, (ys.max() + ys.min()) / 2, 0.0])
     offset = np.asarray(base.eye) - np.asarray(base.target)
     distance = float(np.linalg.norm(offset))
@@ -85,7 +92,7 @@ def group_camera(drummers: Sequence[StageDrummer], name: str, aspect: float) -> 
     scale = max(1.0, needed / distance)
     target = np.asarray(base.target) + centre
     eye = target + offset * scale
-    return Camera(f"{name} (stage of {len(drummers)})", _vec(eye), _vec(target), base.fov_deg)
+    return Camera(f"{name} (stage of {len(placements)})", _vec(eye), _vec(target), base.fov_deg)
 
 
 def local_camera(camera: Camera, placement: Placement) -> Camera:

@@ -1,0 +1,97 @@
+"""``display --live --stage FILE --sub EP1,EP2,...``: the live stage display (not a subcommand).
+
+The stage file says who stands where on which kit; ``--sub`` lists the pose endpoints of the
+performers that play live (those with a ``source``), one per performer in the file's order
+(``up --stage`` passes them). The display is :class:`services.display.stage_live.StageDisplay`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..display.live import FrameClock
+
+
+def run_stage_live(args: argparse.Namespace) -> int:
+    from livedrummer.errors import ConfigError
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.live.calibration import Calibration
+    from livedrummer.stage.stagefile import load_stage
+
+    from ..display.stage_live import StageConfig, StageDisplay, StagePerformer
+    from ..service import serve
+    from .keys import security_from_args
+    from .render import parse_size
+
+    stage = load_stage(args.stage)
+    live = stage.live()
+    subs = [s.strip() for s in args.sub.split(",") if s.strip()]
+    if len(subs) != len(live):
+        names = ", ".join(p.id for _, p, _ in live)
+        raise ConfigError(f"--sub: {len(subs)} endpoints for {len(live)} live performers of "
+                          f"{args.stage} ({names}): give one each, in that order")  # fmt: skip
+    if not 0 < args.fps <= 1000:
+        raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps})")
+    if args.max_frames is not None and args.max_frames < 1:
+        raise ConfigError(f"--max-frames: expected >= 1 (got {args.max_frames})")
+    if args.seconds is not None and not args.seconds > 0:
+        raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
+    window = None
+    if not args.headless:
+        from ..display.window import WindowOptions
+
+        if args.video is not None or args.frames_dir is not None:
+            raise ConfigError("display --live --stage: --video and --frames-dir record off "
+                              "screen: add --headless")  # fmt: skip
+        window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
+                               monitor=args.monitor, camera=args.camera, samples=0,
+                               vsync=False)  # fmt: skip
+    avatars = {}
+    if any(p.avatar for _, p, _ in live):
+        from livedrummer.avatar.loader import load_avatar
+
+        avatars = {p.id: load_avatar(p.avatar) for _, p, _ in live if p.avatar is not None}
+    performers = [StagePerformer(p.id, k, sub, load_kit(p.kit), spot, avatars.get(p.id))
+                  for (k, p, spot), sub in zip(live, subs, strict=True)]  # fmt: skip
+    calibration = Calibration.load()
+    config = StageConfig(
+        fps=args.fps, size=parse_size(args.size), camera=args.camera, frames=args.max_frames,
+        seconds=args.seconds, out=args.frames_dir, png=not args.no_png, video=args.video,
+        window=window, render=not args.no_render,
+        display_offset_s=calibration.display_ms / 1000.0,
+        security=security_from_args(args), control=args.control,
+    )  # fmt: skip
+    import zmq
+
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    clock = _clock(args, window is not None, calibration.audio_ms)
+    display = StageDisplay(performers, config, clock, ctx)
+    code = serve(display, lambda endpoints: ",".join(p.sub for p in performers))
+    s = display.summary()
+    where = f" into {args.frames_dir}" if args.frames_dir else ""
+    each = "; ".join(f"{name}: {v['pose_samples']} pose samples, {v['missing']} lost, "
+                     f"{v['bad']} bad, {v['restarts']} restarts"
+                     for name, v in s["performers"].items())  # fmt: skip
+    print(f"display: {s['frames']} stage frames{where}; {each}", file=sys.stderr)
+    return code
+
+
+def _clock(args: argparse.Namespace, windowed: bool, audio_ms: float) -> FrameClock:
+    """``--clock``, as for one drummer: a window follows the audio output where there is one."""
+    import logging
+
+    from ..display.context import DisplayError
+    from ..display.live import AudioFrameClock, MonotonicFrameClock
+
+    if args.clock == "audio" or (args.clock == "auto" and windowed):
+        try:
+            return AudioFrameClock(audio_ms / 1000.0)
+        except DisplayError as exc:
+            if args.clock == "audio":
+                raise
+            logging.getLogger("livedrummer.display").warning("%s: frames on the monotonic clock",
+                                                             exc)  # fmt: skip
+    return MonotonicFrameClock(audio_ms / 1000.0)

@@ -1,0 +1,386 @@
+"""The live stage display: every performer's synth, one picture (``display --live --stage``).
+
+Streams. ``up --stage`` runs one synth per performer; this display subscribes to each of them
+on its own SUB socket and keeps, per performer, its own
+:class:`~livedrummer.live.track.PoseTrack`, its own
+:class:`~livedrummer.protocol.SequenceTracker` (each stream numbers its messages on its own,
+so a gap on one performer's stream is that stream's loss, counted for it, and a restart of
+one performer's synth is seen on its stream alone) and its own counts.
+The POSE header carries the performer id: a message whose id is not the one the stream was
+opened for (a synth started with the wrong ``--performer``, or a miswired endpoint) is dropped
+and counted as bad on that stream, never drawn on another drummer.
+
+Drawing. As ``render --stage`` (:mod:`services.display.stage_export`), each drummer has its
+own :class:`~services.display.renderer.Renderer` (its kit, its avatar, its key light and
+shadow map) and the group camera (:func:`~services.display.stage_export.group_camera_for`)
+is expressed in each drummer's frame; but live, the N drummers are drawn into ONE framebuffer:
+the first clears it, the others draw over it with the depth test on, which is
+``merge_by_depth`` done by the GPU (the same nearest-surface rule, no read-back of N colour
+and depth pictures, no numpy pass: a 720p frame of 4 drummers took 211 ms instead of 445 ms,
+p50, on a loaded 2-core machine). A frame is drawn for its show time (now + the frame
+clock's latency + the measured render time, as the single-drummer display does); a drummer
+with no pose yet is drawn as its empty kit, one whose stream stalls holds its last pose.
+Headless, frames go to ``--frames-dir`` (``frames.jsonl``: per frame and per performer the
+pose time drawn, the newest pose received and the kit pieces lit, i.e. the contacts seen;
+PNGs unless ``png`` is off) and to a video on show time (frames repeated where the machine
+drew fewer than ``fps``). In a window the drummers are drawn straight into the window's
+framebuffer (Q/Esc or closing the window quits).
+
+Cost and limits: N renders (and N shadow passes) per frame, so the frame rate falls with N
+and the frame size (``livedrummer bench stage`` measures it); a recording is drawn live,
+not deferred as the single-drummer display's is, and has no drum track; the stage camera is
+fixed (no camera keys); the synths' expression presets are not applied live.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+import zmq
+
+from livedrummer.avatar.model import Avatar
+from livedrummer.body.pose import pose_dtype
+from livedrummer.errors import ProtocolError
+from livedrummer.kit.model import Kit
+from livedrummer.live.ahead import RenderAhead
+from livedrummer.live.track import PoseTrack
+from livedrummer.protocol import Pose, PoseFormat, SeqStatus, SequenceTracker, decode
+from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
+from livedrummer.render.camera import Camera
+from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.stage.formation import Placement
+
+from ..badmsg import BadMessages
+from ..net import Security, connect, socket, subscribe_protocol
+from ..service import OnReady, Service
+from .live import FrameClock
+from .renderer import Renderer
+from .stage_export import group_camera_for, local_camera
+from .video import VideoSettings, VideoWriter
+from .window import WindowOptions
+
+log = logging.getLogger("livedrummer.display")
+GLOW_LIT = 0.1  # a piece glowing above this was struck within about 0.3 s (a contact)
+
+
+@dataclass(frozen=True)
+class StagePerformer:
+    """One live drummer of the stage: its stream, its performer id, its kit and its spot."""
+
+    label: str
+    performer: int
+    sub: str
+    kit: Kit
+    placement: Placement
+    avatar: Avatar | None = None
+
+
+@dataclass
+class StageConfig:
+    fps: float = 30.0
+    size: tuple[int, int] = (640, 360)
+    camera: str = "stage"
+    frames: int | None = None  # stop after this many frames
+    seconds: float | None = None  # stop this long after the first frame with a pose
+    out: Path | None = None  # frames.jsonl (and PNGs) folder
+    png: bool = True
+    video: Path | None = None
+    window: WindowOptions | None = None
+    render: bool = True
+    display_offset_s: float = 0.0
+    security: Security = field(default_factory=Security)
+    control: str | None = None
+
+
+@dataclass
+class StreamStats:
+    pose_messages: int = 0
+    pose_samples: int = 0
+    missing: int = 0
+    bad: int = 0
+    restarts: int = 0  # its synth started again (sequence back to 0)
+    lit_frames: int = 0  # frames that drew one of its pieces lit
+
+
+class _Stream:
+    """One performer's pose stream: socket, track, sequence numbers, counts."""
+
+    def __init__(self, who: StagePerformer) -> None:
+        self.who = who
+        self.format = PoseFormat.from_dtype(pose_dtype(len(who.kit.pieces)))
+        self.track = PoseTrack()
+        self.tracker = SequenceTracker()
+        self.stats = StreamStats()
+        self.bad = BadMessages(f"display pose stream of {who.label}", log)
+        self.sock: Any = None
+
+    def drain(self) -> None:
+        while True:
+            try:
+                frames = self.sock.recv_multipart(zmq.NOBLOCK)
+            except zmq.Again:
+                return
+            try:
+                msg = decode(frames, self.format)
+            except ProtocolError as exc:
+                self.stats.bad += 1
+                self.bad.drop(exc)
+                continue
+            if not isinstance(msg.body, Pose):
+                self.stats.bad += 1
+                self.bad.unexpected(msg.kind.name)
+                continue
+            if msg.performer != self.who.performer:
+                self.stats.bad += 1
+                self.bad.unexpected(f"POSE of performer {msg.performer}")
+                continue
+            report = self.tracker.observe_message(msg)
+            if report.status is SeqStatus.GAP:
+                self.stats.missing += report.missing
+            elif report.status in (SeqStatus.RESTART, SeqStatus.DUPLICATE):
+                # One synth on one connection never repeats a number: an older one means it
+                # restarted and we reconnected after its first messages (its own tracker).
+                self.stats.restarts += 1
+                self.tracker.reset()
+                self.tracker.observe_message(msg)
+            rows = msg.body.rows
+            self.track.add(msg.body.time_s + rows["time_s"].astype(np.float64), rows)
+            self.stats.pose_messages += 1
+            self.stats.pose_samples += rows.size
+
+
+class _Recorder:
+    """Merged frames into a video on show time: a frame that comes late repeats the last."""
+
+    def __init__(self, path: Path, settings: VideoSettings) -> None:
+        self._writer = VideoWriter(path, settings)
+        self._fps = settings.fps
+        self._show0: float | None = None
+        self._last: np.ndarray | None = None
+        self.frames = 0
+        self.repeated = 0
+
+    def add(self, rgba: np.ndarray, show_s: float) -> None:
+        if self._show0 is None:
+            self._show0 = show_s
+        index = round((show_s - self._show0) * self._fps)
+        if index < self.frames:
+            return
+        while self.frames < index and self._last is not None:
+            self._writer.write(self._last)
+            self.frames += 1
+            self.repeated += 1
+        self._writer.write(rgba)
+        self._last = rgba
+        self.frames += 1
+
+    def close(self) -> None:
+        self._writer.close()
+
+
+class StagePainter:
+    """N renderers drawing into one framebuffer (see the module docstring): the first clears
+    it, the others draw over it depth-tested, which is the depth merge done by the GPU."""
+
+    def __init__(self, ctx: Any, performers: list[StagePerformer], size: tuple[int, int],
+                 camera: str, target: Any = None) -> None:  # fmt: skip
+        self.ctx = ctx
+        self.size = size
+        w, h = size
+        world: Camera = group_camera_for(performers[0].kit, [p.placement for p in performers],
+                                         camera, w / h)  # fmt: skip
+        if target is None:
+            target = ctx.framebuffer(color_attachments=[ctx.renderbuffer((w, h), 4)],
+                                     depth_attachment=ctx.depth_renderbuffer((w, h)))  # fmt: skip
+        self.target = target
+        self.passes: list[tuple[Renderer, Camera]] = []
+        for p in performers:
+            renderer = Renderer(ctx, build_kit_mesh(p.kit), BODY_SKELETON, size, samples=0,
+                                offscreen=False, avatar=p.avatar)  # fmt: skip
+            self.passes.append((renderer, local_camera(world, p.placement)))
+
+    def draw(self, frames: list[Any]) -> None:
+        for k, ((renderer, cam), frame) in enumerate(zip(self.passes, frames, strict=True)):
+            renderer.draw(frame, cam, target=self.target, clear=k == 0)
+
+    def read_rgba(self) -> np.ndarray:
+        """The frame drawn last, (H, W, 4) uint8, bottom row first (GL order)."""
+        w, h = self.size
+        data = self.target.read(components=4, alignment=1)
+        return np.frombuffer(data, np.uint8).reshape(h, w, 4)
+
+
+class _Window:
+    """A window the stage is drawn straight into (its default framebuffer)."""
+
+    def __init__(self, options: WindowOptions) -> None:
+        from contextlib import ExitStack
+
+        from .window import open_window
+
+        self._stack = ExitStack()
+        self.glfw, self.window, self.ctx = self._stack.enter_context(open_window(options))
+        w, h = self.glfw.get_framebuffer_size(self.window)
+        self.size = (int(w), int(h))
+
+    def present(self) -> bool:
+        self.glfw.swap_buffers(self.window)
+        self.glfw.poll_events()
+        for key in (self.glfw.KEY_Q, self.glfw.KEY_ESCAPE):
+            if self.glfw.get_key(self.window, key) == self.glfw.PRESS:
+                self.glfw.set_window_should_close(self.window, True)
+        return not self.glfw.window_should_close(self.window)
+
+    def close(self) -> None:
+        self._stack.close()
+
+
+class StageDisplay(Service):
+    """See the module docstring."""
+
+    name = "display"
+
+    def __init__(self, performers: list[StagePerformer], config: StageConfig, clock: FrameClock,
+                 ctx: zmq.Context[zmq.Socket[bytes]]) -> None:  # fmt: skip
+        super().__init__(clock, ctx, security=config.security, control=config.control, log=log)
+        if not performers:
+            raise ValueError("a stage display needs at least one performer")
+        self.clock: FrameClock = clock
+        self.config = config
+        self.streams = [_Stream(p) for p in performers]
+        self.frames = 0
+        self.drawn_s: list[float] = []  # wall time each frame took to draw (bench stage)
+
+    def open(self) -> None:
+        for k, s in enumerate(self.streams):
+            s.sock = socket(self.ctx, zmq.SUB)
+            subscribe_protocol(s.sock)
+            connect(s.sock, s.who.sub, f"sub endpoint of {s.who.label}", self.config.security)
+            self.endpoints[f"sub{k}"] = s.who.sub
+
+    def release(self) -> None:
+        for s in self.streams:
+            if s.sock is not None:
+                s.sock.close(0)
+                s.sock = None
+            s.bad.log_summary()
+
+    def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
+        cfg = self.config
+        window: _Window | None = None
+        gl: Any = None
+        painter: StagePainter | None = None
+        recorder: _Recorder | None = None
+        log_file: IO[str] | None = None
+        poller = zmq.Poller()
+        for s in self.streams:
+            poller.register(s.sock, zmq.POLLIN)
+        try:
+            performers = [s.who for s in self.streams]
+            if cfg.window is not None:
+                window = _Window(cfg.window)
+                painter = StagePainter(window.ctx, performers, window.size, cfg.camera,
+                                       target=window.ctx.screen)  # fmt: skip
+            elif cfg.render:
+                from .context import headless_context
+
+                gl = headless_context()
+                painter = StagePainter(gl, performers, cfg.size, cfg.camera)
+            if cfg.video is not None and painter is not None and window is None:
+                recorder = _Recorder(cfg.video, VideoSettings(size=cfg.size, fps=round(cfg.fps)))
+            if cfg.out is not None:
+                cfg.out.mkdir(parents=True, exist_ok=True)
+                log_file = (cfg.out / "frames.jsonl").open("w", buffering=1)
+            period = 1.0 / cfg.fps
+            ahead = RenderAhead()
+            next_frame = self.clock.now()
+            end = math.inf if cfg.seconds is None else self.clock.now() + cfg.seconds
+            drawn = False
+            while not stop.is_set() and (cfg.frames is None or self.frames < cfg.frames):
+                wait_ms = max(0, int((next_frame - self.clock.now()) * 1000))
+                if poller.poll(wait_ms):
+                    self._drain()
+                now = self.clock.now()
+                if now >= end:
+                    break
+                if now < next_frame:
+                    continue
+                self._drain()
+                show = now + self.clock.latency_s() + ahead.seconds + cfg.display_offset_s
+                record, scene = self._frame(show)
+                record.update(frame=self.frames, render_s=now, show_s=show)
+                any_pose = any(p["pose_s"] is not None for p in record["performers"])
+                if painter is not None:
+                    painter.draw(scene)
+                    if window is not None and not window.present():
+                        stop.set()
+                    keep = recorder is not None and (any_pose or recorder.frames > 0)
+                    png = cfg.out is not None and cfg.png and window is None
+                    if keep or png:
+                        rgba = painter.read_rgba()
+                        if recorder is not None and keep:
+                            recorder.add(rgba, show)
+                        if png and cfg.out is not None:
+                            from .png import write_png
+
+                            write_png(cfg.out / f"frame_{self.frames:06d}.png", rgba[::-1, :, :3])
+                record["done_s"] = self.clock.now()
+                ahead.add(record["done_s"] - now)
+                self.drawn_s.append(record["done_s"] - now)
+                if log_file is not None:
+                    log_file.write(json.dumps(record) + "\n")
+                self.frames += 1
+                next_frame = max(next_frame + period, now)
+                if any_pose and not drawn:
+                    drawn = True
+                    end = end if cfg.seconds is None else now + cfg.seconds
+                    if on_ready is not None:
+                        on_ready()
+                        on_ready = None
+        finally:
+            if log_file is not None:
+                log_file.close()
+            if recorder is not None:
+                recorder.close()
+            if window is not None:
+                window.close()
+            if gl is not None:
+                gl.release()
+            self.shutdown()
+        return 0
+
+    def _drain(self) -> None:
+        for s in self.streams:
+            s.drain()
+
+    def _frame(self, show: float) -> tuple[dict[str, Any], list[Any]]:
+        """Each performer's pose at ``show``: the frames.jsonl record and the scene frames."""
+        entries: list[dict[str, Any]] = []
+        scene: list[Any] = []
+        for s in self.streams:
+            got = s.track.at(show)
+            entry: dict[str, Any] = {"id": s.who.label, "performer": s.who.performer,
+                                     "pose_s": None, "newest_s": s.track.newest_s,
+                                     "lit": []}  # fmt: skip
+            frame = None
+            if got is not None:
+                pose_s, row = got
+                entry["pose_s"] = pose_s
+                lit = np.flatnonzero(np.asarray(row["glow"]) > GLOW_LIT)
+                entry["lit"] = [s.who.kit.pieces[int(i)].name for i in lit]
+                s.stats.lit_frames += int(lit.size > 0)
+                frame = frame_from_pose(row, show, s.who.kit)
+            entries.append(entry)
+            scene.append(frame)
+        return {"performers": entries}, scene
+
+    def summary(self) -> dict[str, Any]:
+        each = {s.who.label: dict(s.stats.__dict__) for s in self.streams}
+        return {"frames": self.frames, "performers": each}
