@@ -176,7 +176,7 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
     stage.write_text(
         '[formation]\nshape = "line"\nspacing = 4.0\n\n'
         '[[performer]]\nid = "a"\nsource = "virtual:padsA"\n\n'
-        '[[performer]]\nid = "b"\nsource = "virtual:padsB"\n\n'
+        '[[performer]]\nid = "b"\nsource = "virtual:padsB"\npreset = "energetic"\n\n'
         f'[[performer]]\nid = "c"\nsource = "remote:{relay_at[0]},control={proxy_at[0]}"\n'
     )
     frames = tmp_path / "frames"

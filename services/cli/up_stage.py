@@ -20,9 +20,9 @@ sequence numbers, so a gap is one performer's loss. The cost is one process (abo
 Python interpreter's memory) per performer, and the display's one SUB socket each.
 
 Limits: a stage video has no drum track (the journals are per performer; ``render --stage``
-makes one from files); an ensemble's copies and the performers' expression presets are for
-``render --stage``; the sources are checked for syntax before starting, but a missing MIDI
-port is found by its input daemon (one line, or ``--wait``).
+makes one from files); an ensemble's copies are for ``render --stage`` (each performer's
+``preset`` is played live by its synth); the sources are checked for syntax before starting,
+but a missing MIDI port is found by its input daemon (one line, or ``--wait``).
 """
 
 from __future__ import annotations
@@ -75,7 +75,9 @@ def stage_specs(args: argparse.Namespace, stage_file: Path) -> list[ServiceSpec]
             *me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
             "--control", ep["syn_ctl"], "--kit", performer.kit, "--map", synth_map,
             "--lookahead-ms", str(args.lookahead_ms), "--delay-ms", str(args.delay_ms),
-            "--performer", str(k), *_avatar(performer), *curve["synth"]]))  # fmt: skip
+            "--performer", str(k), *_avatar(performer),
+            *(["--preset", performer.preset] if performer.preset else []),
+            *curve["synth"]]))  # fmt: skip
         subs.append(near["syn_pub"])
     display = [*me, "display", "--live", "--stage", str(stage_file.resolve()),
                "--sub", ",".join(subs), "--camera", args.camera, "--fps", str(args.fps),
