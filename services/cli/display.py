@@ -8,6 +8,12 @@ machine with no screen use ``livedrummer render``. The limbs are those of
 :func:`livedrummer.sticking.stick_performance` (``--sticking``, ``--score``), as ``livedrummer
 sticking`` prints them.
 
+Sound: the file window plays the drum track (the built-in kit, or ``--soundfont FILE.sf2``'s)
+on the default output or ``--audio-device NAME`` (PortAudio: JACK or ALSA), and the picture
+follows the sound's clock (:mod:`services.display.audio_out`); at speeds other than 1x and in
+reverse the sound fades out and is muted (the readout says so). ``--no-sound``, or no output
+device, plays silently on the monotonic clock.
+
 Options share their names with the other commands: ``--seconds`` (as in ``up`` and ``demo``)
 stops the show (the file window or ``--live``), ``--frames-dir`` (as in ``render`` and ``up``)
 is where ``--live --headless`` writes its frames, ``--max-frames`` stops it after so many.
@@ -17,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from livedrummer.render.camera import CAMERA_NAMES
 
@@ -36,6 +43,9 @@ from .common import (
 )
 from .keys import add_curve_options, security_from_args
 from .render import body_scene, parse_size
+
+if TYPE_CHECKING:
+    from ..display.audio_out import TrackPlayer
 
 
 def register(sub: Subparsers) -> None:
@@ -60,6 +70,17 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--overlay", default="", metavar="LIST",
                    help="strips shown first: score, joints or both; keys o, g "
                    "(default: none)")  # fmt: skip
+    sound = p.add_argument_group("sound (the file window)")
+    sound.add_argument("--audio-device", metavar="NAME",
+                       help="sound output: a device name or part of it, e.g. 'system, JACK' "
+                       "(default: the system's default output)")  # fmt: skip
+    sound.add_argument("--soundfont", type=Path, metavar="SF2",
+                       help="drum sounds from this General MIDI SoundFont via FluidSynth "
+                       "(default: the built-in kit)")  # fmt: skip
+    sound.add_argument("--no-sound", action="store_true", help="a silent window")
+    sound.add_argument("--frame-log", type=Path, metavar="JSONL",
+                       help="file window: per frame the monotonic time after the swap and "
+                       "the position shown (default: none)")  # fmt: skip
     add_motion_options(p)
     add_avatar_option(p)
     live = p.add_argument_group("live (poses from a running synth)")
@@ -103,6 +124,10 @@ def run(args: argparse.Namespace) -> int:
 
     from ..display.window import WindowOptions, show
 
+    if args.soundfont is not None:
+        from livedrummer.audio.soundfont import check_soundfont
+
+        check_soundfont(args.soundfont)
     source = Path(args.file) if args.file else demo_groove()
     performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
     if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
@@ -111,11 +136,22 @@ def run(args: argparse.Namespace) -> int:
         size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
         camera=args.camera, samples=args.aa, quit_after_s=args.seconds,
         overlays=parse_overlays(args.overlay), screenshot=args.screenshot,
+        frame_log=args.frame_log,
     )  # fmt: skip
     kit = load_kit(args.kit)
     avatar = avatar_of(args)
     body = body_scene(args, performance, kit, note_map, avatar)
-    show(performance, kit, options, body=body, avatar=avatar)
+    sound = None
+    if not args.no_sound:
+        from livedrummer.audio.synth import SAMPLE_RATE
+
+        from ..display.audio_out import open_player, window_track
+
+        def sound() -> TrackPlayer | None:
+            track = window_track(performance, body, args.soundfont)
+            return open_player(track, SAMPLE_RATE, args.audio_device)
+
+    show(performance, kit, options, body=body, avatar=avatar, sound=sound)
     return 0
 
 

@@ -11,10 +11,16 @@ overlays, :data:`OVERLAY_KEYS`), F (full screen on and off), H (key help), I (th
 and Q/Esc (quit). A readout in the top-left corner (:mod:`livedrummer.render.hud`) shows the
 position and length, speed, playing/paused/reversed, the camera and a clear end-of-file line;
 ``WindowOptions.screenshot`` writes the last frame drawn as a PNG when the window closes. The clock
-is injected (default ``time.monotonic``) as the style guide asks; with sound it would be the audio
-stream's.
+is injected (default ``time.monotonic``) as the style guide asks; with sound (a
+:class:`~services.display.audio_out.TrackPlayer`) it is the output's sample clock, each frame
+tells the player where the transport is, and the frame is drawn for the moment it will be
+seen (the median time frames took to draw and swap, :class:`RenderAhead`), so the picture
+follows what is heard (muted at other
+speeds and in reverse, said in the readout). ``WindowOptions.frame_log`` writes one JSON line
+per frame (the monotonic time just after the swap, the position shown) for tests and
+measurements.
 
-Limits: no sound in the window yet; resizing keeps the
+Limits: resizing keeps the
 aspect ratio of the new size but not the pixel density of a HiDPI monitor.
 """
 
@@ -30,6 +36,7 @@ from typing import Any
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
+from livedrummer.live.ahead import RenderAhead
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CAMERA_NAMES, Camera, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
@@ -38,6 +45,7 @@ from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.render.transport import KEYS, Transport
 from livedrummer.timeline.performance import Performance
 
+from .audio_out import TrackPlayer, muted_reason
 from .context import DisplayError
 from .renderer import Renderer
 
@@ -55,6 +63,7 @@ class WindowOptions:
     quit_after_s: float | None = None  # close by itself (demos, smoke tests)
     overlays: frozenset[str] = frozenset()  # strips shown first: "score", "joints"
     screenshot: Path | None = None  # the last frame drawn, written as a PNG when it closes
+    frame_log: Path | None = None  # per frame: {"mono": after the swap, "t": position shown}
 
 
 DEFAULT_OPTIONS = WindowOptions()
@@ -141,18 +150,27 @@ def show(
     clock: Callable[[], float] = time.monotonic,
     body: BodyScene | None = None,
     avatar: Avatar | None = None,
+    sound: Callable[[], TrackPlayer | None] | None = None,
 ) -> None:
     """Open the window and play ``performance`` until the user quits (the drummer drawn as
     ``avatar``, by default the built-in character).
 
     ``body`` is the performance animated on ``kit``; without it the body is animated here with
-    the defaults (optimal sticking) and the note map the performance was read with."""
+    the defaults (optimal sticking) and the note map the performance was read with. ``sound``
+    opens the player once the window is open (so a machine with no screen says only that);
+    when it returns one the drum track sounds and its clock replaces ``clock``."""
     if body is None:
         from livedrummer.midi.notemap import load_note_map
 
         body = BodyScene.perform(performance, kit, load_note_map(performance.map_name))
     with open_window(options) as (glfw, window, ctx):
-        _loop(glfw, window, ctx, performance, body, options, clock, avatar)
+        player = sound() if sound is not None else None
+        try:
+            _loop(glfw, window, ctx, performance, body, options,
+                  player.now if player is not None else clock, avatar, player)  # fmt: skip
+        finally:
+            if player is not None:
+                player.close()
 
 
 @contextmanager
@@ -199,6 +217,7 @@ def _loop(
     options: WindowOptions,
     clock: Callable[[], float],
     avatar: Avatar | None = None,
+    player: TrackPlayer | None = None,
 ) -> None:
     kit = body.kit
     transport = Transport(performance.duration_s + 1.0)
@@ -223,10 +242,14 @@ def _loop(
     readout, show_readout, show_help = Readout(), True, False
     shot: tuple[tuple[int, int], bytes] | None = None
     camera = options.camera
+    frame_log = options.frame_log.open("w") if options.frame_log is not None else None
+    muted: str | None = None
+    ahead = RenderAhead(quantile=0.5)  # with sound: draw for when the frame is seen
     while not glfw.window_should_close(window):
         if options.quit_after_s is not None and last - started >= options.quit_after_s:
             break
         glfw.poll_events()
+        begun = time.monotonic()
         now = clock()
         for name in pending:
             if name in ("q", "escape"):
@@ -248,6 +271,16 @@ def _loop(
         pending.clear()
         t = transport.advance(now - last)
         last = now
+        if player is not None:
+            reason = muted_reason(transport.playing, transport.speed, transport.reverse)
+            if reason != muted and reason is not None:
+                log.info("window: %s (the drum track sounds at 1x forward)", reason)
+            muted = reason
+            player.follow(t, now, transport.playing and reason is None)
+            if transport.playing:
+                step = ahead.seconds * transport.speed
+                t = min(max(t - step if transport.reverse else t + step, 0.0),
+                        transport.duration_s)  # fmt: skip
         fb = glfw.get_framebuffer_size(window)
         if fb != renderer.size and fb[0] > 0 and fb[1] > 0:
             renderer.size = fb
@@ -262,11 +295,17 @@ def _loop(
 
             readout.draw(renderer, hud_lines(t, transport.duration_s, transport.speed,
                                              transport.playing, transport.reverse, camera,
-                                             show_help), ctx.screen)  # fmt: skip
+                                             show_help) + ([muted.upper()] if muted else []),
+                          ctx.screen)  # fmt: skip
         if options.screenshot is not None:  # read before the swap: the back buffer is defined
             shot = (renderer.size, ctx.screen.read(viewport=(0, 0, *renderer.size), components=3))
         glfw.swap_buffers(window)
+        ahead.add(time.monotonic() - begun)
+        if frame_log is not None:
+            frame_log.write(f'{{"mono": {time.monotonic():.6f}, "t": {t:.6f}}}\n')
         frames += 1
+    if frame_log is not None:
+        frame_log.close()
     if shot is not None and options.screenshot is not None:
         save_screenshot(shot[1], shot[0], options.screenshot)
     elapsed = clock() - started
