@@ -44,6 +44,7 @@ class Recording:
     samples: np.ndarray  # float32, mono (the sum of every source)
     times: np.ndarray  # float64 shared-clock seconds each sample is heard
     sources: list[str]
+    cycles: np.ndarray  # float64 shared-clock seconds each JACK cycle ran
 
 
 class JackRecorder:
@@ -73,18 +74,34 @@ class JackRecorder:
                 latency = max(latency, int(word[2]))
         raw = self._out.read_bytes()
         shutil.rmtree(self._dir, ignore_errors=True)
-        chunks, times, at = [], [], 0
+        chunks, times, cycles, at = [], [], [], 0
         while at + 12 <= len(raw):
             us = int(np.frombuffer(raw, np.int64, 1, at)[0])
             n = int(np.frombuffer(raw, np.uint32, 1, at + 8)[0])
             if at + 12 + 4 * n > len(raw):
                 break
             chunks.append(np.frombuffer(raw, np.float32, n, at + 12))
+            cycles.append(us * 1e-6)
             times.append(us * 1e-6 + (np.arange(n) + latency) / RATE)
             at += 12 + 4 * n
         if not chunks:
-            return Recording(np.zeros(0, np.float32), np.zeros(0), sources)
-        return Recording(np.concatenate(chunks), np.concatenate(times), sources)
+            return Recording(np.zeros(0, np.float32), np.zeros(0), sources, np.zeros(0))
+        return Recording(np.concatenate(chunks), np.concatenate(times), sources,
+                         np.array(cycles))  # fmt: skip
+
+
+def steady(rec: Recording, at: np.ndarray, before_s: float = 0.1, after_s: float = 0.05,
+           slack_s: float = 0.001) -> np.ndarray:  # fmt: skip
+    """Per time in ``at``: whether the JACK graph ran on time around it (every cycle from
+    ``before_s`` before to ``after_s`` after began within ``slack_s`` of one period after
+    the previous one). A stalled cycle (the dummy driver of a loaded machine) moves every
+    sound around it, ours or not, so timing is judged only where the graph was steady."""
+    period = len(rec.samples) / max(len(rec.cycles), 1) / RATE
+    bad_t = rec.cycles[1:][np.abs(np.diff(rec.cycles) - period) > slack_s]
+    ok = np.ones(len(at), bool)
+    for i, t in enumerate(at.tolist()):
+        ok[i] = not np.any((bad_t > t - before_s) & (bad_t < t + after_s))
+    return ok
 
 
 def attacks(rec: Recording, threshold: float = 0.02, rise: float = 3.0, gap_s: float = 0.08,

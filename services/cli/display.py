@@ -94,6 +94,9 @@ def register(sub: Subparsers) -> None:
                       help="ask the synth here which avatar it plays; warn when it is not "
                       "--avatar (default: not asked)")  # fmt: skip
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
+    live.add_argument("--sound", action="store_true",
+                      help="sound each onset the synth forwards at its show time (onset + D), "
+                      "built-in kit, on --audio-device")  # fmt: skip
     add_renamed(live, "--frames", live.add_argument(
         "--max-frames", type=int, metavar="N",
         help="stop after N frames (default: when stopped)"))  # fmt: skip
@@ -221,9 +224,23 @@ def run_live(args: argparse.Namespace) -> int:
     if args.seconds is not None and not args.seconds > 0:  # counted from the first pose drawn
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
     display = LiveDisplay(load_kit(args.kit), config, clock, ctx)
-    code = serve(display, lambda endpoints: endpoints["sub"])
+    sound = None
+    if args.sound:
+        from ..display.live_sound import LiveSound, SoundConfig
+
+        sound = LiveSound(SoundConfig(args.sub, args.audio_device, args.kit,
+                                      security_from_args(args)))  # fmt: skip
+        if not sound.start():
+            sound = None
+    try:
+        code = serve(display, lambda endpoints: endpoints["sub"])
+    finally:
+        if sound is not None:
+            sound.close()
     s = display.summary()
     where = f" into {args.frames_dir}" if args.frames_dir else ""
     print(f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "
           f"{s['missing']} pose messages lost", file=sys.stderr)  # fmt: skip
+    if sound is not None and sound.stats is not None:
+        print(sound.stats.line(), file=sys.stderr)
     return code

@@ -100,6 +100,11 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--soundfont", type=Path, metavar="SF2",
                    help="--video: drum track from this General MIDI SoundFont "
                    "(default: the built-in kit)")  # fmt: skip
+    p.add_argument("--sound", action="store_true",
+                   help="the display sounds each onset at onset + D (built-in kit)")  # fmt: skip
+    p.add_argument("--audio-device", metavar="NAME",
+                   help="--sound: the output, a device name or part of it "
+                   "(default: the system's default output)")  # fmt: skip
     p.add_argument("--size", help="frame size WIDTHxHEIGHT (default 1280x720 in a window, "
                                   "640x360 headless)")  # fmt: skip
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
@@ -198,6 +203,8 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
                     "--camera", args.camera,
                     "--fps", str(args.fps), "--size", frame_size(args), *avatar_argv(args),
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
+    display_argv += ["--sound"] if args.sound else []
+    display_argv += ["--audio-device", args.audio_device] if args.audio_device else []
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
         display_argv += ["--fullscreen"] if args.fullscreen else []

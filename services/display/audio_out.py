@@ -40,6 +40,8 @@ from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.render.body_scene import BodyScene
 from livedrummer.timeline.performance import Performance
 
+from .output_latency import output_latency_s
+
 log = logging.getLogger("livedrummer.display")
 
 FADE_S = 0.005  # a jump, a pause or a start: crossfade this long
@@ -147,7 +149,7 @@ class TrackPlayer:
         self._switch = sys.getswitchinterval()
         sys.setswitchinterval(SWITCH_S)  # the writer gets the interpreter back soon
         self._stream.start()
-        self.latency_s = float(self._stream.latency)
+        self.latency_s = output_latency_s(self._stream)
         self.capacity = self._measure_capacity()
         self._thread = threading.Thread(target=self._write, name="window-sound", daemon=True)
         self._thread.start()

@@ -1,0 +1,109 @@
+"""``display --live --sound``: onsets on the bus, through a real synth, sounded by the display
+at onset + D through a real JACK server, recorded by a JACK client."""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import zmq
+from test_live_e2e import first_line, spawn, stop
+
+from livedrummer import protocol as p
+from livedrummer.kit.vocabulary import INSTRUMENTS, ZONES, Zone
+from livedrummer.timeline.clock import MonotonicClock
+from livedrummer.timeline.events import ONSET_DTYPE
+
+DELAY_S = 0.03
+HITS = 24
+SPACING_S = 0.15
+
+
+def onset(t: float, k: int) -> np.ndarray:
+    row = np.zeros(1, ONSET_DTYPE)
+    row["time_s"], row["channel"], row["velocity"] = t, 9, 100
+    row["note"] = 37 if k % 2 == 0 else 76  # a rim click and a block: short, clear attacks
+    row["instrument"] = INSTRUMENTS.index("snare" if k % 2 == 0 else "percussion")
+    row["zone"] = ZONES.index(Zone.RIM) if k % 2 == 0 else 0
+    return row
+
+
+def test_each_onset_is_heard_at_onset_plus_d(jack_default_server: str, tmp_path: Path) -> None:
+    from services.bench._jackrec import JackRecorder, attacks, steady
+
+    clock = MonotonicClock()
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    bus = ctx.socket(zmq.PUB)
+    bus.setsockopt(zmq.LINGER, 0)
+    port = bus.bind_to_random_port("tcp://127.0.0.1")
+    seq = 0
+    procs = []
+
+    def send(row: np.ndarray) -> None:
+        nonlocal seq
+        bus.send_multipart(p.encode(p.Message(p.Kind.ONSET, row, seq=seq,
+                                              send_time_s=clock.now())))  # fmt: skip
+        seq += 1
+
+    recorder = JackRecorder(dict(os.environ))
+    try:
+        syn = spawn(["synth", "--sub", f"tcp://127.0.0.1:{port}", "--pub", "tcp://127.0.0.1:*",
+                     "--control", "tcp://127.0.0.1:*", "--delay-ms", str(DELAY_S * 1000),
+                     "--lookahead-ms", "10"], tmp_path, "synth")  # fmt: skip
+        procs.append(syn)
+        syn_eps = first_line(syn, tmp_path, "synth")
+        disp = spawn(["display", "--live", "--headless", "--no-render", "--sub", syn_eps["pub"],
+                      "--sound", "--audio-device", "system, JACK", "--fps", "30"],
+                     tmp_path, "display")  # fmt: skip
+        procs.append(disp)
+        first_line(disp, tmp_path, "display")
+        shown = ctx.socket(zmq.SUB)
+        shown.setsockopt(zmq.LINGER, 0)
+        shown.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.SHOWN_ONSET))
+        shown.connect(syn_eps["pub"])
+        deadline = clock.now() + 20
+        while not shown.poll(200) and clock.now() < deadline:  # until a probe went through
+            send(onset(clock.now(), 0))
+        assert shown.poll(0), "no onset came back from the synth"
+        clock_sleep = 1.0  # the probes' sound dies away
+        t_end = clock.now() + clock_sleep
+        while clock.now() < t_end:
+            shown.poll(50) and shown.recv_multipart()
+        sent = []
+        start = clock.now()
+        for k in range(HITS):
+            due = start + k * SPACING_S
+            if due - clock.now() > 0.002:  # sleep, then wait the last 2 ms (no spinning core)
+                time.sleep(due - clock.now() - 0.002)
+            while clock.now() < due:
+                time.sleep(0.0002)
+            t = clock.now()
+            send(onset(t, k))
+            sent.append(t)
+        t_end = clock.now() + 0.6
+        while clock.now() < t_end:
+            shown.poll(50) and shown.recv_multipart()
+    finally:
+        codes = [stop(proc) for proc in reversed(procs)]
+        rec = recorder.stop()
+        ctx.destroy(0)
+    err = (tmp_path / "display.err").read_text()
+    assert codes == [0, 0], err[-1500:]
+    assert "no sound" not in err and rec.sources, err[-1500:]
+    heard = attacks(rec)
+    expected = np.array(sent) + DELAY_S
+    # each onset's nearest attack (an attack 100 ms off is another onset's, or none)
+    near = heard[np.argmin(np.abs(heard[None, :] - expected[:, None]), axis=1)]
+    lag = near - expected
+    assert np.sum(np.abs(lag) < 0.1) >= HITS - 1, (lag * 1000).round(1)  # every onset heard
+    # timing where the JACK graph ran steadily (a stalled dummy driver moves every sound)
+    judged = steady(rec, expected)
+    ms = np.percentile(np.abs(lag[judged]) * 1000, [50, 90, 99]) if judged.any() else [0] * 3
+    print(f"sound - (onset + D): |lag| p50 {ms[0]:.2f} p90 {ms[1]:.2f} p99 {ms[2]:.2f} ms over "
+          f"{judged.sum()} onsets of steady graph; signed {np.round(lag * 1000, 1).tolist()}")  # fmt: skip
+    assert judged.sum() >= HITS // 3, "the JACK graph was never steady: no timing to judge"
+    # p90, not p99: on a loaded 2-core machine a forwarded onset is now and then read late
+    # (the synth or the sound process waited for a core); the p99 is reported by bench audio
+    assert ms[1] <= 2.0, (lag * 1000).round(1)
