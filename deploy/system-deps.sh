@@ -6,8 +6,9 @@ set -euo pipefail
 # sounddevice (audio clock); xvfb + xauth: the window smoke test on a virtual screen;
 # libfluidsynth3: pyfluidsynth (render --soundfont); libjack-jackd2-dev: the C reference client
 # of `livedrummer bench input_load` (compiled for the run with cc); xdotool: keys pressed in the
-# window test; timgm6mb-soundfont: a real sampled General MIDI SoundFont the tests render with.
-packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3 libjack-jackd2-dev xdotool timgm6mb-soundfont)
+# window test; timgm6mb-soundfont: a real sampled General MIDI SoundFont the tests render with;
+# libsndfile1: soundfile (the samples of SFZ kits).
+packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3 libjack-jackd2-dev xdotool timgm6mb-soundfont libsndfile1)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")

@@ -56,6 +56,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--soundfont", type=Path, metavar="SF2",
                    help="video: drum sounds from this General MIDI SoundFont "
                    "(default: the built-in kit)")  # fmt: skip
+    p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
+                   help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+                   "default: the built-in kit)")  # fmt: skip
 
 
 def sticking_line(st: Sticking) -> str:

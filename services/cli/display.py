@@ -77,6 +77,9 @@ def register(sub: Subparsers) -> None:
     sound.add_argument("--soundfont", type=Path, metavar="SF2",
                        help="drum sounds from this General MIDI SoundFont via FluidSynth "
                        "(default: the built-in kit)")  # fmt: skip
+    sound.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
+                       help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+                       "default: the built-in kit)")  # fmt: skip
     sound.add_argument("--no-sound", action="store_true", help="a silent window")
     sound.add_argument("--frame-log", type=Path, metavar="JSONL",
                        help="file window: per frame the monotonic time after the swap and "
@@ -128,9 +131,9 @@ def run(args: argparse.Namespace) -> int:
     from ..display.window import WindowOptions, show
 
     if args.soundfont is not None:
-        from livedrummer.audio.soundfont import check_soundfont
+        from livedrummer.audio.kitfile import check_kit_file
 
-        check_soundfont(args.soundfont)
+        check_kit_file(args.soundfont)
     source = Path(args.file) if args.file else demo_groove()
     performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
     if not performance.onsets.size:  # said on stderr: nothing for the drummer to play

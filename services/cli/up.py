@@ -100,6 +100,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--soundfont", type=Path, metavar="SF2",
                    help="--video: drum track from this General MIDI SoundFont "
                    "(default: the built-in kit)")  # fmt: skip
+    p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
+                   help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+                   "default: the built-in kit)")  # fmt: skip
     p.add_argument("--sound", action="store_true",
                    help="the display sounds each onset at onset + D (built-in kit)")  # fmt: skip
     p.add_argument("--audio-device", metavar="NAME",
@@ -256,9 +259,9 @@ def run(args: argparse.Namespace) -> int:
     if args.video is not None and args.no_journal:
         raise ConfigError("--video: the drum track comes from the journal; drop --no-journal")
     if args.soundfont is not None:  # now, not after the show
-        from livedrummer.audio.soundfont import check_soundfont
+        from livedrummer.audio.kitfile import check_kit_file
 
-        check_soundfont(args.soundfont)
+        check_kit_file(args.soundfont)
     avatar_of(args)  # a bad --avatar is one line here, before three services start
     check_before_start(args)
     with tempfile.TemporaryDirectory(prefix="livedrummer-up-") as tmp:

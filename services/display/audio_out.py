@@ -215,9 +215,9 @@ def window_track(
     cymbal chokes the body plays: the built-in kit, or ``soundfont``'s."""
     duration = performance.duration_s + 1.0
     if soundfont is not None:
-        from livedrummer.audio.soundfont import render_soundfont
+        from livedrummer.audio.kitfile import render_kit_file
 
-        return render_soundfont(performance.onsets, duration, soundfont, sr, body.kit,
+        return render_kit_file(performance.onsets, duration, soundfont, sr, body.kit,
                                 body.performed.chokes)  # fmt: skip
     return mix_onsets(performance.onsets, duration, body.kit, sr, body.performed.chokes)
 

@@ -37,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
+from livedrummer.audio.kitfile import render_kit_file
 from livedrummer.audio.mix import mix_onsets
-from livedrummer.audio.soundfont import render_soundfont
 from livedrummer.avatar.model import Avatar
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
@@ -115,7 +115,7 @@ def export(
     if out is not None:
         track = spooled_track(round(n / fps * settings.sample_rate))
         if soundfont is not None:  # before the writer: a bad file leaves no empty video
-            audio = render_soundfont(performance.onsets, n / fps, soundfont, settings.sample_rate,
+            audio = render_kit_file(performance.onsets, n / fps, soundfont, settings.sample_rate,
                                      kit, body.performed.chokes, track)  # fmt: skip
         else:
             audio = mix_onsets(performance.onsets, n / fps, kit, settings.sample_rate,
