@@ -4,10 +4,12 @@ at onset + D through a real JACK server, recorded by a JACK client."""
 from __future__ import annotations
 
 import os
+import re
 import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 import zmq
 from test_live_e2e import first_line, spawn, stop
 
@@ -107,3 +109,20 @@ def test_each_onset_is_heard_at_onset_plus_d(jack_default_server: str, tmp_path:
     # p90, not p99: on a loaded 2-core machine a forwarded onset is now and then read late
     # (the synth or the sound process waited for a core); the p99 is reported by bench audio
     assert ms[1] <= 2.0, (lag * 1000).round(1)
+
+
+def test_bench_audio_prints_its_figures(tmp_path: Path) -> None:
+    import shutil
+    import subprocess
+    import sys
+
+    if shutil.which("jackd") is None:
+        pytest.skip("jackd not installed")
+    run = subprocess.run([sys.executable, "-m", "services", "bench", "audio", "--seconds", "1.5"],
+                         capture_output=True, text=True, timeout=180)  # fmt: skip
+    assert run.returncode == 0, run.stderr[-1500:]
+    out = run.stdout
+    heard = re.search(r"heard: (\d+) of (\d+) onsets", out)
+    assert heard is not None and int(heard.group(2)) == 15 and int(heard.group(1)) >= 10, out
+    assert "onset on the bus -> sound at the output, - D: p50" in out
+    assert re.search(r"JACK: \d+ xruns, DSP load mean [\d.]+ %", out), out

@@ -45,6 +45,9 @@ class Recording:
     times: np.ndarray  # float64 shared-clock seconds each sample is heard
     sources: list[str]
     cycles: np.ndarray  # float64 shared-clock seconds each JACK cycle ran
+    xruns: int = 0  # JACK's xrun count while recording
+    load_mean: float = 0.0  # JACK's DSP load (%), sampled every 20 ms
+    load_max: float = 0.0
 
 
 class JackRecorder:
@@ -66,12 +69,14 @@ class JackRecorder:
     def stop(self) -> Recording:
         self.proc.terminate()
         out, _ = self.proc.communicate(timeout=10)
-        sources, latency = [], 0
+        sources, latency, stats = [], 0, (0, 0.0, 0.0)
         for line in out.splitlines():
             word = line.split()
             if word and word[0] == "connected":
                 sources.append(word[1])
                 latency = max(latency, int(word[2]))
+            elif word and word[0] == "stats":
+                stats = (int(word[1]), float(word[2]), float(word[3]))
         raw = self._out.read_bytes()
         shutil.rmtree(self._dir, ignore_errors=True)
         chunks, times, cycles, at = [], [], [], 0
@@ -85,9 +90,9 @@ class JackRecorder:
             times.append(us * 1e-6 + (np.arange(n) + latency) / RATE)
             at += 12 + 4 * n
         if not chunks:
-            return Recording(np.zeros(0, np.float32), np.zeros(0), sources, np.zeros(0))
+            return Recording(np.zeros(0, np.float32), np.zeros(0), sources, np.zeros(0), *stats)
         return Recording(np.concatenate(chunks), np.concatenate(times), sources,
-                         np.array(cycles))  # fmt: skip
+                         np.array(cycles), *stats)  # fmt: skip
 
 
 def steady(rec: Recording, at: np.ndarray, before_s: float = 0.1, after_s: float = 0.05,

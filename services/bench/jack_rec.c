@@ -1,7 +1,8 @@
 /* Audio recorder for tests and bench audio: one JACK input port that every other client's
  * audio output is connected to (JACK sums them), written with each cycle's frame time.
  * Usage: jack_rec OUT.bin.  File: per cycle int64 mono_us (CLOCK_MONOTONIC when the cycle
- * runs), uint32 nframes, nframes float32.  Stdout: "ready JACK_US MONO_US" and, per source
+ * runs), uint32 nframes, nframes float32.  Stdout: "ready JACK_US MONO_US", at exit "stats
+ * XRUNS LOAD_MEAN LOAD_MAX" (JACK's xruns and DSP load, %, sampled every 20 ms) and, per source
  * connected, "connected PORT LATENCY_FRAMES" (the port's playback latency, max). */
 #include <jack/jack.h>
 #include <jack/ringbuffer.h>
@@ -17,6 +18,9 @@ static jack_port_t *port;
 static jack_ringbuffer_t *rb;
 static volatile sig_atomic_t stop;
 static volatile uint32_t dropped;
+static volatile uint32_t xruns;
+
+static int on_xrun(void *arg) { (void)arg; xruns++; return 0; }
 
 static int process(jack_nframes_t nframes, void *arg) {
     (void)arg;
@@ -62,6 +66,7 @@ int main(int argc, char **argv) {
     port = jack_port_register(client, "in", JACK_DEFAULT_AUDIO_TYPE, JackPortIsInput, 0);
     rb = jack_ringbuffer_create(1 << 24);
     jack_set_process_callback(client, process, NULL);
+    jack_set_xrun_callback(client, on_xrun, NULL);
     signal(SIGTERM, on_signal);
     signal(SIGINT, on_signal);
     if (jack_activate(client)) { fprintf(stderr, "jack_rec: cannot activate\n"); return 1; }
@@ -72,7 +77,13 @@ int main(int argc, char **argv) {
            (long long)((int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000));
     fflush(stdout);
     char chunk[65536];
+    double load_sum = 0, load_max = 0;
+    long loads = 0;
     while (!stop) {
+        float load = jack_cpu_load(client);
+        load_sum += load;
+        loads++;
+        if (load > load_max) load_max = load;
         connect_new();
         size_t got;
         while ((got = jack_ringbuffer_read(rb, chunk, sizeof chunk)) > 0) fwrite(chunk, 1, got, out);
@@ -83,6 +94,8 @@ int main(int argc, char **argv) {
     while ((got = jack_ringbuffer_read(rb, chunk, sizeof chunk)) > 0) fwrite(chunk, 1, got, out);
     fclose(out);
     if (dropped) fprintf(stderr, "jack_rec: %u cycles dropped\n", (unsigned)dropped);
+    printf("stats %u %.2f %.2f\n", (unsigned)xruns, loads ? load_sum / loads : 0.0, load_max);
+    fflush(stdout);
     jack_client_close(client);
     return 0;
 }
