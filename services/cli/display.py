@@ -81,6 +81,10 @@ def register(sub: Subparsers) -> None:
                        help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
                        "default: the built-in kit)")  # fmt: skip
     sound.add_argument("--no-sound", action="store_true", help="a silent window")
+    sound.add_argument("--midi-out", metavar="PORT",
+                       help="file window: send the file's notes to this MIDI port (a sampler; "
+                       "a virtual port of that name where none is there) as the picture "
+                       "plays them (default: none)")  # fmt: skip
     sound.add_argument("--frame-log", type=Path, metavar="JSONL",
                        help="file window: per frame the monotonic time after the swap and "
                        "the position shown (default: none)")  # fmt: skip
@@ -157,7 +161,19 @@ def run(args: argparse.Namespace) -> int:
             track = window_track(performance, body, args.soundfont)
             return open_player(track, SAMPLE_RATE, args.audio_device)
 
-    show(performance, kit, options, body=body, avatar=avatar, sound=sound)
+    midi = None
+    if args.midi_out is not None:
+        import sys
+
+        from ..display.midi_out import MidiFileOut
+
+        midi = MidiFileOut(performance.onsets, args.midi_out)
+    try:
+        show(performance, kit, options, body=body, avatar=avatar, sound=sound, midi=midi)
+    finally:
+        if midi is not None:
+            midi.close()
+            print(f"display: {midi.sent} notes sent to {midi.out.port_name!r}", file=sys.stderr)
     return 0
 
 

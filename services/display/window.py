@@ -32,7 +32,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
@@ -48,6 +48,9 @@ from livedrummer.timeline.performance import Performance
 from .audio_out import TrackPlayer, muted_reason
 from .context import DisplayError
 from .renderer import Renderer
+
+if TYPE_CHECKING:
+    from .midi_out import MidiFileOut
 
 log = logging.getLogger(__name__)
 
@@ -151,6 +154,7 @@ def show(
     body: BodyScene | None = None,
     avatar: Avatar | None = None,
     sound: Callable[[], TrackPlayer | None] | None = None,
+    midi: MidiFileOut | None = None,
 ) -> None:
     """Open the window and play ``performance`` until the user quits (the drummer drawn as
     ``avatar``, by default the built-in character).
@@ -158,7 +162,8 @@ def show(
     ``body`` is the performance animated on ``kit``; without it the body is animated here with
     the defaults (optimal sticking) and the note map the performance was read with. ``sound``
     opens the player once the window is open (so a machine with no screen says only that);
-    when it returns one the drum track sounds and its clock replaces ``clock``."""
+    when it returns one the drum track sounds and its clock replaces ``clock``. ``midi`` gets
+    the transport's position each frame and sends the file's notes to a sampler."""
     if body is None:
         from livedrummer.midi.notemap import load_note_map
 
@@ -167,7 +172,7 @@ def show(
         player = sound() if sound is not None else None
         try:
             _loop(glfw, window, ctx, performance, body, options,
-                  player.now if player is not None else clock, avatar, player)  # fmt: skip
+                  player.now if player is not None else clock, avatar, player, midi)  # fmt: skip
         finally:
             if player is not None:
                 player.close()
@@ -218,6 +223,7 @@ def _loop(
     clock: Callable[[], float],
     avatar: Avatar | None = None,
     player: TrackPlayer | None = None,
+    midi: MidiFileOut | None = None,
 ) -> None:
     kit = body.kit
     transport = Transport(performance.duration_s + 1.0)
@@ -271,12 +277,16 @@ def _loop(
         pending.clear()
         t = transport.advance(now - last)
         last = now
-        if player is not None:
+        if midi is not None:  # each note when the frame showing it is seen (drawn + swapped)
+            reason = muted_reason(transport.playing, transport.speed, transport.reverse)
+            midi.follow(t, time.monotonic() + ahead.seconds, transport.playing and reason is None)
+        if player is not None or midi is not None:
             reason = muted_reason(transport.playing, transport.speed, transport.reverse)
             if reason != muted and reason is not None:
                 log.info("window: %s (the drum track sounds at 1x forward)", reason)
             muted = reason
-            player.follow(t, now, transport.playing and reason is None)
+        if player is not None:
+            player.follow(t, now, transport.playing and muted is None)
             if transport.playing:
                 step = ahead.seconds * transport.speed
                 t = min(max(t - step if transport.reverse else t + step, 0.0),
