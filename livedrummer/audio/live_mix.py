@@ -8,6 +8,9 @@ CUT_FADE_S` before the new stroke as the offline mix does, for the part of the f
 rendered (the new stroke arrives ``D`` before it sounds, so normally all of it). The result
 is the offline mix, block for block, wherever the offline one was not scaled for headroom.
 
+An SFZ kit plays live the same way (:class:`~livedrummer.audio.sfz_live.SfzLiveMixer`, the
+twin of :func:`~livedrummer.audio.sfz_render.render_sfz`).
+
 Limits: no cymbal chokes (a grab arrives as a control, not yet forwarded to displays); a live
 stream cannot be scaled as a whole, so a sum over full scale is clipped at 1 and counted in
 :attr:`LiveMixer.clipped`. One Python step per voice and block: a few dozen voices ringing
@@ -38,6 +41,8 @@ class Voice:
     hat: bool
     length: int  # samples it sounds (cut by the next hi-hat)
     fade: int = 0  # the last ``fade`` of ``length`` samples fade to silence
+    off_by: int = 0  # an SFZ region's choke: a stroke of this group cuts it (0: none)
+    fade_s: float = 0.0  # an SFZ region's release: the fade when it is cut
 
 
 class LiveMixer:

@@ -247,8 +247,17 @@ def run_live(args: argparse.Namespace) -> int:
     if args.sound:
         from ..display.live_sound import LiveSound, SoundConfig
 
+        sfz = None
+        if args.soundfont is not None:
+            from livedrummer.audio.kitfile import check_kit_file, is_sfz
+
+            if not is_sfz(args.soundfont):
+                raise ConfigError(f"--live --sound plays the built-in kit or an SFZ kit "
+                                  f"(--sfz), not a SoundFont ({args.soundfont})")  # fmt: skip
+            check_kit_file(args.soundfont)
+            sfz = str(args.soundfont)
         sound = LiveSound(SoundConfig(args.sub, args.audio_device, args.kit,
-                                      security_from_args(args)))  # fmt: skip
+                                      security_from_args(args), sfz=sfz))  # fmt: skip
         if not sound.start():
             sound = None
     try:

@@ -207,6 +207,8 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
                     "--fps", str(args.fps), "--size", frame_size(args), *avatar_argv(args),
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
     display_argv += ["--sound"] if args.sound else []
+    if args.sound and args.soundfont is not None and args.soundfont.suffix.lower() == ".sfz":
+        display_argv += ["--sfz", str(args.soundfont)]  # the live sound plays the SFZ kit too
     display_argv += ["--audio-device", args.audio_device] if args.audio_device else []
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]

@@ -5,7 +5,8 @@ show time (onset + D; protocol kind SHOWN_ONSET). A process of its own (so the d
 drawing never holds the interpreter the sound needs) subscribes to that kind only, keeps a
 small PortAudio output FIFO full (:data:`BUFFER_S`, rounded by PortAudio to a power of two of
 samples: 512 at 48 kHz, 10.7 ms) from a :class:`~livedrummer.audio.live_mix.LiveMixer` (the
-built-in kit), and starts each onset on the sample a
+built-in kit; an SFZ kit's :class:`~livedrummer.audio.sfz_live.SfzLiveMixer` with
+``--sfz``), and starts each onset on the sample a
 :class:`~livedrummer.audio.stream_clock.StreamClock` says is heard at its show time. An onset
 that arrives after its sample was written starts on the next sample free and is counted late
 (D must exceed the bus latency plus the FIFO: the default 30 ms does).
@@ -16,7 +17,7 @@ the display; it waits for the output to open and, where there is none, says so i
 the display runs silent. At the end the process reports its counts (onsets, late, underruns,
 clipped samples, bad messages) and the parent logs them.
 
-Limits: the built-in kit only (a SoundFont or SFZ kit live is not done); a remote synth's
+Limits: the built-in kit or an SFZ kit (a SoundFont live is not done); a remote synth's
 CURVE keys are passed to the subscriber as the display has them.
 """
 
@@ -27,6 +28,7 @@ import multiprocessing as mp
 import queue
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -36,7 +38,7 @@ from livedrummer.errors import ProtocolError
 from livedrummer.protocol import Kind, decode, topic
 
 from ..net import Security, connect, socket
-from .output_latency import output_latency_s
+from .output_latency import output_latency_s, output_period
 
 log = logging.getLogger("livedrummer.display")
 
@@ -53,6 +55,7 @@ class SoundConfig:
     kit: str = "rock5"
     security: Security = field(default_factory=Security)
     buffer_s: float = BUFFER_S
+    sfz: str | None = None  # an SFZ kit instead of the built-in one
 
 
 @dataclass
@@ -107,9 +110,16 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
     try:
         sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_ONSET))
         connect(sub, config.sub, "sound sub", config.security)
-        mixer = LiveMixer(load_kit(config.kit), RATE)
+        mixer: LiveMixer
+        if config.sfz is not None:
+            from livedrummer.audio.sfz_live import SfzLiveMixer
+            from livedrummer.audio.sfz_render import check_sfz
+
+            mixer = SfzLiveMixer(check_sfz(Path(config.sfz)), load_kit(config.kit), RATE)
+        else:
+            mixer = LiveMixer(load_kit(config.kit), RATE)
         cap = _capacity(stream)
-        clock = StreamClock(RATE, output_latency_s(stream))
+        clock = StreamClock(RATE, output_latency_s(stream), period=output_period(stream))
         stats.latency_ms = clock.latency_s * 1000
         written = 0
         clock.look(time.monotonic(), written, cap - stream.write_available)

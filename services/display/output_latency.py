@@ -57,6 +57,39 @@ def jack_playback_latency_s(port: bytes = PLAYBACK_PORT) -> float | None:
         lib.jack_client_close(client)
 
 
+def jack_period() -> int:
+    """The JACK server's buffer size (frames), or 0 without JACK."""
+    name = ctypes.util.find_library("jack") or "libjack.so.0"
+    try:
+        lib = ctypes.CDLL(name)
+    except OSError:
+        return 0
+    lib.jack_client_open.restype = ctypes.c_void_p
+    lib.jack_get_buffer_size.restype = ctypes.c_uint32
+    lib.jack_get_buffer_size.argtypes = [ctypes.c_void_p]
+    lib.jack_client_close.argtypes = [ctypes.c_void_p]
+    status = ctypes.c_int(0)
+    client = lib.jack_client_open(b"ldperiod", _NO_START_SERVER, ctypes.byref(status))
+    if not client:
+        return 0
+    try:
+        return int(lib.jack_get_buffer_size(client))
+    finally:
+        lib.jack_client_close(client)
+
+
+def output_period(stream: Any) -> int:
+    """How many samples the device takes from ``stream``'s FIFO at a time, where known:
+    JACK's buffer size for a JACK stream, else 0."""
+    import sounddevice as sd
+
+    try:
+        api = sd.query_hostapis(sd.query_devices(stream.device)["hostapi"])["name"]
+    except (ValueError, sd.PortAudioError, KeyError, TypeError):
+        return 0
+    return jack_period() if "JACK" in str(api) else 0
+
+
 def output_latency_s(stream: Any) -> float:
     """The time from a sample leaving ``stream``'s buffer (a sounddevice stream) to its
     being heard: JACK's playback latency for a JACK stream, else PortAudio's figure."""
