@@ -20,6 +20,7 @@ import rtmidi
 from livedrummer.errors import MidiInputError
 from livedrummer.midi.thrumap import Remap
 
+from .cnoise import c_stderr_to_log
 from .midiport import APIS, _api_names, choose_port
 
 log = logging.getLogger("livedrummer.input")
@@ -40,7 +41,8 @@ class MidiThru:
         problems: list[str] = []
         for name in _api_names(api):
             try:
-                out = rtmidi.MidiOut(APIS[name], f"livedrummer-{what}")
+                with c_stderr_to_log(f"MIDI API {name}"):  # libasound/libjack noise: logged
+                    out = rtmidi.MidiOut(APIS[name], f"livedrummer-{what}")
             except (rtmidi.RtMidiError, RuntimeError) as exc:
                 problems.append(f"{name}: {exc}")
                 continue
