@@ -98,7 +98,7 @@ def test_display_sends_a_files_notes_with_the_frames_that_show_them(
     env.update(jack_env(jack_default_server))
     midi, log = hits_file(tmp_path / "hits.mid"), tmp_path / "frames.jsonl"
     cmd = (f"{sys.executable} -m services display {midi} --map general-midi --size 320x180 "
-           f"--aa 0 --seconds 5 --no-sound --midi-out ldsampler --frame-log {log}")  # fmt: skip
+           f"--aa 0 --seconds 5.5 --no-sound --midi-out ldsampler --frame-log {log}")  # fmt: skip
     window = subprocess.Popen(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", cmd],
                               cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                               text=True, env=env)  # fmt: skip
