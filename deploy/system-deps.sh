@@ -7,9 +7,10 @@ set -euo pipefail
 # libfluidsynth3: pyfluidsynth (render --soundfont); libjack-jackd2-dev: the C reference client
 # of `livedrummer bench input_load` (compiled for the run with cc); xdotool: keys pressed in the
 # window test; chromium: the practice report test loads the HTML report in a headless browser;
-# timgm6mb-soundfont: a sampled General MIDI SoundFont, the real drum samples the percussion
-# recogniser's tests and `bench transcribe` render their audio from.
-packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3 libjack-jackd2-dev xdotool chromium timgm6mb-soundfont)
+# timgm6mb-soundfont: a real sampled General MIDI SoundFont, which the tests render with and
+# from which the percussion recogniser's tests and `bench transcribe` make their audio;
+# libsndfile1: soundfile (the samples of SFZ kits).
+packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3 libjack-jackd2-dev xdotool chromium timgm6mb-soundfont libsndfile1)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")

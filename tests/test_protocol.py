@@ -172,7 +172,7 @@ def patch(frame: bytes, fmt: str, offset: int, value: object) -> bytes:
     "mutate,field",
     [
         (lambda f: [patch(f[0], "4s", 0, b"XXXX"), f[1]], "magic"),
-        (lambda f: [patch(f[0], "B", 4, 2), f[1]], "version"),
+        (lambda f: [patch(f[0], "B", 4, p.PROTOCOL_VERSION + 1), f[1]], "version"),
         (lambda f: [patch(f[0], "B", 5, 99), f[1]], "kind"),
         (lambda f: [patch(f[0], "H", 6, 0x80), f[1]], "flags"),
         (lambda f: [patch(f[0], "<d", 20, float("nan")), f[1]], "send_time_s"),
@@ -224,7 +224,8 @@ def test_control_ranges_and_hello_json_checked() -> None:
         frames = [patch(head, "<I", 28, len(payload)), payload]
         with pytest.raises(ProtocolError, match=field):
             p.decode(frames)
-    bad = hello().to_bytes().replace(b'"protocol":1', b'"protocol":2')
+    now, other = p.PROTOCOL_VERSION, p.PROTOCOL_VERSION + 1
+    bad = hello().to_bytes().replace(f'"protocol":{now}'.encode(), f'"protocol":{other}'.encode())
     with pytest.raises(ProtocolError, match=r"hello\.protocol"):
         p.decode([patch(head, "<I", 28, len(bad)), bad])
 

@@ -78,7 +78,7 @@ def bad_messages(good: Frames, rng: np.random.Generator) -> list[tuple[str, Fram
     head, *payload = good
     big = p.MAX_PAYLOAD + 1
     return [
-        ("version", [patch(head, "<B", 4, 2), *payload]),
+        ("version", [patch(head, "<B", 4, p.PROTOCOL_VERSION + 1), *payload]),
         ("version", [patch(head, "<B", 4, 0), *payload]),
         ("header", [head[:20], *payload]),  # truncated header
         ("header", [p.MAGIC + rng.bytes(40)]),  # random bytes after the magic (not 32 long)

@@ -11,7 +11,7 @@ Header frame (:data:`HEADER`, little-endian, 32 bytes)::
 
     offset size field         type  meaning
     0      4    magic         4s    b"LDRM"
-    4      1    version       u8    PROTOCOL_VERSION (1); any other value is refused
+    4      1    version       u8    PROTOCOL_VERSION (2); any other value is refused
     5      1    kind          u8    Kind (table below)
     6      2    flags         u16   Flag bits; unknown bits are refused
     8      2    performer     u16   who played it (same space as the onset ``source`` field)
@@ -39,6 +39,11 @@ Kinds (:data:`SPECS`; "frames" counts the payload frames after the header)::
     HEARTBEAT  6    1      empty (0 bytes): the sender is alive; lets a tail gap show
     GAP        7    1      GAP_PAYLOAD (dropped u64, first_time_s f64, last_time_s f64,
                            reason u32; 28 bytes): the *sender* shed or lost events
+    SHOWN_ONSET 8   1      n >= 1 rows of events.ONSET_DTYPE, ``time_s`` the onset's *show
+                           time* (its time + the synth's D): the synth forwards each onset
+                           on its pose stream as it arrives, so a display can sound it (and
+                           draw a score) at the moment the picture shows its contact
+                           (version 2; version 1 had no kind 8)
 
 Limits checked by :func:`decode`: header size exact; payload_len <= ``max_payload``
 (default :data:`MAX_PAYLOAD`, 16 MiB) and equal to the frames' total; row payloads a whole

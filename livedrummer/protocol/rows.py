@@ -72,7 +72,8 @@ def check_controls(rows: np.ndarray) -> None:
     _check_range(rows, "value", 128)
 
 
-ROW_CHECKS = {Kind.ONSET: check_onsets, Kind.CONTROL: check_controls}
+ROW_CHECKS = {Kind.ONSET: check_onsets, Kind.CONTROL: check_controls,
+              Kind.SHOWN_ONSET: check_onsets}  # fmt: skip
 
 
 def rows_from(data: memoryview, dtype: np.dtype[Any], what: str) -> np.ndarray:

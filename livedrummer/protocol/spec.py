@@ -19,7 +19,7 @@ import numpy as np
 from livedrummer.errors import ProtocolError
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2  # 2: SHOWN_ONSET
 MAGIC = b"LDRM"
 HEADER = struct.Struct("<4sBBHHHQdI")
 POSE_HEADER = struct.Struct("<8sI4xd")
@@ -40,6 +40,7 @@ class Kind(IntEnum):
     POSE = 5
     HEARTBEAT = 6
     GAP = 7
+    SHOWN_ONSET = 8  # an onset forwarded to displays, stamped with its show time
 
 
 class Flag(IntFlag):
@@ -56,7 +57,7 @@ class Stream(IntEnum):
     """Conventional stream ids (a sender may use others)."""
 
     EVENTS = 0  # onsets, controls, heartbeats and gaps of one input daemon
-    POSES = 1  # poses of one synth
+    POSES = 1  # poses of one synth, and the onsets it forwards to displays (SHOWN_ONSET)
     CONTROL = 2  # hello/ready on a control socket (sequence numbers unused there)
 
 
@@ -87,6 +88,7 @@ SPECS: dict[int, KindSpec] = {
         KindSpec(Kind.POSE, 2, "pose", fixed=POSE_HEADER),
         KindSpec(Kind.HEARTBEAT, 1, "empty"),
         KindSpec(Kind.GAP, 1, "struct", fixed=GAP_PAYLOAD),
+        KindSpec(Kind.SHOWN_ONSET, 1, "rows", rows=ONSET_DTYPE),
     )
 }
 

@@ -67,6 +67,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--camera", metavar="NAME",
                    help="viewpoint (default stage live, front --offline)")  # fmt: skip
     add_kit_option(p)
+    p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
+                   help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+                   "default: the built-in kit)")  # fmt: skip
 
 
 def sticking_line(st: Sticking) -> str:

@@ -8,6 +8,12 @@ machine with no screen use ``livedrummer render``. The limbs are those of
 :func:`livedrummer.sticking.stick_performance` (``--sticking``, ``--score``), as ``livedrummer
 sticking`` prints them.
 
+Sound: the file window plays the drum track (the built-in kit, or ``--soundfont FILE.sf2``'s)
+on the default output or ``--audio-device NAME`` (PortAudio: JACK or ALSA), and the picture
+follows the sound's clock (:mod:`services.display.audio_out`); at speeds other than 1x and in
+reverse the sound fades out and is muted (the readout says so). ``--no-sound``, or no output
+device, plays silently on the monotonic clock.
+
 Options share their names with the other commands: ``--seconds`` (as in ``up`` and ``demo``)
 stops the show (the file window or ``--live``), ``--frames-dir`` (as in ``render`` and ``up``)
 is where ``--live --headless`` writes its frames, ``--max-frames`` stops it after so many.
@@ -17,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from livedrummer.render.camera import CAMERA_NAMES
 
@@ -42,6 +49,9 @@ from .common import (
 from .keys import add_curve_options, security_from_args
 from .render import body_scene, parse_size
 
+if TYPE_CHECKING:
+    from ..display.audio_out import TrackPlayer
+
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "display", run)
@@ -65,6 +75,24 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--overlay", default="", metavar="LIST",
                    help="strips shown first: score, joints or both; keys o, g "
                    "(default: none)")  # fmt: skip
+    sound = p.add_argument_group("sound (the file window)")
+    sound.add_argument("--audio-device", metavar="NAME",
+                       help="sound output: a device name or part of it, e.g. 'system, JACK' "
+                       "(default: the system's default output)")  # fmt: skip
+    sound.add_argument("--soundfont", type=Path, metavar="SF2",
+                       help="drum sounds from this General MIDI SoundFont via FluidSynth "
+                       "(default: the built-in kit)")  # fmt: skip
+    sound.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
+                       help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+                       "default: the built-in kit)")  # fmt: skip
+    sound.add_argument("--no-sound", action="store_true", help="a silent window")
+    sound.add_argument("--midi-out", metavar="PORT",
+                       help="file window: send the file's notes to this MIDI port (a sampler; "
+                       "a virtual port of that name where none is there) as the picture "
+                       "plays them (default: none)")  # fmt: skip
+    sound.add_argument("--frame-log", type=Path, metavar="JSONL",
+                       help="file window: per frame the monotonic time after the swap and "
+                       "the position shown (default: none)")  # fmt: skip
     add_motion_options(p)
     add_avatar_option(p)
     add_background_option(p, transparent=False)
@@ -83,6 +111,9 @@ def register(sub: Subparsers) -> None:
                       "synths' pose endpoints, comma-separated, in the file's order "
                       "(default: one drummer)")  # fmt: skip
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
+    live.add_argument("--sound", action="store_true",
+                      help="sound each onset the synth forwards at its show time (onset + D), "
+                      "built-in kit, on --audio-device")  # fmt: skip
     add_renamed(live, "--frames", live.add_argument(
         "--max-frames", type=int, metavar="N",
         help="stop after N frames (default: when stopped)"))  # fmt: skip
@@ -119,6 +150,10 @@ def run(args: argparse.Namespace) -> int:
     from ..display.window import WindowOptions, show
 
     background = background_of(args, window=True)
+    if args.soundfont is not None:
+        from livedrummer.audio.kitfile import check_kit_file
+
+        check_kit_file(args.soundfont)
     source = Path(args.file) if args.file else demo_groove()
     performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
     if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
@@ -127,11 +162,34 @@ def run(args: argparse.Namespace) -> int:
         size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
         camera=args.camera, samples=args.aa, quit_after_s=args.seconds,
         overlays=parse_overlays(args.overlay), screenshot=args.screenshot, background=background,
+        frame_log=args.frame_log,
     )  # fmt: skip
     kit = load_kit(args.kit)
     avatar = avatar_of(args)
     body = body_scene(args, performance, kit, note_map, avatar)
-    show(performance, kit, options, body=body, avatar=avatar)
+    sound = None
+    if not args.no_sound:
+        from livedrummer.audio.synth import SAMPLE_RATE
+
+        from ..display.audio_out import open_player, window_track
+
+        def sound() -> TrackPlayer | None:
+            track = window_track(performance, body, args.soundfont)
+            return open_player(track, SAMPLE_RATE, args.audio_device)
+
+    midi = None
+    if args.midi_out is not None:
+        import sys
+
+        from ..display.midi_out import MidiFileOut
+
+        midi = MidiFileOut(performance.onsets, args.midi_out)
+    try:
+        show(performance, kit, options, body=body, avatar=avatar, sound=sound, midi=midi)
+    finally:
+        if midi is not None:
+            midi.close()
+            print(f"display: {midi.sent} notes sent to {midi.out.port_name!r}", file=sys.stderr)
     return 0
 
 
@@ -206,9 +264,32 @@ def run_live(args: argparse.Namespace) -> int:
     if args.seconds is not None and not args.seconds > 0:  # counted from the first pose drawn
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
     display = LiveDisplay(load_kit(args.kit), config, clock, ctx)
-    code = serve(display, lambda endpoints: endpoints["sub"])
+    sound = None
+    if args.sound:
+        from ..display.live_sound import LiveSound, SoundConfig
+
+        sfz = None
+        if args.soundfont is not None:
+            from livedrummer.audio.kitfile import check_kit_file, is_sfz
+
+            if not is_sfz(args.soundfont):
+                raise ConfigError(f"--live --sound plays the built-in kit or an SFZ kit "
+                                  f"(--sfz), not a SoundFont ({args.soundfont})")  # fmt: skip
+            check_kit_file(args.soundfont)
+            sfz = str(args.soundfont)
+        sound = LiveSound(SoundConfig(args.sub, args.audio_device, args.kit,
+                                      security_from_args(args), sfz=sfz))  # fmt: skip
+        if not sound.start():
+            sound = None
+    try:
+        code = serve(display, lambda endpoints: endpoints["sub"])
+    finally:
+        if sound is not None:
+            sound.close()
     s = display.summary()
     where = f" into {args.frames_dir}" if args.frames_dir else ""
     print(f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "
           f"{s['missing']} pose messages lost", file=sys.stderr)  # fmt: skip
+    if sound is not None and sound.stats is not None:
+        print(sound.stats.line(), file=sys.stderr)
     return code

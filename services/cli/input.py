@@ -42,6 +42,12 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
     p.add_argument("--loop", action="store_true", help="--file: start again at the end")
+    p.add_argument("--thru", metavar="PORT",
+                   help="forward what the kit sends to this MIDI port (a DAW or sampler; a "
+                   "virtual port of that name where none is there) (default: none)")  # fmt: skip
+    p.add_argument("--thru-map", choices=("general-midi",),
+                   help="--thru: re-map notes to General MIDI drums on channel 10 "
+                   "(default: forwarded unchanged)")  # fmt: skip
     p.add_argument("--pub", default=DEFAULT_PUB, help=f"publish endpoint (default {DEFAULT_PUB})")
     p.add_argument("--control", default=DEFAULT_CONTROL,
                    help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
@@ -103,6 +109,12 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--channel: {exc}") from None
     channels = None if channel in ("all", "auto") else frozenset({int(channel)})
     source: Source
+    thru = None
+    if args.thru is not None and (args.midi is None and args.virtual is None):
+        raise ConfigError("--thru forwards a MIDI port's messages: use it with --midi or "
+                          "--virtual")  # fmt: skip
+    if args.thru_map is not None and args.thru is None:
+        raise ConfigError("--thru-map re-maps what --thru forwards: add --thru PORT")
     if args.audio is not None:
         from livedrummer.acoustic.pieces import parse_channel_map
         from livedrummer.acoustic.profile import load_profile
@@ -136,8 +148,16 @@ def run(args: argparse.Namespace) -> int:
 
         decoder = MessageDecoder(note_map, args.performer, channels)
         virtual = args.virtual is not None
+        if args.thru is not None:
+            from livedrummer.midi.thrumap import gm_remap
+
+            from ..input.thru import MidiThru
+
+            thru = MidiThru(args.thru, args.api,
+                            gm_remap(note_map) if args.thru_map else None)  # fmt: skip
         source = MidiPortSource(args.virtual if virtual else args.midi, clock, decoder,
-                                api=args.api, virtual=virtual)  # fmt: skip
+                                api=args.api, virtual=virtual,
+                                thru=thru.send if thru is not None else None)  # fmt: skip
     if not args.wait:
         source.check()  # a device that is not there: one line naming what is, exit 2
     config = DaemonConfig(
@@ -153,7 +173,11 @@ def run(args: argparse.Namespace) -> int:
         security=security,
     )
     daemon = InputDaemon(source, config, clock, ctx)
-    code = serve(daemon, lambda endpoints: endpoints["pub"])
+    try:
+        code = serve(daemon, lambda endpoints: endpoints["pub"])
+    finally:
+        if thru is not None:
+            thru.close()
     summary = daemon.summary()
     timing = summary.get("remote_timing")
     print(f"input: {summary['onsets']} onsets, {summary['controls']} controls, "
@@ -163,4 +187,7 @@ def run(args: argparse.Namespace) -> int:
              f" drift {timing['drift_ppm']:+.1f} ppm, played {timing['delay_ms']:.1f} ms behind"
              f" the remote drummer, {timing['late']:.0f} hits late"),
           file=sys.stderr)  # fmt: skip
+    if thru is not None:
+        print(f"thru: {thru.sent} messages forwarded to {thru.port_name!r}, {thru.failed} failed",
+              file=sys.stderr)  # fmt: skip
     return code

@@ -96,6 +96,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--soundfont", type=Path, metavar="SF2",
                    help="drum sounds from this General MIDI SoundFont via FluidSynth "
                    "(default: the built-in kit)")  # fmt: skip
+    p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
+                   help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+                   "default: the built-in kit)")  # fmt: skip
     add_motion_options(p)
     add_avatar_option(p)
     p.add_argument("--stage", type=Path, metavar="TOML",
@@ -227,9 +230,9 @@ def run(args: argparse.Namespace) -> int:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
     start_pos, end_pos = position_option("--start", args.start), position_option("--end", args.end)
     if args.soundfont is not None:
-        from livedrummer.audio.soundfont import check_soundfont
+        from livedrummer.audio.kitfile import check_kit_file
 
-        check_soundfont(args.soundfont)
+        check_kit_file(args.soundfont)
     source = Path(args.file) if args.file else demo_groove()
     # Every option is checked before the file is read (and its report printed): a mistyped
     # option is the one line on stderr.

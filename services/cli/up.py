@@ -119,6 +119,14 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--soundfont", type=Path, metavar="SF2",
                    help="--video: drum track from this General MIDI SoundFont "
                    "(default: the built-in kit)")  # fmt: skip
+    p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
+                   help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+                   "default: the built-in kit)")  # fmt: skip
+    p.add_argument("--sound", action="store_true",
+                   help="the display sounds each onset at onset + D (built-in kit)")  # fmt: skip
+    p.add_argument("--audio-device", metavar="NAME",
+                   help="--sound: the output, a device name or part of it "
+                   "(default: the system's default output)")  # fmt: skip
     p.add_argument("--size", help="frame size WIDTHxHEIGHT (default 1280x720 in a window, "
                                   "640x360 headless)")  # fmt: skip
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
@@ -243,6 +251,10 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
             cues = ["--cues", str(args.cues.resolve())]
             synth_argv += cues
             display_argv += cues
+    display_argv += ["--sound"] if args.sound else []
+    if args.sound and args.soundfont is not None and args.soundfont.suffix.lower() == ".sfz":
+        display_argv += ["--sfz", str(args.soundfont)]  # the live sound plays the SFZ kit too
+    display_argv += ["--audio-device", args.audio_device] if args.audio_device else []
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
         display_argv += ["--background", args.background] if args.background else []
@@ -299,9 +311,9 @@ def run(args: argparse.Namespace) -> int:
     if args.video is not None and args.no_journal:
         raise ConfigError("--video: the drum track comes from the journal; drop --no-journal")
     if args.soundfont is not None:  # now, not after the show
-        from livedrummer.audio.soundfont import check_soundfont
+        from livedrummer.audio.kitfile import check_kit_file
 
-        check_soundfont(args.soundfont)
+        check_kit_file(args.soundfont)
     avatar_of(args)  # a bad --avatar is one line here, before three services start
     background_of(args, window=True)  # and a bad --background
     if args.background is not None and not windowed(args):

@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
+from livedrummer.audio.kitfile import render_kit_file
 from livedrummer.audio.mix import mix_onsets
-from livedrummer.audio.soundfont import render_soundfont
 from livedrummer.avatar.model import Avatar
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
@@ -134,7 +134,7 @@ def export(
         track = spooled_track(lead + length)
         mixed_s = (lead + length) / settings.sample_rate
         if soundfont is not None:  # before the writer: a bad file leaves no empty video
-            audio = render_soundfont(performance.onsets, mixed_s, soundfont, settings.sample_rate,
+            audio = render_kit_file(performance.onsets, mixed_s, soundfont, settings.sample_rate,
                                      kit, body.performed.chokes, track)  # fmt: skip
         else:
             audio = mix_onsets(performance.onsets, mixed_s, kit, settings.sample_rate,

@@ -21,7 +21,9 @@ received by then, so a test or a bench can check contacts and latency without pi
 
 Bad input. The SUB socket takes every message that starts with the protocol magic (so a
 synth of another protocol version is seen and counted, not filtered into silence); a message
-that fails to decode, or a valid one that is not a POSE, is dropped and counted per kind in
+that fails to decode, or a valid one that is not a POSE (or a SHOWN_ONSET, the onsets the
+synth forwards: counted, sequence-checked and left to the sound process, which subscribes to
+them on its own socket, :mod:`~services.display.live_sound`), is dropped and counted per kind in
 ``bad`` (:class:`~services.badmsg.BadMessages`, logged once per kind, totals logged when the
 loop ends and in ``summary()``), and the next one is read.
 
@@ -81,7 +83,16 @@ from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.live.behind import BehindCounter
 from livedrummer.live.track import PoseTrack
-from livedrummer.protocol import Hello, Pose, PoseFormat, SeqStatus, SequenceTracker, decode
+from livedrummer.protocol import (
+    Hello,
+    Kind,
+    Message,
+    Pose,
+    PoseFormat,
+    SeqStatus,
+    SequenceTracker,
+    decode,
+)
 from livedrummer.render.body_scene import frame_from_pose
 
 from ..badmsg import BadMessages
@@ -187,6 +198,7 @@ class LiveStats:
     missing: int = 0
     bad: int = 0
     frames: int = 0
+    shown_onsets: int = 0  # onsets the synth forwarded (SHOWN_ONSET; --sound plays them)
     held: int = 0  # frames drawn with no pose at or after their show time - 1 frame
 
 
@@ -441,13 +453,15 @@ class LiveDisplay(Service):
                 self.stats.bad += 1
                 self.bad.drop(exc)
                 continue
+            if msg.kind is Kind.SHOWN_ONSET:  # onsets the synth forwards (sounded apart)
+                self._observe(msg)
+                self.stats.shown_onsets += msg.rows.size
+                continue
             if not isinstance(msg.body, Pose):
                 self.stats.bad += 1
                 self.bad.unexpected(msg.kind.name)
                 continue
-            report = self.tracker.observe_message(msg)
-            if report.status is SeqStatus.GAP:
-                self.stats.missing += report.missing
+            self._observe(msg)
             rows = msg.body.rows
             show = msg.body.time_s + rows["time_s"].astype(np.float64)
             # a message whose every sample is for a frame already drawn came too late to be
@@ -461,6 +475,11 @@ class LiveDisplay(Service):
                 self._spool.write(np.ascontiguousarray(rows).tobytes())
             self.stats.pose_messages += 1
             self.stats.pose_samples += rows.size
+
+    def _observe(self, msg: Message) -> None:
+        report = self.tracker.observe_message(msg)
+        if report.status is SeqStatus.GAP:
+            self.stats.missing += report.missing
 
     def _say(self, line: str | None) -> None:
         if line is not None:

@@ -138,9 +138,9 @@ def recording_track(
     duration = timing.frames / timing.fps
     out = spooled_track(round(duration * sample_rate))
     if soundfont is not None:
-        from livedrummer.audio.soundfont import render_soundfont
+        from livedrummer.audio.kitfile import render_kit_file
 
-        return render_soundfont(on, duration, soundfont, sample_rate, kit, chokes, out)
+        return render_kit_file(on, duration, soundfont, sample_rate, kit, chokes, out)
     return mix_onsets(on, duration, kit, sample_rate, chokes, out)
 
 

@@ -11,10 +11,16 @@ overlays, :data:`OVERLAY_KEYS`), F (full screen on and off), H (key help), I (th
 and Q/Esc (quit). A readout in the top-left corner (:mod:`livedrummer.render.hud`) shows the
 position and length, speed, playing/paused/reversed, the camera and a clear end-of-file line;
 ``WindowOptions.screenshot`` writes the last frame drawn as a PNG when the window closes. The clock
-is injected (default ``time.monotonic``) as the style guide asks; with sound it would be the audio
-stream's.
+is injected (default ``time.monotonic``) as the style guide asks; with sound (a
+:class:`~services.display.audio_out.TrackPlayer`) it is the output's sample clock, each frame
+tells the player where the transport is, and the frame is drawn for the moment it will be
+seen (the median time frames took to draw and swap, :class:`RenderAhead`), so the picture
+follows what is heard (muted at other
+speeds and in reverse, said in the readout). ``WindowOptions.frame_log`` writes one JSON line
+per frame (the monotonic time just after the swap, the position shown) for tests and
+measurements.
 
-Limits: no sound in the window yet; resizing keeps the
+Limits: resizing keeps the
 aspect ratio of the new size but not the pixel density of a HiDPI monitor.
 """
 
@@ -26,10 +32,11 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
+from livedrummer.live.ahead import RenderAhead
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CameraMove, kit_cameras
@@ -39,9 +46,13 @@ from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.render.transport import KEYS, Transport
 from livedrummer.timeline.performance import Performance
 
+from .audio_out import TrackPlayer, muted_reason
 from .context import DisplayError
 from .renderer import Renderer
 from .viewcontrol import ViewControl
+
+if TYPE_CHECKING:
+    from .midi_out import MidiFileOut
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +69,7 @@ class WindowOptions:
     overlays: frozenset[str] = frozenset()  # strips shown first: "score", "joints"
     screenshot: Path | None = None  # the last frame drawn, written as a PNG when it closes
     background: Background | None = None  # behind the stage (None: the dark hall)
+    frame_log: Path | None = None  # per frame: {"mono": after the swap, "t": position shown}
 
 
 DEFAULT_OPTIONS = WindowOptions()
@@ -137,18 +149,29 @@ def show(
     clock: Callable[[], float] = time.monotonic,
     body: BodyScene | None = None,
     avatar: Avatar | None = None,
+    sound: Callable[[], TrackPlayer | None] | None = None,
+    midi: MidiFileOut | None = None,
 ) -> None:
     """Open the window and play ``performance`` until the user quits (the drummer drawn as
     ``avatar``, by default the built-in character).
 
     ``body`` is the performance animated on ``kit``; without it the body is animated here with
-    the defaults (optimal sticking) and the note map the performance was read with."""
+    the defaults (optimal sticking) and the note map the performance was read with. ``sound``
+    opens the player once the window is open (so a machine with no screen says only that);
+    when it returns one the drum track sounds and its clock replaces ``clock``. ``midi`` gets
+    the transport's position each frame and sends the file's notes to a sampler."""
     if body is None:
         from livedrummer.midi.notemap import load_note_map
 
         body = BodyScene.perform(performance, kit, load_note_map(performance.map_name))
     with open_window(options) as (glfw, window, ctx):
-        _loop(glfw, window, ctx, performance, body, options, clock, avatar)
+        player = sound() if sound is not None else None
+        try:
+            _loop(glfw, window, ctx, performance, body, options,
+                  player.now if player is not None else clock, avatar, player, midi)  # fmt: skip
+        finally:
+            if player is not None:
+                player.close()
 
 
 @contextmanager
@@ -195,6 +218,8 @@ def _loop(
     options: WindowOptions,
     clock: Callable[[], float],
     avatar: Avatar | None = None,
+    player: TrackPlayer | None = None,
+    midi: MidiFileOut | None = None,
 ) -> None:
     kit = body.kit
     transport = Transport(performance.duration_s + 1.0)
@@ -221,10 +246,14 @@ def _loop(
     readout, show_readout, show_help = Readout(), True, False
     shot: tuple[tuple[int, int], bytes] | None = None
     camera = options.camera
+    frame_log = options.frame_log.open("w") if options.frame_log is not None else None
+    muted: str | None = None
+    ahead = RenderAhead(quantile=0.5)  # with sound: draw for when the frame is seen
     while not glfw.window_should_close(window):
         if options.quit_after_s is not None and last - started >= options.quit_after_s:
             break
         glfw.poll_events()
+        begun = time.monotonic()
         now = clock()
         for name in pending:
             if name in ("q", "escape"):
@@ -246,6 +275,20 @@ def _loop(
         move = view.mouse(move, now, renderer.size)
         t = transport.advance(now - last)
         last = now
+        if midi is not None:  # each note when the frame showing it is seen (drawn + swapped)
+            reason = muted_reason(transport.playing, transport.speed, transport.reverse)
+            midi.follow(t, time.monotonic() + ahead.seconds, transport.playing and reason is None)
+        if player is not None or midi is not None:
+            reason = muted_reason(transport.playing, transport.speed, transport.reverse)
+            if reason != muted and reason is not None:
+                log.info("window: %s (the drum track sounds at 1x forward)", reason)
+            muted = reason
+        if player is not None:
+            player.follow(t, now, transport.playing and muted is None)
+            if transport.playing:
+                step = ahead.seconds * transport.speed
+                t = min(max(t - step if transport.reverse else t + step, 0.0),
+                        transport.duration_s)  # fmt: skip
         fb = glfw.get_framebuffer_size(window)
         if fb != renderer.size and fb[0] > 0 and fb[1] > 0:
             renderer.size = fb
@@ -260,11 +303,17 @@ def _loop(
 
             readout.draw(renderer, hud_lines(t, transport.duration_s, transport.speed,
                                              transport.playing, transport.reverse, camera,
-                                             show_help), ctx.screen)  # fmt: skip
+                                             show_help) + ([muted.upper()] if muted else []),
+                          ctx.screen)  # fmt: skip
         if options.screenshot is not None:  # read before the swap: the back buffer is defined
             shot = (renderer.size, ctx.screen.read(viewport=(0, 0, *renderer.size), components=3))
         glfw.swap_buffers(window)
+        ahead.add(time.monotonic() - begun)
+        if frame_log is not None:
+            frame_log.write(f'{{"mono": {time.monotonic():.6f}, "t": {t:.6f}}}\n')
         frames += 1
+    if frame_log is not None:
+        frame_log.close()
     if shot is not None and options.screenshot is not None:
         save_screenshot(shot[1], shot[0], options.screenshot)
     elapsed = clock() - started

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from typing import Any
 
 import rtmidi
@@ -134,11 +135,13 @@ class MidiPortSource(MidiSource):
         problems: Problems | None = None,
         *,
         virtual: bool = False,
+        thru: Callable[[list[int]], None] | None = None,
     ) -> None:
         super().__init__(f"{'virtual' if virtual else 'midi'}:{spec}", clock, decoder, problems)
         self.spec = spec
         self.api = api
         self.virtual = virtual
+        self.thru = thru  # every message read, forwarded before it is decoded (input --thru)
         self.api_used = ""
         self.port_name = ""
         self.stamper = DeltaStamper()
@@ -244,6 +247,8 @@ class MidiPortSource(MidiSource):
                 continue
             taken += 1
             msg, delta_s = item
+            if self.thru is not None:
+                self.thru(msg)
             t = stamp(delta_s, now())
             if msg and msg[0] < 0xF0:  # channel messages only; system ones gave their delta
                 self.decode(t, msg[0], msg[1:], out)

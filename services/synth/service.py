@@ -12,6 +12,9 @@ sample's show time; each record's ``time_s`` is its offset from it). Each batch 
 ``LiveSynth.poses_until`` (``answer=``), which calls it between the steps of a re-animation:
 it reads the socket there, so a hit is answered within a step (a few ms) even while the synth
 is busy.
+Each onset is also forwarded on the pose socket the moment it is read, before the synth
+works on it, as a SHOWN_ONSET message stamped with its show time (onset + D): a display sounds
+it then (``display --live --sound``), a score strip can draw it.
 Sequence numbers of the input stream are tracked, so a gap upstream is counted and logged. The
 service base (:mod:`services.service`) runs the control socket (a second thread answering HELLO
 with READY; the READY carries the pose format, which a display checks against its own), start-up
@@ -111,6 +114,7 @@ class SynthStats:
     bad: int = 0
     pose_messages: int = 0
     pose_samples: int = 0
+    forwarded: int = 0  # onsets forwarded to displays (SHOWN_ONSET)
     first_seq: int | None = None
     last_seq: int | None = None
     # read -> quick contacts sent, per batch (the latest ones: a show runs for hours)
@@ -278,6 +282,17 @@ class SynthService(Service):
         self.stats.pose_messages += 1
         self.stats.pose_samples += batch.show_s.size
 
+    def _forward(self, rows: np.ndarray) -> None:
+        """The onsets as they arrive, on the pose stream, stamped with their show time
+        (onset + D): SHOWN_ONSET, for displays that sound them or draw a score."""
+        shown = rows.copy()
+        shown["time_s"] += self.synth.params.delay_s
+        msg = Message(Kind.SHOWN_ONSET, shown, self.config.performer, self._seq,
+                      self.clock.now(), Stream.POSES)  # fmt: skip
+        self._pub.send_multipart(encode(msg), copy=False)
+        self._seq += 1
+        self.stats.forwarded += shown.size
+
     def _drain(self) -> None:
         """Everything waiting on the SUB socket, in batches of up to :data:`DRAIN_BATCH`
         messages: the onsets of a batch go to the synth together (their contacts are solved
@@ -295,6 +310,7 @@ class SynthService(Service):
                 got += 1
                 rows = self._receive(frames)
                 if rows is not None:
+                    self._forward(rows)  # first: a display sounds them at onset + D
                     onsets.append(rows)
             if onsets:
                 rows = np.concatenate(onsets)

@@ -1,0 +1,65 @@
+"""An SFZ kit played live: the online twin of :func:`~livedrummer.audio.sfz_render.render_sfz`.
+
+The same regions for each stroke (its General MIDI note, velocity, round robin count and
+random number, drawn from the same seeded generator in arrival order, which is time order on
+a live stream), the same pitch, gain and pan, and the same choke groups: a region with
+``group`` G cuts what sounds with ``off_by`` G at its start, faded over the cut region's
+``ampeg_release`` (at least 1 ms), the part of that fade not yet rendered. Voices are mixed
+block by block by :class:`~livedrummer.audio.live_mix.LiveMixer`. Limits: those of the
+live mixer (no cymbal grabs live; clipped, not scaled, over full scale).
+"""
+
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+
+from livedrummer.audio.live_mix import LiveMixer, Voice
+from livedrummer.audio.mix import _pan
+from livedrummer.audio.sfz import SfzKit
+from livedrummer.audio.sfz_render import MIN_FADE_S, _pitched, choose, read_sample
+from livedrummer.audio.soundfont import gm_note
+from livedrummer.audio.synth import SAMPLE_RATE
+from livedrummer.kit.model import Kit
+from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES
+
+
+class SfzLiveMixer(LiveMixer):
+    """See the module docstring."""
+
+    def __init__(self, sfz: SfzKit, kit: Kit | None = None, sr: int = SAMPLE_RATE) -> None:
+        super().__init__(kit, sr)
+        self.sfz = sfz
+        self.counts: dict[int, int] = {}
+        self.rng = np.random.default_rng(zlib.crc32(str(sfz.path).encode()))
+
+    def add(self, onset: np.void | np.ndarray, start: int) -> None:
+        instrument = INSTRUMENTS[int(onset["instrument"])]
+        note = gm_note(int(onset["note"]), instrument, ZONES[int(onset["zone"])],
+                       HIHATS[int(onset["hihat"])])  # fmt: skip
+        velocity = int(onset["velocity"])
+        count = self.counts.get(note, 0)
+        self.counts[note] = count + 1
+        regions = choose(self.sfz, note, velocity, count, float(self.rng.random()))
+        for region in regions:
+            if region.group == 0:
+                continue
+            for v in self.voices:
+                if v.off_by == region.group and v.start < start < v.start + v.length:
+                    fade = max(1, round(max(v.fade_s, MIN_FADE_S) * self.sr))
+                    v.length = min(v.length, start - v.start + fade)
+                    v.fade = min(fade, v.length)
+        if instrument not in self._pans:
+            self._pans[instrument] = _pan(self.kit, instrument)
+        piece_left, piece_right = self._pans[instrument]
+        for region in regions:
+            sample, rate = read_sample(self.sfz, region)
+            wave = _pitched(sample, rate, self.sr,
+                            (note - region.keycenter) * 100.0 + region.tune_cents)  # fmt: skip
+            gain = 10.0 ** (region.volume_db / 20.0) * (velocity / 127.0) ** 2
+            angle = (np.clip(region.pan / 100.0, -1.0, 1.0) + 1.0) * np.pi / 4
+            left = float(np.cos(angle)) * np.sqrt(2.0) * piece_left * gain
+            right = float(np.sin(angle)) * np.sqrt(2.0) * piece_right * gain
+            self.voices.append(Voice(start, wave, 1.0, left, right, False, wave.size,
+                                     off_by=region.off_by, fade_s=region.release_s))  # fmt: skip

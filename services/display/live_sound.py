@@ -1,0 +1,203 @@
+"""``display --live --sound``: each onset the synth forwards, sounded at its show time.
+
+The synth forwards every onset on its pose stream the moment it reads it, stamped with its
+show time (onset + D; protocol kind SHOWN_ONSET). A process of its own (so the display's
+drawing never holds the interpreter the sound needs) subscribes to that kind only, keeps a
+small PortAudio output FIFO full (:data:`BUFFER_S`, rounded by PortAudio to a power of two of
+samples: 512 at 48 kHz, 10.7 ms) from a :class:`~livedrummer.audio.live_mix.LiveMixer` (the
+built-in kit; an SFZ kit's :class:`~livedrummer.audio.sfz_live.SfzLiveMixer` with
+``--sfz``), and starts each onset on the sample a
+:class:`~livedrummer.audio.stream_clock.StreamClock` says is heard at its show time. An onset
+that arrives after its sample was written starts on the next sample free and is counted late
+(D must exceed the bus latency plus the FIFO: the default 30 ms does).
+
+One loop, no Python in the audio thread: wait on the socket for up to a millisecond, read
+what came, look at the FIFO, top it up. :class:`LiveSound` starts and stops the process from
+the display; it waits for the output to open and, where there is none, says so in one line and
+the display runs silent. At the end the process reports its counts (onsets, late, underruns,
+clipped samples, bad messages) and the parent logs them.
+
+Limits: the built-in kit or an SFZ kit (a SoundFont live is not done); a remote synth's
+CURVE keys are passed to the subscriber as the display has them.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing as mp
+import queue
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import zmq
+
+from livedrummer.errors import ProtocolError
+from livedrummer.protocol import Kind, decode, topic
+
+from ..net import Security, connect, socket
+from .output_latency import output_latency_s, output_period
+
+log = logging.getLogger("livedrummer.display")
+
+BUFFER_S = 0.01  # asked of PortAudio as the output latency: the FIFO kept full
+MIN_WRITE = 64  # samples free before a write
+POLL_MS = 1
+RATE = 48_000
+
+
+@dataclass(frozen=True)
+class SoundConfig:
+    sub: str
+    device: str | None = None
+    kit: str = "rock5"
+    security: Security = field(default_factory=Security)
+    buffer_s: float = BUFFER_S
+    sfz: str | None = None  # an SFZ kit instead of the built-in one
+
+
+@dataclass
+class SoundStats:
+    onsets: int = 0
+    late: int = 0  # started after their show time (arrived after their sample was written)
+    underruns: int = 0
+    clipped: int = 0
+    bad: int = 0
+    latency_ms: float = 0.0  # the output's latency after the FIFO (StreamClock's)
+    lead_ms: list[float] = field(default_factory=list)  # show time - write head, per onset
+
+    def line(self) -> str:
+        lead = np.percentile(self.lead_ms, [50, 1]) if self.lead_ms else [np.nan, np.nan]
+        return (f"sound: {self.onsets} onsets, {self.late} late, {self.underruns} underruns, "
+                f"{self.clipped} samples clipped, {self.bad} bad messages; onsets placed "
+                f"{lead[0]:.1f} ms (p50) / {lead[1]:.1f} ms (p1) ahead of the output, "
+                f"output latency {self.latency_ms:.2f} ms")  # fmt: skip
+
+
+def _capacity(stream: Any) -> int:
+    seen, deadline = -1, time.monotonic() + 0.5
+    while time.monotonic() < deadline:
+        now = stream.write_available
+        if now == seen and now > 0:
+            break
+        seen = now
+        time.sleep(0.02)
+    return max(seen, 1)
+
+
+def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
+    """The process body: ``report`` (a queue) gets ("ready", None) or ("error", line), and
+    ("stats", SoundStats) at the end; runs until ``stop`` (an Event) is set."""
+    from livedrummer.audio.live_mix import LiveMixer
+    from livedrummer.audio.stream_clock import StreamClock
+    from livedrummer.kit.loader import load_kit
+
+    try:
+        import sounddevice as sd
+
+        stream = sd.OutputStream(samplerate=RATE, channels=2, dtype="float32",
+                                 device=config.device, latency=config.buffer_s)  # fmt: skip
+        stream.start()
+    except Exception as exc:  # PortAudioError, no library (OSError), no device (ValueError)
+        report.put(("error", f"no sound: cannot open the output {config.device or '(default)'}"
+                    f" ({exc}): the display runs silent"))  # fmt: skip
+        return
+    stats = SoundStats()
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    sub = socket(ctx, zmq.SUB)
+    try:
+        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_ONSET))
+        connect(sub, config.sub, "sound sub", config.security)
+        mixer: LiveMixer
+        if config.sfz is not None:
+            from livedrummer.audio.sfz_live import SfzLiveMixer
+            from livedrummer.audio.sfz_render import check_sfz
+
+            mixer = SfzLiveMixer(check_sfz(Path(config.sfz)), load_kit(config.kit), RATE)
+        else:
+            mixer = LiveMixer(load_kit(config.kit), RATE)
+        cap = _capacity(stream)
+        clock = StreamClock(RATE, output_latency_s(stream), period=output_period(stream))
+        stats.latency_ms = clock.latency_s * 1000
+        written = 0
+        clock.look(time.monotonic(), written, cap - stream.write_available)
+        report.put(("ready", None))
+        while not stop.is_set():
+            if sub.poll(POLL_MS):
+                clock.look(time.monotonic(), written, cap - stream.write_available)
+                while True:
+                    try:
+                        frames = sub.recv_multipart(zmq.NOBLOCK)
+                    except zmq.Again:
+                        break
+                    try:
+                        rows = decode(frames).rows
+                    except ProtocolError:
+                        stats.bad += 1
+                        continue
+                    for row in rows:
+                        at = clock.sample_for(float(row["time_s"]))
+                        stats.lead_ms.append((at - written) / RATE * 1000)
+                        if at < written:
+                            stats.late += 1
+                            at = written
+                        mixer.add(row, at)
+                        stats.onsets += 1
+            free = stream.write_available
+            clock.look(time.monotonic(), written, cap - free)
+            if free >= MIN_WRITE:
+                if stream.write(mixer.render(free)):
+                    stats.underruns += 1
+                written += free
+        stats.clipped = mixer.clipped
+    finally:
+        sub.close(0)
+        ctx.term()
+        stream.stop()
+        stream.close()
+        report.put(("stats", stats))
+
+
+class LiveSound:
+    """The sound process, started and stopped by the display (see the module docstring)."""
+
+    def __init__(self, config: SoundConfig) -> None:
+        spawn = mp.get_context("spawn")
+        self._stop = spawn.Event()
+        self._report: Any = spawn.Queue()
+        self._proc = spawn.Process(target=sound_loop, args=(config, self._stop, self._report),
+                                   name="livedrummer-sound", daemon=True)  # fmt: skip
+        self.stats: SoundStats | None = None
+        self.running = False
+
+    def start(self, timeout_s: float = 30.0) -> bool:
+        """Start and wait for the output to open: True, or False after one warning line."""
+        self._proc.start()
+        try:
+            what, line = self._report.get(timeout=timeout_s)
+        except queue.Empty:
+            what, line = "error", "no sound: the sound process did not start"
+        if what != "ready":
+            log.warning("%s", line)
+            self.close()
+            return False
+        self.running = True
+        return True
+
+    def close(self) -> None:
+        self._stop.set()
+        if self.running:
+            try:
+                what, stats = self._report.get(timeout=10.0)
+                if what == "stats":
+                    self.stats = stats
+                    level = logging.WARNING if stats.late or stats.underruns else logging.INFO
+                    log.log(level, "%s", stats.line())
+            except queue.Empty:
+                log.warning("sound: the sound process sent no summary")
+        self._proc.join(5.0)
+        if self._proc.is_alive():
+            self._proc.kill()
+        self.running = False
