@@ -41,7 +41,7 @@ class MidiThru:
         problems: list[str] = []
         for name in _api_names(api):
             try:
-                with native_stderr_to_log(log, f"MIDI API {name}"):  # libasound/libjack noise: logged
+                with native_stderr_to_log(log, f"MIDI API {name}"):  # libasound/libjack: logged
                     out = rtmidi.MidiOut(APIS[name], f"livedrummer-{what}")
             except (rtmidi.RtMidiError, RuntimeError) as exc:
                 problems.append(f"{name}: {exc}")
