@@ -51,7 +51,15 @@ from livedrummer.errors import ProtocolError
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.live.track import PoseTrack
-from livedrummer.protocol import Pose, PoseFormat, SeqStatus, SequenceTracker, decode
+from livedrummer.protocol import (
+    Kind,
+    Message,
+    Pose,
+    PoseFormat,
+    SeqStatus,
+    SequenceTracker,
+    decode,
+)
 from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
 from livedrummer.render.camera import Camera
 from livedrummer.render.kitmesh import build_kit_mesh
@@ -121,6 +129,18 @@ class _Stream:
         self.bad = BadMessages(f"display pose stream of {who.label}", log)
         self.sock: Any = None
 
+    def _observe(self, msg: Message) -> None:
+        """One message of this performer's stream: its sequence number seen."""
+        report = self.tracker.observe_message(msg)
+        if report.status is SeqStatus.GAP:
+            self.stats.missing += report.missing
+        elif report.status in (SeqStatus.RESTART, SeqStatus.DUPLICATE):
+            # One synth on one connection never repeats a number: an older one means it
+            # restarted and we reconnected after its first messages (its own tracker).
+            self.stats.restarts += 1
+            self.tracker.reset()
+            self.tracker.observe_message(msg)
+
     def drain(self) -> None:
         while True:
             try:
@@ -133,23 +153,18 @@ class _Stream:
                 self.stats.bad += 1
                 self.bad.drop(exc)
                 continue
+            if msg.performer != self.who.performer:
+                self.stats.bad += 1
+                self.bad.unexpected(f"{msg.kind.name} of performer {msg.performer}")
+                continue
+            if msg.kind is Kind.SHOWN_ONSET:  # the synth's forwarded onsets share its numbers
+                self._observe(msg)
+                continue
             if not isinstance(msg.body, Pose):
                 self.stats.bad += 1
                 self.bad.unexpected(msg.kind.name)
                 continue
-            if msg.performer != self.who.performer:
-                self.stats.bad += 1
-                self.bad.unexpected(f"POSE of performer {msg.performer}")
-                continue
-            report = self.tracker.observe_message(msg)
-            if report.status is SeqStatus.GAP:
-                self.stats.missing += report.missing
-            elif report.status in (SeqStatus.RESTART, SeqStatus.DUPLICATE):
-                # One synth on one connection never repeats a number: an older one means it
-                # restarted and we reconnected after its first messages (its own tracker).
-                self.stats.restarts += 1
-                self.tracker.reset()
-                self.tracker.observe_message(msg)
+            self._observe(msg)
             rows = msg.body.rows
             self.track.add(msg.body.time_s + rows["time_s"].astype(np.float64), rows)
             self.stats.pose_messages += 1
