@@ -237,3 +237,31 @@ def test_transparent_pngs_and_bad_values(midi: Path, tmp_path: Path, capsys: Any
         assert main(args) == 2, args
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
+
+
+def test_the_live_headless_recording_has_the_background(tmp_path: Path) -> None:
+    """``up --headless`` passes --background to its display: chroma green behind the stage."""
+    import os
+    import random
+    import subprocess
+    import sys
+
+    base = random.Random().randrange(20_000, 40_000, 20)
+    frames = tmp_path / "frames"
+    env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
+    env.pop("DISPLAY", None)
+    env.pop("WAYLAND_DISPLAY", None)
+    done = subprocess.run(
+        [sys.executable, "-m", "services", "up", "--demo", "--headless", "--port-base", str(base),
+         "--seconds", "2", "--background", "chroma", "--frames-dir", str(frames), "--png",
+         "--size", "160x90", "--fps", "10"],
+        capture_output=True, text=True, timeout=120, env=env,
+        cwd=Path(__file__).resolve().parent.parent,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-1500:]
+    pngs = sorted(frames.glob("*.png"))
+    assert pngs, done.stderr[-800:]
+    with av.open(str(pngs[-1])) as c:
+        img = next(iter(c.decode(video=0))).to_ndarray(format="rgb24").astype(int)
+    corner = img[:8, :8].reshape(-1, 3).mean(axis=0)  # the sky above the stage
+    assert corner[1] > 150 and corner[0] < 80 and corner[2] < 80, corner

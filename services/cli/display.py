@@ -214,10 +214,7 @@ def run_live(args: argparse.Namespace) -> int:
     from ..service import serve
 
     window = None
-    background = background_of(args, window=True)
-    if args.headless and args.background is not None:
-        raise ConfigError("display --live --headless: --background is drawn in windows and by "
-                          "`livedrummer render`, not in the headless recording")  # fmt: skip
+    background = background_of(args, window=True)  # live video has no alpha: opaque only
     if not args.headless:
         from ..display.window import WindowOptions
 
@@ -254,7 +251,7 @@ def run_live(args: argparse.Namespace) -> int:
         png=not args.no_png, security=security_from_args(args), window=window,
         video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
         control=args.control, avatar=avatar, osc_port=args.osc, osc_allow=osc_allow(args),
-        cues=cues_of(args),
+        cues=cues_of(args), background=background,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     if args.synth_control is not None:  # one line when the synth plays another avatar

@@ -251,13 +251,13 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
             cues = ["--cues", str(args.cues.resolve())]
             synth_argv += cues
             display_argv += cues
+    display_argv += ["--background", args.background] if args.background else []
     display_argv += ["--sound"] if args.sound else []
     if args.sound and args.soundfont is not None and args.soundfont.suffix.lower() == ".sfz":
         display_argv += ["--sfz", str(args.soundfont)]  # the live sound plays the SFZ kit too
     display_argv += ["--audio-device", args.audio_device] if args.audio_device else []
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
-        display_argv += ["--background", args.background] if args.background else []
         display_argv += ["--fullscreen"] if args.fullscreen else []
     else:
         display_argv += ["--headless", "--frames-dir", str(args.frames_dir)]
@@ -316,12 +316,6 @@ def run(args: argparse.Namespace) -> int:
         check_kit_file(args.soundfont)
     avatar_of(args)  # a bad --avatar is one line here, before three services start
     background_of(args, window=True)  # and a bad --background
-    if args.background is not None and not windowed(args):
-        import logging
-
-        logging.getLogger("livedrummer.up").warning(
-            "--background %s: no window here; the headless recording keeps the hall",
-            args.background)  # fmt: skip
     if args.preset is not None:  # and a bad --preset
         from livedrummer.body.expression import load_expression
 

@@ -93,6 +93,7 @@ from livedrummer.protocol import (
     SequenceTracker,
     decode,
 )
+from livedrummer.render.background import Background
 from livedrummer.render.body_scene import frame_from_pose
 
 from ..badmsg import BadMessages
@@ -186,6 +187,7 @@ class LiveConfig:
     security: Security = field(default_factory=Security)
     control: str | None = None  # HELLO/READY endpoint (none unless asked: up runs many displays)
     avatar: Avatar | None = None  # who is drawn (None: the built-in character); READY says which
+    background: Background | None = None  # behind the stage, off screen (None: the hall)
     osc_port: int | None = None  # OSC camera and blackout (services.display.showctl)
     osc_allow: tuple[str, ...] = ()
     cues: dict[str, Any] = field(default_factory=dict)  # livedrummer.live.cues, by name
@@ -280,7 +282,8 @@ class LiveDisplay(Service):
             if cfg.window is not None:
                 surface = WindowSurface(self.kit, cfg.window, cfg.avatar)
             elif cfg.render:
-                surface = HeadlessSurface(self.kit, cfg.size, cfg.camera, cfg.avatar)
+                surface = HeadlessSurface(self.kit, cfg.size, cfg.camera, cfg.avatar,
+                                          cfg.background)  # fmt: skip
             if surface is not None and self.show is not None:
                 surface.stage = self.show.stage
             # A set-length headless recording is drawn after the show from what arrived (see

@@ -21,6 +21,7 @@ from typing import Any
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
 from livedrummer.live.stage import Stage
+from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON
 from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
@@ -42,14 +43,15 @@ class HeadlessSurface:
     """An off-screen renderer on an EGL context; read frames back from :attr:`renderer`."""
 
     def __init__(self, kit: Kit, size: tuple[int, int], camera: str,
-                 avatar: Avatar | None = None) -> None:  # fmt: skip
+                 avatar: Avatar | None = None,
+                 background: Background | None = None) -> None:  # fmt: skip
         from livedrummer.render.camera import pick_camera
 
         from .context import headless_context
 
         self._ctx = headless_context()
         self.renderer = Renderer(self._ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0,
-                                 avatar=avatar)  # fmt: skip
+                                 avatar=avatar, background=background)  # fmt: skip
         self._camera = pick_camera(kit, camera)
         self.stage: Stage | None = None  # show control: camera and blackout (showctl)
 
