@@ -28,6 +28,7 @@ HELP_LINES: tuple[str, ...] = (
     "HOME END  START / END     R  REVERSE",
     "+ -  SPEED     0  NORMAL SPEED",
     "M  MARK     [ ]  PREVIOUS / NEXT MARK",
+    "A B  LOOP FROM A TO B     L  NO LOOP     S  STEP SIZE",
     "1-8  CAMERAS     O  SCORE     G  JOINT ANGLES",
     "SHIFT 1-8  STORE A VIEW (1-8 RECALLS IT)",
     "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
@@ -52,11 +53,21 @@ def hud_lines(
     reverse: bool,
     camera: str,
     show_help: bool = False,
+    loop: tuple[float, float] | None = None,
+    step_s: float | None = None,
 ) -> list[str]:
-    """The readout for a file window (see the module docstring)."""
+    """The readout for a file window (see the module docstring); ``loop`` and ``step_s``
+    add the loop's ends and the step size."""
     state = ("REVERSE" if reverse else "PLAYING") if playing else "PAUSED"
     lines = [f"{clock_text(position_s)} / {clock_text(duration_s)}   {speed:g}X   {state}   "
              f"CAMERA {camera.upper()}   H HELP"]  # fmt: skip
+    extra = []
+    if loop is not None:
+        extra.append(f"LOOP {clock_text(loop[0])} - {clock_text(loop[1])}")
+    if step_s is not None:
+        extra.append(f"STEP {step_s * 1000:.0f} MS")
+    if extra:
+        lines.append("   ".join(extra))
     if not playing and position_s >= duration_s - 1e-6:
         lines.append("END OF FILE - HOME TO PLAY AGAIN, Q TO QUIT")
     if show_help:

@@ -7,6 +7,13 @@ clamped to ``[0, duration_s]``; playing into either end pauses there. Speed move
 :data:`SPEEDS` (slow motion for study, fast for scrubbing); reverse plays backwards at the same
 speed. Step moves one ``step_s`` (a video frame by default) and pauses, as a step key should.
 Markers (SMED's song flags) are sorted positions; next/previous jump between them.
+
+Loop A-B (SMED's "repeat a passage", the practice tools' loop): ``loop_start`` and ``loop_end``
+set the two ends at the position (either first; if B comes before A they swap), and playing
+through one end wraps to the other, forwards B to A, in reverse A to B, carrying the
+overshoot so the playback clock never stutters; ``loop_clear`` plays the whole file again.
+The step size is one of :data:`STEPS` (a video frame by default, then 10, 50, 100 and
+500 ms), cycled by ``step_size`` or set by the caller.
 """
 
 from __future__ import annotations
@@ -17,6 +24,9 @@ from dataclasses import dataclass, field
 
 SPEEDS: tuple[float, ...] = (0.125, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 4.0)
 SEEK_S = 5.0
+#: step sizes cycled by the step-size key: a 30 fps frame, then 10, 50, 100 and 500 ms
+STEPS: tuple[float, ...] = (1.0 / 30.0, 0.010, 0.050, 0.100, 0.500)
+MIN_LOOP_S = 0.05  # a loop shorter than this is not set (A and B on the same spot)
 
 #: key name (as the window reports it) -> transport action
 KEYS: dict[str, str] = {
@@ -36,6 +46,10 @@ KEYS: dict[str, str] = {
     "m": "mark",
     "right_bracket": "next_mark",
     "left_bracket": "previous_mark",
+    "a": "loop_start",
+    "b": "loop_end",
+    "l": "loop_clear",
+    "s": "step_size",
 }
 
 
@@ -50,6 +64,8 @@ class Transport:
     reverse: bool = False
     speed_index: int = SPEEDS.index(1.0)
     markers: list[float] = field(default_factory=list)
+    loop: tuple[float, float] | None = None  # (A, B) seconds, A < B
+    _loop_ends: tuple[float | None, float | None] = (None, None)  # set so far, no loop yet
 
     @property
     def speed(self) -> float:
@@ -59,7 +75,15 @@ class Transport:
         """Move by ``dt_s`` seconds of clock time if playing; return the new position."""
         if self.playing and dt_s > 0:
             direction = -1.0 if self.reverse else 1.0
-            self._move_to(self.position_s + direction * dt_s * self.speed)
+            target = self.position_s + direction * dt_s * self.speed
+            if self.loop is not None:
+                a, b = self.loop
+                inside = a - 1e-9 <= self.position_s <= b + 1e-9
+                if inside and not self.reverse and target > b:
+                    target = a + (target - b) % (b - a)
+                elif inside and self.reverse and target < a:
+                    target = b - (a - target) % (b - a)
+            self._move_to(target)
             at_end = self.position_s <= 0.0 if self.reverse else self.position_s >= self.duration_s
             if at_end:
                 self.playing = False
@@ -88,6 +112,10 @@ class Transport:
             "mark": self._mark,
             "next_mark": lambda: self._jump(+1),
             "previous_mark": lambda: self._jump(-1),
+            "loop_start": lambda: self._set_loop_end(0),
+            "loop_end": lambda: self._set_loop_end(1),
+            "loop_clear": self._loop_clear,
+            "step_size": self._next_step,
         }
         handlers[action]()
 
@@ -127,3 +155,24 @@ class Transport:
             k = bisect.bisect_left(self.markers, self.position_s - eps)
             if k > 0:
                 self._move_to(self.markers[k - 1])
+
+    def _set_loop_end(self, end: int) -> None:
+        """End ``end`` (0: A, 1: B) of the loop at the position; once both ends are known and
+        apart, the loop is set (the earlier of the two is A)."""
+        ends = list(self.loop) if self.loop is not None else list(self._loop_ends)
+        ends[end] = self.position_s
+        a, b = ends
+        if a is not None and b is not None and abs(b - a) >= MIN_LOOP_S:
+            self.loop = (min(a, b), max(a, b))
+            self._loop_ends = (None, None)
+        else:
+            self.loop = None
+            self._loop_ends = (a, b)
+
+    def _loop_clear(self) -> None:
+        self.loop = None
+        self._loop_ends = (None, None)
+
+    def _next_step(self) -> None:
+        here = min(range(len(STEPS)), key=lambda i: abs(STEPS[i] - self.step_s))
+        self.step_s = STEPS[(here + 1) % len(STEPS)]

@@ -43,7 +43,7 @@ from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
-from livedrummer.render.transport import KEYS, Transport
+from livedrummer.render.transport import KEYS, STEPS, Transport
 from livedrummer.timeline.performance import Performance
 
 from .audio_out import TrackPlayer, muted_reason
@@ -301,10 +301,19 @@ def _loop(
         if show_readout or show_help:
             from livedrummer.render.hud import hud_lines
 
-            readout.draw(renderer, hud_lines(t, transport.duration_s, transport.speed,
-                                             transport.playing, transport.reverse, camera,
-                                             show_help) + ([muted.upper()] if muted else []),
-                          ctx.screen)  # fmt: skip
+            shown_step = None if transport.step_s == STEPS[0] else transport.step_s  # not default
+            lines = hud_lines(
+                t,
+                transport.duration_s,
+                transport.speed,
+                transport.playing,
+                transport.reverse,
+                camera,
+                show_help,
+                transport.loop,
+                shown_step,
+            )
+            readout.draw(renderer, lines + ([muted.upper()] if muted else []), ctx.screen)
         if options.screenshot is not None:  # read before the swap: the back buffer is defined
             shot = (renderer.size, ctx.screen.read(viewport=(0, 0, *renderer.size), components=3))
         glfw.swap_buffers(window)
