@@ -1,33 +1,45 @@
-"""An online beat tracker on live drum onsets: tempo and beat phase, causally.
+"""An online beat tracker on live drum onsets: tempo, beat phase and bars, causally.
 
-Method (our own, after the published trackers' two stages: a tempo from the periodicity of
-recent onsets, then the phase of a beat grid fitted to them; cf. BTrack's comb-filtered
-autocorrelation and madmom's online tracking):
+Method (our own, after the published trackers' stages: a tempo from the periodicity of recent
+onsets, as BTrack's comb-filtered autocorrelation under a tempo prior; then the phase of a
+beat grid, as BTrack's cumulative score and madmom's online tracking; bars from where the
+kick and the snare fall):
 
 * **Evidence.** Each onset weighs its velocity times its instrument's share of the beat:
   kick and snare mark beats and backbeats (1.0), cymbals and toms less (0.6), the hi-hat's
   and ride's steady subdivisions least (0.35), so a busy hi-hat does not pull the tempo to
   eighths. Only the last ``window_s`` seconds count.
 * **Tempo.** For each candidate period (log-spaced, ``min_bpm``..``max_bpm``), a comb score:
-  every pair of onsets whose distance lies near 1, 2, 3 or 4 periods adds the product of
-  their weights under a Gaussian of width ``sigma_s``; divided by the number of teeth that
-  fit the window (longer periods are not favoured for having fewer) and weighted by a
-  log-normal prior around ``prior_bpm`` (the octave human tempos most often sit in). The
+  every pair of onsets whose distance lies near a half multiple of the period (1/2 .. 4)
+  adds the product of their weights under a Gaussian of width ``sigma_s``; whole multiples
+  weigh 1, odd halves ``half_share`` (a true beat has its eighths, a syncopation's 3:4
+  ghost period has none), each tooth less the further out it is; divided by the weight of the
+  teeth that fit the window and weighted by a log-normal prior around ``prior_bpm``. The
   period follows the best candidate, smoothed in the log domain, and jumps only when another
   one has won by a margin twice in a row.
-* **Phase.** The circular mean of the onsets' times modulo the period, each weighted by the
-  square of its evidence (the kick and snare lead) and by recency (``recency_s``), anchors
-  the beat grid.
+* **Phase.** Beat grids shifted from the current one by 1/64 of a period are scored: each
+  onset (evidence squared, kicks and crashes ``1 + kick_boost`` times more, recent ones more:
+  ``recency_s``) counts for a grid under a Gaussian of its distance to the grid's nearest
+  beat and, ``offbeat`` times, against it near the grid's off-beats, so a syncopated kick or
+  an off-beat hi-hat does not pull the grid onto the "and". A small shift is followed
+  (smoothed); a large one only once it has won by ``switch`` for ``switch_beats`` beats. A
+  correction never repeats or skips the beat at hand (:meth:`BeatTracker._keep_heard`):
+  every beat is given once, so a service polling the tracker sees no jump.
+* **Bars.** A kick or a crash near a beat is evidence (decaying over ``downbeat_decay_s``)
+  for that beat starting a bar, a snare (the backbeat) against; the bar's first beat is the
+  one with the most evidence plus half its middle beat's (``beats_per_bar``, 4 by default).
 
 :class:`BeatTracker` is the online object: :meth:`~BeatTracker.process` one onset at a
 time (its own arrival time is "now"), :meth:`~BeatTracker.beats` the predicted beats in a
-span; :func:`track_beats` is its offline twin: it feeds a whole onset array and collects the
-beats the tracker would have predicted for each stretch between onsets before the next one
-arrived, so it gives exactly the online beats. Bars are counted by ``beats_per_bar``
-(4: GMD's grooves are mostly in 4/4; the downbeat itself is not detected).
+span, :meth:`~BeatTracker.bars` the bar starts and their numbers; :func:`track_beats` is its
+offline twin: it feeds a whole onset array and collects the beats the tracker would have
+predicted for each stretch between onsets before the next one arrived, so it gives exactly
+the online beats. The constants were tuned on GMD's train and validation grooves
+(``livedrummer bench beats --split test`` measures on the others).
 
-Limits: no downbeat or meter detection; a tempo change settles in a few beats; before two
-seconds of playing (or with fewer than six onsets) there is no estimate.
+Limits: the meter is not detected (``beats_per_bar``); tempos above ``max_bpm`` are followed
+at half speed; a tempo change settles in a few beats; before two seconds of playing (or with
+fewer than six onsets) there is no estimate; about 0.7 ms of CPU per onset.
 """
 
 from __future__ import annotations
