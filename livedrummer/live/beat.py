@@ -39,7 +39,7 @@ the online beats. The constants were tuned on GMD's train and validation grooves
 
 Limits: the meter is not detected (``beats_per_bar``); tempos above ``max_bpm`` are followed
 at half speed; a tempo change settles in a few beats; before two seconds of playing (or with
-fewer than six onsets) there is no estimate; about 0.7 ms of CPU per onset.
+fewer than six onsets) there is no estimate; about 0.5 ms of CPU per onset.
 """
 
 from __future__ import annotations
@@ -113,6 +113,8 @@ class BeatTracker:
             np.exp(-0.5 * ((centers[None, :] - m * self._periods[:, None]) / p.sigma_s) ** 2)
             for m in self._teeth
         ])  # fmt: skip
+        self._comb = np.tensordot(self._tooth_w, self._kernel, axes=1)  # all teeth at once
+        self._comb_norm = float(np.sum(self._tooth_w))
         self._offsets = (np.arange(_PHASES) / _PHASES + 0.5) % 1.0 - 0.5  # in periods
         self.reset()
 
@@ -166,12 +168,16 @@ class BeatTracker:
         hist = np.bincount((d[keep] / _BIN_S).astype(np.int64), ww[keep],
                            self._kernel.shape[2])  # fmt: skip
         span = max(float(t[-1] - t[0]), 1e-3)
-        score = np.zeros(self._periods.size)
-        norm = np.zeros(self._periods.size)
-        for k, m in enumerate(self._teeth):
-            fits = span > m * self._periods
-            score += np.where(fits, self._kernel[k] @ hist, 0.0) * self._tooth_w[k]
-            norm += np.where(fits, self._tooth_w[k], 0.0)
+        if span > self._teeth[-1] * self._periods[-1]:  # every tooth fits: one product
+            score: np.ndarray = self._comb @ hist
+            norm: np.ndarray = np.full(self._periods.size, self._comb_norm)
+        else:
+            score = np.zeros(self._periods.size)
+            norm = np.zeros(self._periods.size)
+            for k, m in enumerate(self._teeth):
+                fits = span > m * self._periods
+                score += np.where(fits, self._kernel[k] @ hist, 0.0) * self._tooth_w[k]
+                norm += np.where(fits, self._tooth_w[k], 0.0)
         score = score / np.maximum(norm, 1e-9) * self._prior
         best = float(self._periods[int(np.argmax(score))])
         if self.period_s is None:
