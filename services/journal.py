@@ -239,13 +239,14 @@ def detected_beats(journal: Journal) -> np.ndarray | None:
     """The beats the online tracker (:mod:`livedrummer.live.beat`) finds in a journal's
     onsets, cleaned into an increasing grid (a beat closer than half the median interval
     to the one before is dropped); None when it finds fewer than four."""
-    from livedrummer.live.beat import onset_weights, track_beats
+    from livedrummer.live.beat import downbeat_weights, onset_weights, track_beats
 
     on = np.sort(journal.onsets, order="time_s")
     if on.size < 8:
         return None
     times = on["time_s"].astype(np.float64)
-    beats = np.sort(track_beats(times, onset_weights(on), float(times[-1]) + 1.0))
+    end = float(times[-1]) + 1.0
+    beats = np.sort(track_beats(times, onset_weights(on), end, downbeats=downbeat_weights(on)))
     if beats.size < 4:
         return None
     half = 0.5 * float(np.median(np.diff(beats)))

@@ -21,8 +21,14 @@ and :func:`expression_at` folds the ones fired so far into the expression in for
 file renderer and the live services apply the same cue the same way: the synth takes its
 preset and parameters, the display its camera and blackout.
 
-Limits: bars are counted on a file's tempo map and meter (live, bars are not counted: cues
-fire by name); a cue's preset is read when the list is loaded.
+Live, bars are counted by the beat tracker (:meth:`livedrummer.live.beat.BeatTracker.bars`:
+bar 1 is the first bar it hears start once it has a tempo, 4/4 assumed) and :class:`BarCues`
+fires each ``bar`` cue once, when its bar starts (or at the next bar start, should a corrected
+downbeat skip its number); the synth applies its style.
+
+Limits: bars are counted on a file's tempo map and meter; live, a bar cue's camera and blackout
+are not applied (the display counts no bars: fire those by name); a cue's preset is read when
+the list is loaded.
 """
 
 from __future__ import annotations
@@ -173,3 +179,20 @@ def fire_stage(stage: Stage, cue: Cue, now_s: float) -> None:
         stage.set_camera(cue.camera, now_s, cut=cue.cut)
     if cue.blackout is not None:
         stage.set_blackout(cue.blackout, now_s)
+
+
+class BarCues:
+    """The ``bar`` cues of a list, fired live as bars are counted: :meth:`due` takes the bar
+    starts heard since the last call and gives the cues due, each once, in bar order."""
+
+    def __init__(self, cues: dict[str, Cue]) -> None:
+        self._pending = sorted((c for c in cues.values() if c.bar is not None),
+                               key=lambda c: c.bar or 0)  # fmt: skip
+
+    def due(self, bars: list[tuple[float, int]]) -> list[Cue]:
+        if not bars or not self._pending:
+            return []
+        reached = max(bar for _, bar in bars)
+        out = [c for c in self._pending if (c.bar or 0) <= reached]
+        self._pending = self._pending[len(out) :]
+        return out

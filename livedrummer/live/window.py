@@ -42,7 +42,7 @@ import numpy as np
 from livedrummer.body.rig import Rig
 from livedrummer.body.sample import kit_choke_times
 from livedrummer.kit.vocabulary import INSTRUMENTS
-from livedrummer.live.beat import BeatTracker, instrument_weights
+from livedrummer.live.beat import BeatTracker, downbeat_weights, onset_weights
 from livedrummer.live.predict import Guess, HandPredictor
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.sticking.online import Decision, OnlineSticker
@@ -103,7 +103,6 @@ class NoteWindow:
         self.sticker = OnlineSticker(rig.kit, params.lookahead_s, keep_onsets=False)
         self.predictor = HandPredictor()
         self.beat = BeatTracker()  # the music's beat, for the torso (see _beats)
-        self._beat_share = instrument_weights()
         self.reset()
 
     def reset(self) -> None:
@@ -120,14 +119,13 @@ class NoteWindow:
     def add(self, recs: np.ndarray) -> list[Note]:
         """Onsets (ONSET_DTYPE array, arrival order) join; returns their notes."""
         notes = []
-        for rec in recs:
+        weights, downbeats = onset_weights(recs), downbeat_weights(recs)
+        for i, rec in enumerate(recs):
             note = Note(np.array(rec, dtype=ONSET_DTYPE), self._first + len(self._notes))
             self._notes.append(note)
             notes.append(note)
             self._apply(self.sticker.process(rec))
-            inst = min(max(int(rec["instrument"]), 0), self._beat_share.size - 1)
-            weight = float(rec["velocity"]) / 127.0 * float(self._beat_share[inst])
-            self.beat.process(float(rec["time_s"]), weight)
+            self.beat.process(float(rec["time_s"]), float(weights[i]), float(downbeats[i]))
         if recs.size:  # also while no poses are asked for (a re-animation answering a flood)
             self.prune(float(recs["time_s"].max()) - self.params.lookahead_s)
         return notes

@@ -6,11 +6,15 @@ tracker's offline twin: the beats it predicts before each next onset arrives), a
 are compared with the file's own tempo map: the fraction of reference beats after the first
 four bars with a detected beat within +-70 ms. Prints the median and mean over the grooves,
 the share of grooves at or above 90 %, and how many had their tempo within 4 % at the end.
+``--split test`` (or ``train``, ``validation``) takes the grooves from that part of GMD's own
+split (``info.csv``): the tracker's constants were tuned on train and validation, so its
+figure on unseen playing is the one on test.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import random
 import statistics
 import time
@@ -18,7 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from livedrummer.live.beat import BeatTracker, beat_accuracy, onset_weights, track_beats
+from livedrummer.live.beat import (
+    BeatTracker,
+    beat_accuracy,
+    downbeat_weights,
+    onset_weights,
+    track_beats,
+)
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
 
@@ -29,8 +39,17 @@ def main(argv: list[str]) -> int:
     p.add_argument("--groove", type=Path, default=here.parent / "shared" / "data" / "groove")
     p.add_argument("--files", type=int, default=40)
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument(
+        "--split",
+        choices=("train", "validation", "test"),
+        help="only grooves of this part of GMD's split (info.csv)",
+    )
     args = p.parse_args(argv)
     files = sorted(args.groove.rglob("*beat_4-4.mid"))
+    if args.split is not None:
+        with (args.groove / "info.csv").open(newline="") as f:
+            chosen = {r["midi_filename"] for r in csv.DictReader(f) if r["split"] == args.split}
+        files = [f for f in files if f.relative_to(args.groove).as_posix() in chosen]
     if not files:
         print(f"bench beats: no GMD grooves under {args.groove}")
         return 1
@@ -47,17 +66,19 @@ def main(argv: list[str]) -> int:
         if on.size < 20 or bars.size < 6:
             continue
         times, weights = on["time_s"].astype(np.float64), onset_weights(on)
-        detected = track_beats(times, weights, perf.duration_s)
+        down = downbeat_weights(on)
+        detected = track_beats(times, weights, perf.duration_s, downbeats=down)
         reference = grid.beat_s[grid.beat_s <= perf.duration_s]
         accs.append(beat_accuracy(detected, reference, float(bars[4])))
         tracker = BeatTracker()
-        for t, w in zip(times, weights, strict=True):
-            tracker.process(float(t), float(w))
+        for t, w, d in zip(times, weights, down, strict=True):
+            tracker.process(float(t), float(w), float(d))
         ref_bpm = 60.0 / float(np.median(np.diff(reference)))
         tempo_ok += int(tracker.bpm is not None and abs(tracker.bpm / ref_bpm - 1) < 0.04)
         onsets += on.size
     spent = time.perf_counter() - started
-    print(f"beats on {len(accs)} GMD 4/4 grooves (seed {args.seed}): reference beats matched "
+    part = "" if args.split is None else f", {args.split} split"
+    print(f"beats on {len(accs)} GMD 4/4 grooves (seed {args.seed}{part}): reference beats matched "
           f"within +-70 ms after the first four bars: median {100 * statistics.median(accs):.1f} %,"
           f" mean {100 * float(np.mean(accs)):.1f} %; grooves at >= 90 %: "
           f"{100 * float(np.mean(np.array(accs) >= 0.9)):.0f} %; tempo within 4 % at the end: "

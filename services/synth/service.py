@@ -30,7 +30,9 @@ checked; a bad one is dropped, counted per kind (``bad_events``, ``bad_control``
 Show control. With ``config.osc_port`` the loop also reads an OSC port
 (:mod:`services.osc`) before each tick: a preset, a parameter or a cue changes the style
 (eased in, :mod:`livedrummer.live.style`), ``/livedrummer/state`` is answered with the preset,
-every parameter and the performer's state.
+every parameter and the performer's state. A cue list's ``bar`` cues fire when the beat
+tracker (:mod:`livedrummer.live.beat`) hears their bar start
+(:class:`~livedrummer.live.cues.BarCues`).
 
 Limits: the pose socket is a plain PUB (a slow display loses samples past the high-water
 mark; it sees the gap in the sequence numbers); one performer per synth.
@@ -54,7 +56,7 @@ import zmq
 
 from livedrummer.errors import ProtocolError
 from livedrummer.live.behind import BehindCounter
-from livedrummer.live.cues import Cue
+from livedrummer.live.cues import BarCues, Cue
 from livedrummer.live.synth import LiveSynth, PoseBatch
 from livedrummer.protocol import (
     Hello,
@@ -153,6 +155,8 @@ class SynthService(Service):
         self.osc: OscEndpoint | None = None
         self.preset = config.preset
         self._last_onset_s = -math.inf
+        self.bar_cues = BarCues(config.cues)  # the list's bar cues, fired as bars are heard
+        self._bars_from = -math.inf
 
     def open(self) -> None:
         """Bind the pose socket, connect to the input daemon (the base binds the control)."""
@@ -260,9 +264,20 @@ class SynthService(Service):
             log.warning("synth: %s", line)
 
     def tick(self, now: float) -> None:
+        self._fire_bar_cues(now)
         # hits that arrive while the synth re-animates are answered between its steps
         self._publish(self.synth.poses_until(now, answer=self._answer_hits))
         self._say(self.late.poll(now))
+
+    def _fire_bar_cues(self, now: float) -> None:
+        """The cue list's ``bar`` cues whose bar the beat tracker has heard start: their style
+        (their camera and blackout are the display's, which counts no bars)."""
+        bars = self.synth.window.beat.bars(max(self._bars_from, now - 1.0), now)
+        self._bars_from = now
+        for cue in self.bar_cues.due(bars):
+            self.synth.set_expression(cue.apply(self.synth.style.target), now)
+            self.preset = cue.preset or self.preset
+            log.info("synth: bar %d: cue %s", cue.bar or 0, cue.name)
 
     def _answer_hits(self) -> None:
         """Passed to ``LiveSynth.poses_until`` as ``answer`` (see :meth:`tick`): called
