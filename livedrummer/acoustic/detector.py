@@ -17,6 +17,17 @@ within 32 ms of it, at least :data:`CLOSE_SHARE` of its value (a second drum, no
 one's decay). One drum per channel: 30 ms windows; a mix: 15 and 10 ms, since a drummer's kick
 and hi-hat land 5-25 ms apart, and a drum is not reported twice within 32 ms.
 
+**A second onset function for the hi-hat** (a mix only). A drummer's hi-hat often lands 3-15 ms
+after a snare or kick stroke; the full-band function's picking windows and the louder drum's
+onset hide it, and the rise read at the louder drum's onset is over before the hat starts. So
+a mix also picks peaks on the SuperFlux of the bands above :data:`HIGH_HZ` alone (8.8 kHz: the
+hat's, where a snare's noise has faded 5 ms after its attack) with a 6 ms pre-max window, at
+:data:`HIGH_DELTA` and :data:`HIGH_FLOOR` times the full-band thresholds, and at least
+:data:`HIGH_GAP_S` after a full-band onset. Its onsets are classified as any other but report
+only the strongest of :data:`HIGH_CLASSES` (hi-hats, crash, ride): the earlier drum's ring,
+still growing in the 21 ms spectrum, is not a second stroke of it. Such a hit is stamped 0-8 ms
+late (the hat's rise in the high bands peaks after its attack's first frame).
+
 **Classes: templates as fixed NMF bases.** A hit's feature is what it *adds* to the 21 ms band
 spectrum: bands ``L`` frames after the onset minus bands two frames before it, clipped at
 zero, so a cymbal still ringing from an earlier hit is subtracted away. The feature is
@@ -61,6 +72,7 @@ from livedrummer.acoustic.spectrum import (
     HOP,
     N_BANDS,
     bands,
+    flux_edges,
     frames_at,
     log_flux_spectra,
     superflux,
@@ -86,6 +98,17 @@ CLOSE_SHARE = 0.5
 #: (velocity 127 * sqrt(0.005) = 9); below it the onset is a ring's wobble, not a hit.
 QUIETEST = 0.005
 NMF_ITERATIONS = 60
+#: A mix's second onset function: the SuperFlux of the bands above HIGH_HZ (a hi-hat, a
+#: cymbal), picked with a short pre-max window, HIGH_GAP_S after the full-band onset at the
+#: least, at HIGH_DELTA and HIGH_FLOOR times the full-band thresholds; its onsets report only
+#: HIGH_CLASSES.
+HIGH_HZ = 8800.0
+HIGH_PRE_MAX_S = 0.006
+HIGH_GAP_S = 0.006
+HIGH_DELTA = 0.1
+HIGH_FLOOR = 0.1
+HIGH_CLOSE_SHARE = 0.0  # no share of the last onset needed: a hat after a snare is weaker
+HIGH_CLASSES = frozenset(CLASSES.index(c) for c in ("hihat_closed", "hihat_open", "crash", "ride"))
 OWN_SHARE = 0.3  # multi-mic: share of a rise that crosstalk must not explain
 BATCH = 2048  # frames per FFT batch (bounds memory for a long file)
 _EPS = 1e-9
@@ -118,58 +141,84 @@ def velocity_of(level: float, ref: float) -> int:
     return int(np.clip(round(127.0 * np.sqrt(max(level, 0.0) / ref)), 1, 127))
 
 
-class _Channel:
-    """One channel's frames and onset function, with the short history picking needs."""
+class _Peaks:
+    """One onset function's recent values and the online peak picking on them."""
 
-    def __init__(self, sr: int, lookahead: int, mode: str) -> None:
+    def __init__(
+        self, sr: int, lookahead: int, pre_max_s: float, combine_s: float, close_share: float
+    ) -> None:
         self.sr = sr
         self.lookahead = lookahead
-        self.pre_max = int(PRE_MAX_S[mode] * sr / HOP)
-        self.combine = int(COMBINE_S[mode] * sr / HOP)
-        keep = max(int(PRE_AVG_S * sr / HOP), self.pre_max) + lookahead + 2
-        self.flux: deque[float] = deque([0.0] * keep, maxlen=keep)
+        self.pre_max = max(1, int(pre_max_s * sr / HOP))
+        self.combine = int(combine_s * sr / HOP)
+        self.pre_avg = int(PRE_AVG_S * sr / HOP)
+        keep = max(self.pre_avg, self.pre_max) + lookahead + 2
+        self.values: deque[float] = deque([0.0] * keep, maxlen=keep)
+        self.last_onset = -(10**9)
+        self.last_value = 0.0
+        self.close = math.ceil(SAME_DRUM_S * sr / HOP)
+        self.close_share = close_share
+
+    def is_onset(self, frame: int, delta: float, floor: float) -> bool:
+        """Whether frame ``frame`` (``lookahead`` frames before the newest) is an onset."""
+        f = list(self.values)
+        p = len(f) - 1 - self.lookahead
+        value = f[p]
+        if value < floor or frame - self.last_onset < self.combine:
+            return False
+        if frame - self.last_onset < self.close and value < self.close_share * self.last_value:
+            return False
+        if value <= max(f[p - self.pre_max : p]) or value < max(f[p + 1 :]):
+            return False
+        return value >= float(np.mean(f[p - self.pre_avg : p + 1])) + delta
+
+    def mark(self, frame: int) -> None:
+        """Frame ``frame`` was taken as an onset."""
+        self.last_onset = frame
+        self.last_value = self.values[len(self.values) - 1 - self.lookahead]
+
+
+class _Channel:
+    """One channel's frames, its onset function(s) and the band spectra a rise is read from.
+
+    ``high``: a mix also picks peaks on a second onset function, the SuperFlux of the bands
+    above :data:`HIGH_HZ` alone (see :class:`OnlineDetector`)."""
+
+    def __init__(self, sr: int, lookahead: int, mode: str, high: bool = False) -> None:
+        self.sr = sr
+        self.main = _Peaks(sr, lookahead, PRE_MAX_S[mode], COMBINE_S[mode], CLOSE_SHARE)
+        self.high = (
+            _Peaks(sr, lookahead, HIGH_PRE_MAX_S, HIGH_GAP_S, HIGH_CLOSE_SHARE) if high else None
+        )
+        self.high_from = int(np.searchsorted(flux_edges(sr), HIGH_HZ * FLUX_SIZE / sr))
         self.bands: deque[np.ndarray] = deque(
             [np.zeros(N_BANDS)] * (BEFORE + lookahead + 1), maxlen=BEFORE + lookahead + 1
         )
         self.logs: deque[np.ndarray] = deque([np.zeros(FLUX_BANDS)] * MU, maxlen=MU)
-        self.last_onset = -(10**9)
-        self.last_value = 0.0
-        self.close = math.ceil(SAME_DRUM_S * sr / HOP)
 
-    def frames(self, signal: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Onset function and band spectra of the frames ending at ``ends``."""
+    def frames(
+        self, signal: np.ndarray, ends: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Onset function, high-band onset function and band spectra of the frames ending at
+        ``ends``."""
         logs = log_flux_spectra(frames_at(signal, ends, FLUX_SIZE), self.sr)
         before = np.concatenate([np.array(self.logs), logs])[: len(logs)]
         flux = superflux(logs, before)
+        k = self.high_from
+        high = superflux(logs[:, k:], before[:, k:]) if self.high is not None else flux
         for row in logs[-MU:]:
             self.logs.append(row)
-        return flux, bands(frames_at(signal, ends, CLASS_SIZE), self.sr)
+        return flux, high, bands(frames_at(signal, ends, CLASS_SIZE), self.sr)
 
-    def push(self, flux: float, band: np.ndarray) -> None:
-        self.flux.append(flux)
+    def push(self, flux: float, high: float, band: np.ndarray) -> None:
+        self.main.values.append(flux)
+        if self.high is not None:
+            self.high.values.append(high)
         self.bands.append(band)
 
-    def onset_rise(self, frame: int, delta: float, floor: float) -> np.ndarray | None:
-        """If the frame ``lookahead`` frames ago is an onset: the band rise it brought."""
-        f = list(self.flux)
-        p = len(f) - 1 - self.lookahead
-        value = f[p]
-        pre_avg = int(PRE_AVG_S * self.sr / HOP)
-        if value < floor or frame - self.last_onset < self.combine:
-            return None
-        if frame - self.last_onset < self.close and value < CLOSE_SHARE * self.last_value:
-            return None
-        if value <= max(f[p - self.pre_max : p]) or value < max(f[p + 1 :]):
-            return None
-        if value < float(np.mean(f[p - pre_avg : p + 1])) + delta:
-            return None
-        return self.rise()
-
-    def value_at_onset(self) -> float:
-        """The onset function at the frame just decided."""
-        return float(self.flux[len(self.flux) - 1 - self.lookahead])
-
     def rise(self) -> np.ndarray:
+        """The band rise of the frame being decided: ``lookahead`` frames after it minus
+        :data:`BEFORE` frames before it."""
         out: np.ndarray = np.maximum(self.bands[-1] - self.bands[0], 0.0)
         return out
 
@@ -206,7 +255,8 @@ class OnlineDetector:
     def reset(self) -> None:
         n = 1 if self.channel_class is None else len(self.channel_class)
         mode = "mix" if self.channel_class is None and not self.one_drum else "mics"
-        self._chans = [_Channel(self.sr, self.profile.settings.lookahead, mode) for _ in range(n)]
+        look = self.profile.settings.lookahead
+        self._chans = [_Channel(self.sr, look, mode, high=mode == "mix") for _ in range(n)]
         self._last_hit = np.full(len(CLASSES), -(10**9))  # frame of each drum's last hit
         self._history = np.zeros((CLASS_SIZE, n), np.float64)  # the last samples seen
         self._pending = 0  # samples after the last frame end, at the end of _history
@@ -233,7 +283,8 @@ class OnlineDetector:
             for i in range(len(ends)):
                 self._frame += 1
                 for c, ch in enumerate(self._chans):
-                    ch.push(float(per_chan[c][0][i]), per_chan[c][1][i])
+                    flux, high, band = per_chan[c]
+                    ch.push(float(flux[i]), float(high[i]), band[i])
                 out.extend(self._decide())
         self.frames_seen = self._frame + 1
         self._pending = (self._pending + data.shape[0]) % HOP
@@ -244,44 +295,64 @@ class OnlineDetector:
         s = self.profile.settings
         p = self._frame - s.lookahead
         time_s = (p + 1) * HOP / self.sr - s.offset_ms / 1000.0
-        rises = [ch.onset_rise(p, s.delta, s.floor) for ch in self._chans]
         hits: list[tuple[float, int, int, float, int]] = []
         if self.channel_class is None:
-            rise = rises[0]
-            if rise is None:
-                return hits
-            if self.features is not None:
-                self.features.append(rise)
-            act = activations(rise, self.profile)
-            top = float(act.max())
-            if top < s.min_level:
-                return hits
-            self._chans[0].last_onset = p
-            self._chans[0].last_value = self._chans[0].value_at_onset()
-            levels = self.profile.levels
-            need = np.where(levels > 0, s.poly * levels, s.poly * top)
-            quietest = np.where(levels > 0, QUIETEST * levels, 0.0)  # a hit at velocity ~9
-            found = (act >= np.maximum(need, s.min_level)) | ((act == top) & (act >= quietest))
-            recent = p - self._last_hit < math.ceil(SAME_DRUM_S * self.sr / HOP)
-            for cls in np.flatnonzero(found & ~recent).tolist():
-                self._last_hit[cls] = p
-                level = float(act[cls])
-                hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, 0))
-            return hits
+            return self._decide_mix(p, time_s)
         all_rises = [ch.rise() for ch in self._chans]
-        for c, rise in enumerate(rises):
-            if rise is None:
+        for c, ch in enumerate(self._chans):
+            if not ch.main.is_onset(p, s.delta, s.floor):
                 continue
+            rise = all_rises[c]
             level = float(rise.sum())
             others = [all_rises[d] for d in range(len(all_rises)) if d != c]
             leaked = s.leak * np.max(others, axis=0) if others else np.zeros_like(rise)
             own = float(np.maximum(rise - leaked, 0.0).sum())
             if level < s.min_level or own < OWN_SHARE * level:
                 continue  # crosstalk: most of this rise is another channel's, heard through
-            self._chans[c].last_onset = p
-            self._chans[c].last_value = self._chans[c].value_at_onset()
+            ch.main.mark(p)
             cls = self.channel_class[c]
             hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, c))
+        return hits
+
+    def _decide_mix(self, p: int, time_s: float) -> list[tuple[float, int, int, float, int]]:
+        s = self.profile.settings
+        ch = self._chans[0]
+        hits: list[tuple[float, int, int, float, int]] = []
+        if ch.main.is_onset(p, s.delta, s.floor):
+            allowed = None
+        elif (
+            ch.high is not None
+            and p >= ch.high.pre_avg  # noise starting with the stream is no hit
+            and p - ch.main.last_onset >= ch.high.combine
+            and ch.high.is_onset(p, HIGH_DELTA * s.delta, HIGH_FLOOR * s.floor)
+        ):
+            allowed = HIGH_CLASSES
+        else:
+            return hits
+        rise = ch.rise()
+        if self.features is not None:
+            self.features.append(rise)
+        act = activations(rise, self.profile)
+        if allowed is not None:  # the strongest high drum, whatever a ringing drum adds
+            act[[c for c in range(len(CLASSES)) if c not in allowed]] = 0.0
+        top = float(act.max())
+        if top < s.min_level:
+            return hits
+        if allowed is None:
+            ch.main.mark(p)
+        if ch.high is not None:
+            ch.high.mark(p)
+        levels = self.profile.levels
+        need = np.where(levels > 0, s.poly * levels, s.poly * top)
+        quietest = np.where(levels > 0, QUIETEST * levels, 0.0)  # a hit at velocity ~9
+        found = (act >= np.maximum(need, s.min_level)) | ((act == top) & (act >= quietest))
+        recent = p - self._last_hit < math.ceil(SAME_DRUM_S * self.sr / HOP)
+        for cls in np.flatnonzero(found & ~recent).tolist():
+            if allowed is not None and cls not in allowed:
+                continue
+            self._last_hit[cls] = p
+            level = float(act[cls])
+            hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, 0))
         return hits
 
 
