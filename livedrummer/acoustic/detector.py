@@ -47,7 +47,9 @@ channel saw: from channel ``c``'s rise, band by band, ``leak`` times the largest
 channel saw is taken away (``leak``: the loudest crosstalk the profile allows, in amplitude;
 0.15 by default), and the onset is dropped when less than :data:`OWN_SHARE` of it is left (a
 hi-hat's high bands survive a kick heard through its microphone; the kick's own leak does
-not). Velocity as above, from the channel's rise.
+not), unless what is left is a soft hit of the channel's own drum (:data:`OWN_LEVEL`). A
+hi-hat's or cymbal's channel picks its onsets from its bands above :data:`MIC_HIGH_HZ` only.
+Velocity as above, from the channel's rise.
 
 Limits: the lookahead is ``lookahead`` frames (5.3 ms) plus the attack's position in the
 256-sample window (up to 5.3 ms): decisions come 5.3-10.7 ms after the attack, times are
@@ -84,12 +86,15 @@ HIT_DTYPE = np.dtype(
 BEFORE = 2  # the "before" band spectrum: frames before the onset frame
 MU = 2  # SuperFlux: compare with the frame this many hops earlier
 #: Peak picking windows: before an onset, its value must top the last PRE_MAX_S, and the last
-#: onset must be COMBINE_S back. One drum per channel: 30 ms (a drum is not struck twice
-#: faster). A mix: 15 and 10 ms, since a drummer's kick and hi-hat land 5-25 ms apart and the
-#: second must be an onset of its own; a drum is still not reported twice within SAME_DRUM_S.
-PRE_MAX_S = {"mix": 0.015, "mics": 0.030}
+#: onset must be COMBINE_S back. A mix: 15 and 10 ms, since a drummer's kick and hi-hat land
+#: 5-25 ms apart and the second must be an onset of its own; a drum is still not reported twice
+#: within SAME_DRUM_S. One microphone per drum: 6 ms, since the crosstalk of a louder drum
+#: 5-25 ms earlier is an onset on every channel that must not hide the channel's own drum (its
+#: own decay is held off by CLOSE_SHARE). One drum at a time (learning): 30 ms (a drum is not
+#: struck twice faster).
+PRE_MAX_S = {"mix": 0.015, "mics": 0.006, "one_drum": 0.030}
 PRE_AVG_S = 0.100
-COMBINE_S = {"mix": 0.010, "mics": 0.030}
+COMBINE_S = {"mix": 0.010, "mics": 0.006, "one_drum": 0.030}
 SAME_DRUM_S = 0.030
 #: An onset within SAME_DRUM_S of the last must be at least this share of its value: a second
 #: drum struck just after the first is as strong, the first one's own decay bumps are not.
@@ -109,7 +114,17 @@ HIGH_DELTA = 0.1
 HIGH_FLOOR = 0.1
 HIGH_CLOSE_SHARE = 0.0  # no share of the last onset needed: a hat after a snare is weaker
 HIGH_CLASSES = frozenset(CLASSES.index(c) for c in ("hihat_closed", "hihat_open", "crash", "ride"))
-OWN_SHARE = 0.3  # multi-mic: share of a rise that crosstalk must not explain
+#: Multi-mic crosstalk: an onset is the channel's own drum when crosstalk does not explain
+#: OWN_SHARE of its rise, or when what is left is OWN_LEVEL of its drum's full-strength level
+#: at the least (velocity 18: a soft hi-hat struck with a loud snare is mostly snare).
+OWN_SHARE = 0.3
+OWN_LEVEL = 0.02
+#: A cymbal's or hi-hat's microphone: its onset function is the SuperFlux of the bands above
+#: MIC_HIGH_HZ alone (the drums it hears through the air are lower), at MIC_HIGH_SCALE of the
+#: profile's thresholds (fewer bands, smaller sums); other channels at MIC_SCALE of them.
+MIC_HIGH_HZ = 3500.0
+MIC_HIGH_SCALE = 0.2
+MIC_SCALE = 1.0
 BATCH = 2048  # frames per FFT batch (bounds memory for a long file)
 _EPS = 1e-9
 
@@ -184,8 +199,12 @@ class _Channel:
     ``high``: a mix also picks peaks on a second onset function, the SuperFlux of the bands
     above :data:`HIGH_HZ` alone (see :class:`OnlineDetector`)."""
 
-    def __init__(self, sr: int, lookahead: int, mode: str, high: bool = False) -> None:
+    def __init__(
+        self, sr: int, lookahead: int, mode: str, high: bool = False, main_hz: float = 0.0
+    ) -> None:
         self.sr = sr
+        #: the main onset function's lowest band (a hi-hat's microphone: MIC_HIGH_HZ)
+        self.main_from = int(np.searchsorted(flux_edges(sr), main_hz * FLUX_SIZE / sr))
         self.main = _Peaks(sr, lookahead, PRE_MAX_S[mode], COMBINE_S[mode], CLOSE_SHARE)
         self.high = (
             _Peaks(sr, lookahead, HIGH_PRE_MAX_S, HIGH_GAP_S, HIGH_CLOSE_SHARE) if high else None
@@ -203,7 +222,8 @@ class _Channel:
         ``ends``."""
         logs = log_flux_spectra(frames_at(signal, ends, FLUX_SIZE), self.sr)
         before = np.concatenate([np.array(self.logs), logs])[: len(logs)]
-        flux = superflux(logs, before)
+        m = self.main_from
+        flux = superflux(logs[:, m:], before[:, m:])
         k = self.high_from
         high = superflux(logs[:, k:], before[:, k:]) if self.high is not None else flux
         for row in logs[-MU:]:
@@ -254,9 +274,15 @@ class OnlineDetector:
 
     def reset(self) -> None:
         n = 1 if self.channel_class is None else len(self.channel_class)
-        mode = "mix" if self.channel_class is None and not self.one_drum else "mics"
+        mode = "one_drum" if self.one_drum else "mix" if self.channel_class is None else "mics"
         look = self.profile.settings.lookahead
-        self._chans = [_Channel(self.sr, look, mode, high=mode == "mix") for _ in range(n)]
+        if self.channel_class is None:
+            self._chans = [_Channel(self.sr, look, mode, high=mode == "mix")]
+        else:
+            self._chans = [_Channel(self.sr, look, mode, main_hz=MIC_HIGH_HZ * (c in HIGH_CLASSES))
+                           for c in self.channel_class]  # fmt: skip
+        #: onset thresholds of each channel, a share of the profile's (MIC_HIGH_SCALE)
+        self._scale = [MIC_SCALE if ch.main_from == 0 else MIC_HIGH_SCALE for ch in self._chans]
         self._last_hit = np.full(len(CLASSES), -(10**9))  # frame of each drum's last hit
         self._history = np.zeros((CLASS_SIZE, n), np.float64)  # the last samples seen
         self._pending = 0  # samples after the last frame end, at the end of _history
@@ -300,17 +326,18 @@ class OnlineDetector:
             return self._decide_mix(p, time_s)
         all_rises = [ch.rise() for ch in self._chans]
         for c, ch in enumerate(self._chans):
-            if not ch.main.is_onset(p, s.delta, s.floor):
+            if not ch.main.is_onset(p, self._scale[c] * s.delta, self._scale[c] * s.floor):
                 continue
             rise = all_rises[c]
             level = float(rise.sum())
             others = [all_rises[d] for d in range(len(all_rises)) if d != c]
             leaked = s.leak * np.max(others, axis=0) if others else np.zeros_like(rise)
             own = float(np.maximum(rise - leaked, 0.0).sum())
-            if level < s.min_level or own < OWN_SHARE * level:
+            cls = self.channel_class[c]
+            loud_own = own >= OWN_LEVEL * self.profile.levels[cls] > 0
+            if level < s.min_level or (own < OWN_SHARE * level and not loud_own):
                 continue  # crosstalk: most of this rise is another channel's, heard through
             ch.main.mark(p)
-            cls = self.channel_class[c]
             hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, c))
         return hits
 
