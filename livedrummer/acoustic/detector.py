@@ -103,6 +103,10 @@ CLOSE_SHARE = 0.5
 #: (velocity 127 * sqrt(0.005) = 9); below it the onset is a ring's wobble, not a hit.
 QUIETEST = 0.005
 NMF_ITERATIONS = 60
+#: A rise out of digital silence (the SuperFlux reference frame all zeros: a stream's or a
+#: file's start, a player starting) counts at this share: the noise floor starting out of
+#: nothing is not an attack; a drum hit out of silence still is, unless very soft.
+FROM_SILENCE = 0.25
 #: A mix's second onset function: the SuperFlux of the bands above HIGH_HZ (a hi-hat, a
 #: cymbal), picked with a short pre-max window, HIGH_GAP_S after the full-band onset at the
 #: least, at HIGH_DELTA and HIGH_FLOOR times the full-band thresholds; its onsets report only
@@ -223,9 +227,10 @@ class _Channel:
         logs = log_flux_spectra(frames_at(signal, ends, FLUX_SIZE), self.sr)
         before = np.concatenate([np.array(self.logs), logs])[: len(logs)]
         m = self.main_from
-        flux = superflux(logs[:, m:], before[:, m:])
+        scale = np.where(before.max(axis=1) > 0, 1.0, FROM_SILENCE)
+        flux = scale * superflux(logs[:, m:], before[:, m:])
         k = self.high_from
-        high = superflux(logs[:, k:], before[:, k:]) if self.high is not None else flux
+        high = scale * superflux(logs[:, k:], before[:, k:]) if self.high is not None else flux
         for row in logs[-MU:]:
             self.logs.append(row)
         return flux, high, bands(frames_at(signal, ends, CLASS_SIZE), self.sr)
@@ -349,7 +354,6 @@ class OnlineDetector:
             allowed = None
         elif (
             ch.high is not None
-            and p >= ch.high.pre_avg  # noise starting with the stream is no hit
             and p - ch.main.last_onset >= ch.high.combine
             and ch.high.is_onset(p, HIGH_DELTA * s.delta, HIGH_FLOOR * s.floor)
         ):
