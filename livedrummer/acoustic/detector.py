@@ -180,11 +180,11 @@ class _Peaks:
 
     def is_onset(self, frame: int, delta: float, floor: float) -> bool:
         """Whether frame ``frame`` (``lookahead`` frames before the newest) is an onset."""
+        value = self.values[-1 - self.lookahead]
+        if value < floor or frame - self.last_onset < self.combine:
+            return False  # (most frames: decided before the window is copied)
         f = list(self.values)
         p = len(f) - 1 - self.lookahead
-        value = f[p]
-        if value < floor or frame - self.last_onset < self.combine:
-            return False
         if frame - self.last_onset < self.close and value < self.close_share * self.last_value:
             return False
         if value <= max(f[p - self.pre_max : p]) or value < max(f[p + 1 :]):
