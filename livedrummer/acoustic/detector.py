@@ -14,8 +14,11 @@ last :data:`PRE_MAX_S` and not below the ``lookahead`` frames after it (the prof
 2 by default: the only future the online twin waits for), above the mean of the last 100 ms
 plus ``delta``, above ``floor``, at least :data:`COMBINE_S` after the previous onset, and,
 within 32 ms of it, at least :data:`CLOSE_SHARE` of its value (a second drum, not the first
-one's decay). One drum per channel: 30 ms windows; a mix: 15 and 10 ms, since a drummer's kick
-and hi-hat land 5-25 ms apart, and a drum is not reported twice within 32 ms.
+one's decay). A mix: 15 and 10 ms windows, since a drummer's kick and hi-hat land 5-25 ms
+apart, and a drum is not reported twice within 32 ms; one microphone per drum: 6 ms (another
+drum's crosstalk just before must not hide the channel's own); one drum at a time (learning):
+30 ms. A rise out of digital silence (the reference frame all zeros) counts
+:data:`FROM_SILENCE` of its value: noise starting with a file or a player is no attack.
 
 **A second onset function for the hi-hat** (a mix only). A drummer's hi-hat often lands 3-15 ms
 after a snare or kick stroke; the full-band function's picking windows and the louder drum's
