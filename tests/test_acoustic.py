@@ -104,12 +104,43 @@ def test_mix_accuracy_on_a_held_out_groove(held_out) -> None:  # type: ignore[no
     assert s["kick"].tp + s["kick"].fn > 10 and s["snare"].tp + s["snare"].fn > 10
     assert s["kick"].f >= 0.80, s["kick"]  # measured 0.895 (kick, 21 onsets)
     assert s["snare"].f >= 0.80, s["snare"]  # 0.917 (13)
-    assert s["hihat"].f >= 0.62, s["hihat"]  # 0.742 (55)
+    assert s["hihat"].f >= 0.85, s["hihat"]  # 0.926 (55)
     # times: matched hits within a few ms of the MIDI
     truth = ex.onsets["time_s"][ex.classes == CLASSES.index("kick")]
     kicks = hits["time_s"][hits["cls"] == CLASSES.index("kick")]
     err = [np.min(np.abs(truth - t)) for t in kicks]
     assert np.median(err) < 0.004
+
+
+def test_a_hihat_just_after_a_loud_snare_is_a_hit_of_its_own(held_out) -> None:  # type: ignore[no-untyped-def]
+    """The hi-hat 8 ms after a full-strength snare: in a mix, inside the full-band picking window
+    of the snare's onset, found by the high-band onset function (as a hi-hat, not a 2nd snare);
+    with one microphone each, on the hat's channel behind the snare's crosstalk."""
+    from dataclasses import replace
+
+    ex = held_out[0]
+    snare = ex.onsets[ex.classes == CLASSES.index("snare")][:1].copy()
+    hat = ex.onsets[ex.classes == CLASSES.index("hihat_closed")][:1].copy()
+    snare["time_s"], snare["velocity"] = 0.25, 127
+    hat["time_s"], hat["velocity"] = 0.258, 100
+    pair = replace(ex, onsets=np.concatenate([snare, hat]), duration_s=0.8,
+                   classes=np.array([CLASSES.index("snare"), CLASSES.index("hihat_closed")]))  # fmt: skip
+    hits = detect(render_mix(pair, seed=5), SR, load_profile(None))
+    got = sorted((CLASSES[int(h["cls"])], round(float(h["time_s"]), 3)) for h in hits)
+    assert [c for c, _t in got] == ["hihat_closed", "snare"], got
+    assert all(abs(t - want) < 0.010 for (_c, t), want in zip(got, (0.258, 0.25), strict=True)), got
+    # one microphone each: the hat's, hearing the snare 20 dB down, still hears its own hat
+    hat["velocity"] = 100
+    pair = replace(pair, onsets=np.concatenate([snare, hat]))
+    stems, names = render_stems(pair, seed=5)
+    assert names == ["snare", "hihat"]
+    hits = detect(
+        stems, SR, load_profile(None), [CLASSES.index("snare"), CLASSES.index("hihat_closed")]
+    )
+    got = sorted(
+        (CLASSES[int(h["cls"])], int(h["channel"]), round(float(h["time_s"]), 3)) for h in hits
+    )
+    assert [(c, ch) for c, ch, _t in got] == [("hihat_closed", 1), ("snare", 0)], got
 
 
 def test_one_mic_per_drum_accuracy_and_crosstalk(held_out) -> None:  # type: ignore[no-untyped-def]
@@ -120,9 +151,9 @@ def test_one_mic_per_drum_accuracy_and_crosstalk(held_out) -> None:  # type: ign
     groups = {n: MICS[n] for n in names}
     s = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
               ex.onsets["velocity"], groups)  # fmt: skip
-    assert s["kick"].f >= 0.92, s["kick"]  # measured 0.977
-    assert s["snare"].f >= 0.90, s["snare"]  # 0.963
-    assert s["hihat"].f >= 0.75, s["hihat"]  # 0.857
+    assert s["kick"].f >= 0.95, s["kick"]  # measured 1.000
+    assert s["snare"].f >= 0.92, s["snare"]  # 1.000
+    assert s["hihat"].f >= 0.95, s["hihat"]  # 0.991
     # without crosstalk rejection (leak 0) the kick's leak shows up on the other mics
     import dataclasses
 
@@ -264,3 +295,23 @@ def test_transcribe_bad_input_is_one_line(
     assert main(["transcribe", str(clipped), "-o", out]) == 0
     err = capsys.readouterr().err
     assert "samples clipped" in err and len(err.strip().splitlines()) == 1
+
+
+def test_noise_starting_out_of_silence_is_no_hit_and_a_drum_out_of_silence_is(held_out) -> None:  # type: ignore[no-untyped-def]
+    """A file's or a player's start: noise 60 dB down beginning at sample 0 or after digital
+    silence makes no hit, in a mix or on a microphone; a snare out of silence is one."""
+    from livedrummer.audio.soundfont import render_soundfont
+
+    rng = np.random.default_rng(4)
+    noise = 0.001 * rng.standard_normal(SR // 2)  # -60 dBFS: a quiet microphone
+    for audio in (noise, np.concatenate([np.zeros(SR // 3), noise])):
+        assert len(detect(audio, SR, load_profile(None))) == 0
+        two = np.stack([audio, np.roll(audio, 7)], axis=1)
+        assert len(detect(two, SR, load_profile(None), [0, 1])) == 0
+    snare = held_out[0].onsets[held_out[0].classes == CLASSES.index("snare")][:1].copy()
+    snare["time_s"], snare["velocity"] = 0.2, 100
+    clean = render_soundfont(snare, 0.6, DEFAULT_SF2, SR).mean(axis=1)
+    clean[: int(np.argmax(np.abs(clean) > 1e-4))] = 0.0  # digital silence up to the stroke
+    hits = detect(clean, SR, load_profile(None))
+    assert [CLASSES[int(c)] for c in hits["cls"]] == ["snare"], hits
+    assert abs(float(hits["time_s"][0]) - 0.2) < 0.005, hits

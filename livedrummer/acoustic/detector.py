@@ -14,8 +14,22 @@ last :data:`PRE_MAX_S` and not below the ``lookahead`` frames after it (the prof
 2 by default: the only future the online twin waits for), above the mean of the last 100 ms
 plus ``delta``, above ``floor``, at least :data:`COMBINE_S` after the previous onset, and,
 within 32 ms of it, at least :data:`CLOSE_SHARE` of its value (a second drum, not the first
-one's decay). One drum per channel: 30 ms windows; a mix: 15 and 10 ms, since a drummer's kick
-and hi-hat land 5-25 ms apart, and a drum is not reported twice within 32 ms.
+one's decay). A mix: 15 and 10 ms windows, since a drummer's kick and hi-hat land 5-25 ms
+apart, and a drum is not reported twice within 32 ms; one microphone per drum: 6 ms (another
+drum's crosstalk just before must not hide the channel's own); one drum at a time (learning):
+30 ms. A rise out of digital silence (the reference frame all zeros) counts
+:data:`FROM_SILENCE` of its value: noise starting with a file or a player is no attack.
+
+**A second onset function for the hi-hat** (a mix only). A drummer's hi-hat often lands 3-15 ms
+after a snare or kick stroke; the full-band function's picking windows and the louder drum's
+onset hide it, and the rise read at the louder drum's onset is over before the hat starts. So
+a mix also picks peaks on the SuperFlux of the bands above :data:`HIGH_HZ` alone (8.8 kHz: the
+hat's, where a snare's noise has faded 5 ms after its attack) with a 6 ms pre-max window, at
+:data:`HIGH_DELTA` and :data:`HIGH_FLOOR` times the full-band thresholds, and at least
+:data:`HIGH_GAP_S` after a full-band onset. Its onsets are classified as any other but report
+only the strongest of :data:`HIGH_CLASSES` (hi-hats, crash, ride): the earlier drum's ring,
+still growing in the 21 ms spectrum, is not a second stroke of it. Such a hit is stamped 0-8 ms
+late (the hat's rise in the high bands peaks after its attack's first frame).
 
 **Classes: templates as fixed NMF bases.** A hit's feature is what it *adds* to the 21 ms band
 spectrum: bands ``L`` frames after the onset minus bands two frames before it, clipped at
@@ -36,7 +50,9 @@ channel saw: from channel ``c``'s rise, band by band, ``leak`` times the largest
 channel saw is taken away (``leak``: the loudest crosstalk the profile allows, in amplitude;
 0.15 by default), and the onset is dropped when less than :data:`OWN_SHARE` of it is left (a
 hi-hat's high bands survive a kick heard through its microphone; the kick's own leak does
-not). Velocity as above, from the channel's rise.
+not), unless what is left is a soft hit of the channel's own drum (:data:`OWN_LEVEL`). A
+hi-hat's or cymbal's channel picks its onsets from its bands above :data:`MIC_HIGH_HZ` only.
+Velocity as above, from the channel's rise.
 
 Limits: the lookahead is ``lookahead`` frames (5.3 ms) plus the attack's position in the
 256-sample window (up to 5.3 ms): decisions come 5.3-10.7 ms after the attack, times are
@@ -61,6 +77,7 @@ from livedrummer.acoustic.spectrum import (
     HOP,
     N_BANDS,
     bands,
+    flux_edges,
     frames_at,
     log_flux_spectra,
     superflux,
@@ -72,12 +89,15 @@ HIT_DTYPE = np.dtype(
 BEFORE = 2  # the "before" band spectrum: frames before the onset frame
 MU = 2  # SuperFlux: compare with the frame this many hops earlier
 #: Peak picking windows: before an onset, its value must top the last PRE_MAX_S, and the last
-#: onset must be COMBINE_S back. One drum per channel: 30 ms (a drum is not struck twice
-#: faster). A mix: 15 and 10 ms, since a drummer's kick and hi-hat land 5-25 ms apart and the
-#: second must be an onset of its own; a drum is still not reported twice within SAME_DRUM_S.
-PRE_MAX_S = {"mix": 0.015, "mics": 0.030}
+#: onset must be COMBINE_S back. A mix: 15 and 10 ms, since a drummer's kick and hi-hat land
+#: 5-25 ms apart and the second must be an onset of its own; a drum is still not reported twice
+#: within SAME_DRUM_S. One microphone per drum: 6 ms, since the crosstalk of a louder drum
+#: 5-25 ms earlier is an onset on every channel that must not hide the channel's own drum (its
+#: own decay is held off by CLOSE_SHARE). One drum at a time (learning): 30 ms (a drum is not
+#: struck twice faster).
+PRE_MAX_S = {"mix": 0.015, "mics": 0.006, "one_drum": 0.030}
 PRE_AVG_S = 0.100
-COMBINE_S = {"mix": 0.010, "mics": 0.030}
+COMBINE_S = {"mix": 0.010, "mics": 0.006, "one_drum": 0.030}
 SAME_DRUM_S = 0.030
 #: An onset within SAME_DRUM_S of the last must be at least this share of its value: a second
 #: drum struck just after the first is as strong, the first one's own decay bumps are not.
@@ -86,7 +106,32 @@ CLOSE_SHARE = 0.5
 #: (velocity 127 * sqrt(0.005) = 9); below it the onset is a ring's wobble, not a hit.
 QUIETEST = 0.005
 NMF_ITERATIONS = 60
-OWN_SHARE = 0.3  # multi-mic: share of a rise that crosstalk must not explain
+#: A rise out of digital silence (the SuperFlux reference frame all zeros: a stream's or a
+#: file's start, a player starting) counts at this share: the noise floor starting out of
+#: nothing is not an attack; a drum hit out of silence still is, unless very soft.
+FROM_SILENCE = 0.25
+#: A mix's second onset function: the SuperFlux of the bands above HIGH_HZ (a hi-hat, a
+#: cymbal), picked with a short pre-max window, HIGH_GAP_S after the full-band onset at the
+#: least, at HIGH_DELTA and HIGH_FLOOR times the full-band thresholds; its onsets report only
+#: HIGH_CLASSES.
+HIGH_HZ = 8800.0
+HIGH_PRE_MAX_S = 0.006
+HIGH_GAP_S = 0.006
+HIGH_DELTA = 0.1
+HIGH_FLOOR = 0.1
+HIGH_CLOSE_SHARE = 0.0  # no share of the last onset needed: a hat after a snare is weaker
+HIGH_CLASSES = frozenset(CLASSES.index(c) for c in ("hihat_closed", "hihat_open", "crash", "ride"))
+#: Multi-mic crosstalk: an onset is the channel's own drum when crosstalk does not explain
+#: OWN_SHARE of its rise, or when what is left is OWN_LEVEL of its drum's full-strength level
+#: at the least (velocity 18: a soft hi-hat struck with a loud snare is mostly snare).
+OWN_SHARE = 0.3
+OWN_LEVEL = 0.02
+#: A cymbal's or hi-hat's microphone: its onset function is the SuperFlux of the bands above
+#: MIC_HIGH_HZ alone (the drums it hears through the air are lower), at MIC_HIGH_SCALE of the
+#: profile's thresholds (fewer bands, smaller sums); other channels at MIC_SCALE of them.
+MIC_HIGH_HZ = 3500.0
+MIC_HIGH_SCALE = 0.2
+MIC_SCALE = 1.0
 BATCH = 2048  # frames per FFT batch (bounds memory for a long file)
 _EPS = 1e-9
 
@@ -118,58 +163,90 @@ def velocity_of(level: float, ref: float) -> int:
     return int(np.clip(round(127.0 * np.sqrt(max(level, 0.0) / ref)), 1, 127))
 
 
-class _Channel:
-    """One channel's frames and onset function, with the short history picking needs."""
+class _Peaks:
+    """One onset function's recent values and the online peak picking on them."""
 
-    def __init__(self, sr: int, lookahead: int, mode: str) -> None:
+    def __init__(
+        self, sr: int, lookahead: int, pre_max_s: float, combine_s: float, close_share: float
+    ) -> None:
         self.sr = sr
         self.lookahead = lookahead
-        self.pre_max = int(PRE_MAX_S[mode] * sr / HOP)
-        self.combine = int(COMBINE_S[mode] * sr / HOP)
-        keep = max(int(PRE_AVG_S * sr / HOP), self.pre_max) + lookahead + 2
-        self.flux: deque[float] = deque([0.0] * keep, maxlen=keep)
+        self.pre_max = max(1, int(pre_max_s * sr / HOP))
+        self.combine = int(combine_s * sr / HOP)
+        self.pre_avg = int(PRE_AVG_S * sr / HOP)
+        keep = max(self.pre_avg, self.pre_max) + lookahead + 2
+        self.values: deque[float] = deque([0.0] * keep, maxlen=keep)
+        self.last_onset = -(10**9)
+        self.last_value = 0.0
+        self.close = math.ceil(SAME_DRUM_S * sr / HOP)
+        self.close_share = close_share
+
+    def is_onset(self, frame: int, delta: float, floor: float) -> bool:
+        """Whether frame ``frame`` (``lookahead`` frames before the newest) is an onset."""
+        value = self.values[-1 - self.lookahead]
+        if value < floor or frame - self.last_onset < self.combine:
+            return False  # (most frames: decided before the window is copied)
+        f = list(self.values)
+        p = len(f) - 1 - self.lookahead
+        if frame - self.last_onset < self.close and value < self.close_share * self.last_value:
+            return False
+        if value <= max(f[p - self.pre_max : p]) or value < max(f[p + 1 :]):
+            return False
+        return value >= float(np.mean(f[p - self.pre_avg : p + 1])) + delta
+
+    def mark(self, frame: int) -> None:
+        """Frame ``frame`` was taken as an onset."""
+        self.last_onset = frame
+        self.last_value = self.values[len(self.values) - 1 - self.lookahead]
+
+
+class _Channel:
+    """One channel's frames, its onset function(s) and the band spectra a rise is read from.
+
+    ``high``: a mix also picks peaks on a second onset function, the SuperFlux of the bands
+    above :data:`HIGH_HZ` alone (see :class:`OnlineDetector`)."""
+
+    def __init__(
+        self, sr: int, lookahead: int, mode: str, high: bool = False, main_hz: float = 0.0
+    ) -> None:
+        self.sr = sr
+        #: the main onset function's lowest band (a hi-hat's microphone: MIC_HIGH_HZ)
+        self.main_from = int(np.searchsorted(flux_edges(sr), main_hz * FLUX_SIZE / sr))
+        self.main = _Peaks(sr, lookahead, PRE_MAX_S[mode], COMBINE_S[mode], CLOSE_SHARE)
+        self.high = (
+            _Peaks(sr, lookahead, HIGH_PRE_MAX_S, HIGH_GAP_S, HIGH_CLOSE_SHARE) if high else None
+        )
+        self.high_from = int(np.searchsorted(flux_edges(sr), HIGH_HZ * FLUX_SIZE / sr))
         self.bands: deque[np.ndarray] = deque(
             [np.zeros(N_BANDS)] * (BEFORE + lookahead + 1), maxlen=BEFORE + lookahead + 1
         )
         self.logs: deque[np.ndarray] = deque([np.zeros(FLUX_BANDS)] * MU, maxlen=MU)
-        self.last_onset = -(10**9)
-        self.last_value = 0.0
-        self.close = math.ceil(SAME_DRUM_S * sr / HOP)
 
-    def frames(self, signal: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Onset function and band spectra of the frames ending at ``ends``."""
+    def frames(
+        self, signal: np.ndarray, ends: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Onset function, high-band onset function and band spectra of the frames ending at
+        ``ends``."""
         logs = log_flux_spectra(frames_at(signal, ends, FLUX_SIZE), self.sr)
         before = np.concatenate([np.array(self.logs), logs])[: len(logs)]
-        flux = superflux(logs, before)
+        m = self.main_from
+        scale = np.where(before.max(axis=1) > 0, 1.0, FROM_SILENCE)
+        flux = scale * superflux(logs[:, m:], before[:, m:])
+        k = self.high_from
+        high = scale * superflux(logs[:, k:], before[:, k:]) if self.high is not None else flux
         for row in logs[-MU:]:
             self.logs.append(row)
-        return flux, bands(frames_at(signal, ends, CLASS_SIZE), self.sr)
+        return flux, high, bands(frames_at(signal, ends, CLASS_SIZE), self.sr)
 
-    def push(self, flux: float, band: np.ndarray) -> None:
-        self.flux.append(flux)
+    def push(self, flux: float, high: float, band: np.ndarray) -> None:
+        self.main.values.append(flux)
+        if self.high is not None:
+            self.high.values.append(high)
         self.bands.append(band)
 
-    def onset_rise(self, frame: int, delta: float, floor: float) -> np.ndarray | None:
-        """If the frame ``lookahead`` frames ago is an onset: the band rise it brought."""
-        f = list(self.flux)
-        p = len(f) - 1 - self.lookahead
-        value = f[p]
-        pre_avg = int(PRE_AVG_S * self.sr / HOP)
-        if value < floor or frame - self.last_onset < self.combine:
-            return None
-        if frame - self.last_onset < self.close and value < CLOSE_SHARE * self.last_value:
-            return None
-        if value <= max(f[p - self.pre_max : p]) or value < max(f[p + 1 :]):
-            return None
-        if value < float(np.mean(f[p - pre_avg : p + 1])) + delta:
-            return None
-        return self.rise()
-
-    def value_at_onset(self) -> float:
-        """The onset function at the frame just decided."""
-        return float(self.flux[len(self.flux) - 1 - self.lookahead])
-
     def rise(self) -> np.ndarray:
+        """The band rise of the frame being decided: ``lookahead`` frames after it minus
+        :data:`BEFORE` frames before it."""
         out: np.ndarray = np.maximum(self.bands[-1] - self.bands[0], 0.0)
         return out
 
@@ -205,8 +282,15 @@ class OnlineDetector:
 
     def reset(self) -> None:
         n = 1 if self.channel_class is None else len(self.channel_class)
-        mode = "mix" if self.channel_class is None and not self.one_drum else "mics"
-        self._chans = [_Channel(self.sr, self.profile.settings.lookahead, mode) for _ in range(n)]
+        mode = "one_drum" if self.one_drum else "mix" if self.channel_class is None else "mics"
+        look = self.profile.settings.lookahead
+        if self.channel_class is None:
+            self._chans = [_Channel(self.sr, look, mode, high=mode == "mix")]
+        else:
+            self._chans = [_Channel(self.sr, look, mode, main_hz=MIC_HIGH_HZ * (c in HIGH_CLASSES))
+                           for c in self.channel_class]  # fmt: skip
+        #: onset thresholds of each channel, a share of the profile's (MIC_HIGH_SCALE)
+        self._scale = [MIC_SCALE if ch.main_from == 0 else MIC_HIGH_SCALE for ch in self._chans]
         self._last_hit = np.full(len(CLASSES), -(10**9))  # frame of each drum's last hit
         self._history = np.zeros((CLASS_SIZE, n), np.float64)  # the last samples seen
         self._pending = 0  # samples after the last frame end, at the end of _history
@@ -233,7 +317,8 @@ class OnlineDetector:
             for i in range(len(ends)):
                 self._frame += 1
                 for c, ch in enumerate(self._chans):
-                    ch.push(float(per_chan[c][0][i]), per_chan[c][1][i])
+                    flux, high, band = per_chan[c]
+                    ch.push(float(flux[i]), float(high[i]), band[i])
                 out.extend(self._decide())
         self.frames_seen = self._frame + 1
         self._pending = (self._pending + data.shape[0]) % HOP
@@ -244,44 +329,64 @@ class OnlineDetector:
         s = self.profile.settings
         p = self._frame - s.lookahead
         time_s = (p + 1) * HOP / self.sr - s.offset_ms / 1000.0
-        rises = [ch.onset_rise(p, s.delta, s.floor) for ch in self._chans]
         hits: list[tuple[float, int, int, float, int]] = []
         if self.channel_class is None:
-            rise = rises[0]
-            if rise is None:
-                return hits
-            if self.features is not None:
-                self.features.append(rise)
-            act = activations(rise, self.profile)
-            top = float(act.max())
-            if top < s.min_level:
-                return hits
-            self._chans[0].last_onset = p
-            self._chans[0].last_value = self._chans[0].value_at_onset()
-            levels = self.profile.levels
-            need = np.where(levels > 0, s.poly * levels, s.poly * top)
-            quietest = np.where(levels > 0, QUIETEST * levels, 0.0)  # a hit at velocity ~9
-            found = (act >= np.maximum(need, s.min_level)) | ((act == top) & (act >= quietest))
-            recent = p - self._last_hit < math.ceil(SAME_DRUM_S * self.sr / HOP)
-            for cls in np.flatnonzero(found & ~recent).tolist():
-                self._last_hit[cls] = p
-                level = float(act[cls])
-                hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, 0))
-            return hits
+            return self._decide_mix(p, time_s)
         all_rises = [ch.rise() for ch in self._chans]
-        for c, rise in enumerate(rises):
-            if rise is None:
+        for c, ch in enumerate(self._chans):
+            if not ch.main.is_onset(p, self._scale[c] * s.delta, self._scale[c] * s.floor):
                 continue
+            rise = all_rises[c]
             level = float(rise.sum())
             others = [all_rises[d] for d in range(len(all_rises)) if d != c]
             leaked = s.leak * np.max(others, axis=0) if others else np.zeros_like(rise)
             own = float(np.maximum(rise - leaked, 0.0).sum())
-            if level < s.min_level or own < OWN_SHARE * level:
-                continue  # crosstalk: most of this rise is another channel's, heard through
-            self._chans[c].last_onset = p
-            self._chans[c].last_value = self._chans[c].value_at_onset()
             cls = self.channel_class[c]
+            loud_own = own >= OWN_LEVEL * self.profile.levels[cls] > 0
+            if level < s.min_level or (own < OWN_SHARE * level and not loud_own):
+                continue  # crosstalk: most of this rise is another channel's, heard through
+            ch.main.mark(p)
             hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, c))
+        return hits
+
+    def _decide_mix(self, p: int, time_s: float) -> list[tuple[float, int, int, float, int]]:
+        s = self.profile.settings
+        ch = self._chans[0]
+        hits: list[tuple[float, int, int, float, int]] = []
+        if ch.main.is_onset(p, s.delta, s.floor):
+            allowed = None
+        elif (
+            ch.high is not None
+            and p - ch.main.last_onset >= ch.high.combine
+            and ch.high.is_onset(p, HIGH_DELTA * s.delta, HIGH_FLOOR * s.floor)
+        ):
+            allowed = HIGH_CLASSES
+        else:
+            return hits
+        rise = ch.rise()
+        if self.features is not None:
+            self.features.append(rise)
+        act = activations(rise, self.profile)
+        if allowed is not None:  # the strongest high drum, whatever a ringing drum adds
+            act[[c for c in range(len(CLASSES)) if c not in allowed]] = 0.0
+        top = float(act.max())
+        if top < s.min_level:
+            return hits
+        if allowed is None:
+            ch.main.mark(p)
+        if ch.high is not None:
+            ch.high.mark(p)
+        levels = self.profile.levels
+        need = np.where(levels > 0, s.poly * levels, s.poly * top)
+        quietest = np.where(levels > 0, QUIETEST * levels, 0.0)  # a hit at velocity ~9
+        found = (act >= np.maximum(need, s.min_level)) | ((act == top) & (act >= quietest))
+        recent = p - self._last_hit < math.ceil(SAME_DRUM_S * self.sr / HOP)
+        for cls in np.flatnonzero(found & ~recent).tolist():
+            if allowed is not None and cls not in allowed:
+                continue
+            self._last_hit[cls] = p
+            level = float(act[cls])
+            hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, 0))
         return hits
 
 

@@ -88,7 +88,8 @@ def log_flux_spectra(spectra: np.ndarray, sr: int) -> np.ndarray:
 def superflux(log_now: np.ndarray, log_before: np.ndarray) -> np.ndarray:
     """SuperFlux: the rise of each bin over the maximum of its three neighbours in an earlier
     frame (vibrato and a ringing cymbal's wobble do not count as rises), summed per frame."""
-    padded = np.pad(log_before, ((0, 0), (1, 1)), mode="edge")
-    widened = np.maximum(np.maximum(padded[:, :-2], padded[:, 1:-1]), padded[:, 2:])
+    widened = log_before.copy()  # each bin's max with its neighbours (the edges: their one)
+    np.maximum(widened[:, 1:], log_before[:, :-1], out=widened[:, 1:])
+    np.maximum(widened[:, :-1], log_before[:, 1:], out=widened[:, :-1])
     out: np.ndarray = np.maximum(log_now - widened, 0.0).sum(axis=1)
     return out
