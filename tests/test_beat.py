@@ -178,3 +178,14 @@ def test_bar_cues_fire_once_each_in_bar_order() -> None:
     assert fire.due([(2.0, 2), (4.0, 3)]) == []  # a repeated bar fires nothing again
     assert [c.name for c in fire.due([(9.0, 6)])] == ["b"]  # a skipped bar 5 still fires
     assert fire.due([(11.0, 7)]) == []
+
+
+def test_a_flood_keeps_each_update_bounded() -> None:
+    """1,000 onsets a second: the tracker keeps its newest max_onsets (the tempo's pair
+    histogram is quadratic in them), so the flood costs what ordinary playing costs."""
+    from livedrummer.live.beat import BeatParams, BeatTracker
+
+    tracker = BeatTracker()
+    for k in range(3000):
+        tracker.process(100.0 + k / 1000.0, 1.0)
+    assert len(tracker._onsets) <= BeatParams().max_onsets

@@ -39,7 +39,9 @@ the online beats. The constants were tuned on GMD's train and validation grooves
 
 Limits: the meter is not detected (``beats_per_bar``); tempos above ``max_bpm`` are followed
 at half speed; a tempo change settles in a few beats; before two seconds of playing (or with
-fewer than six onsets) there is no estimate; about 0.4 ms of CPU per onset.
+fewer than six onsets) there is no estimate; about 0.4 ms of CPU per onset. Only the newest
+``max_onsets`` (256: 10 s of any real playing) are kept: the tempo's pair histogram is quadratic
+in them, and a flood of 1,000 notes a second made each update cost 50 ms before the cap.
 """
 
 from __future__ import annotations
@@ -88,6 +90,7 @@ class BeatParams:
     kick_boost: float = 2.0  # phase: a kick (or crash) weighs (1 + this) times more
     downbeat_decay_s: float = 8.0  # downbeat evidence this old counts 1/e as much
     beats_per_bar: int = 4
+    max_onsets: int = 256  # the newest onsets kept (a flood must not make each update O(n^2))
 
 
 _PHASES = 64  # candidate beat phases per period
@@ -143,7 +146,7 @@ class BeatTracker:
             self.first_s = time_s
         q = self._onsets
         q.append((time_s, weight, downbeat))
-        while q and q[0][0] < time_s - p.window_s:
+        while q and (q[0][0] < time_s - p.window_s or len(q) > p.max_onsets):
             q.popleft()
         if len(q) < 6 or time_s - self.first_s < 2.0:
             return
