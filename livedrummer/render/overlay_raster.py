@@ -25,11 +25,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from livedrummer.render.font5x7 import ADVANCE, GLYPH_H, text_pixels, text_size
-from livedrummer.render.overlay import AngleModel, OverlayModels, ScoreModel, ScoreView
+from livedrummer.render.overlay import AngleView, Lanes, OverlayModels, ScoreView
 
 BACKGROUND = (10, 12, 22, 176)
 LABEL_BOX = (0, 0, 0, 210)
@@ -49,6 +50,22 @@ ANGLE_LABELS = ("RS", "RE", "RW", "LS", "LE", "LW")
 SCORE_FRACTION = 0.14
 GRAPH_FRACTION = 0.11
 MAX_DEG = 180.0
+
+
+class ScoreSource(Protocol):
+    """What a score strip paints: a file's :class:`~livedrummer.render.overlay.ScoreModel` or
+    a live feed's :class:`~livedrummer.render.live_overlay.LiveScore`."""
+
+    @property
+    def lanes(self) -> Lanes: ...
+
+    def view(self, now_s: float) -> ScoreView: ...
+
+
+class AngleSource(Protocol):
+    """What an angle strip paints: an ``AngleModel`` or a ``LiveAngles``."""
+
+    def view(self, now_s: float) -> AngleView: ...
 
 
 def fill_boxes(img: np.ndarray, top: np.ndarray, left: np.ndarray, height: np.ndarray,
@@ -135,7 +152,7 @@ def _now_line(img: np.ndarray, top: int) -> None:
 class ScoreStrip:
     """The scrolling score at ``width`` x ``height`` pixels (see the module docstring)."""
 
-    def __init__(self, model: ScoreModel, width: int, height: int) -> None:
+    def __init__(self, model: ScoreSource, width: int, height: int) -> None:
         self.model, self.width, self.height = model, width, height
         self.scale = s = font_scale(height)
         self.band_h = (GLYPH_H + 4) * s  # legend row
@@ -179,7 +196,7 @@ class ScoreStrip:
 class AngleStrip:
     """The scrolling joint-angle graph at ``width`` x ``height`` pixels, 0..180 degrees."""
 
-    def __init__(self, model: AngleModel, width: int, height: int) -> None:
+    def __init__(self, model: AngleSource, width: int, height: int) -> None:
         self.model, self.width, self.height = model, width, height
         self.scale = s = font_scale(height)
         self.band_h = (GLYPH_H + 4) * s
@@ -261,7 +278,7 @@ class OverlayImage:
     it goes. With no strip enabled, :attr:`empty` is true and nothing should be drawn."""
 
     def __init__(self, frame_size: tuple[int, int], names: frozenset[str],
-                 score: ScoreModel | None, angles: AngleModel | None) -> None:  # fmt: skip
+                 score: ScoreSource | None, angles: AngleSource | None) -> None:  # fmt: skip
         w, h = frame_size
         heights = strip_heights(h, names)
         self.strips: list[tuple[ScoreStrip | AngleStrip, int, int]] = []
