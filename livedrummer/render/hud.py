@@ -81,6 +81,7 @@ def live_lines(state: str, camera: str, show_help: bool = False) -> list[str]:
     if show_help:
         lines += ["", "1-8  CAMERAS     SHIFT 1-8  STORE A VIEW",
                   "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
+                  "O  SCORE     G  JOINT ANGLES",
                   "F  FULL SCREEN     I  READOUT     Q ESC  QUIT"]  # fmt: skip
     return lines
 

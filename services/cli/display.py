@@ -203,6 +203,7 @@ def run_live(args: argparse.Namespace) -> int:
     from livedrummer.errors import ConfigError
     from livedrummer.kit.loader import load_kit
     from livedrummer.live.calibration import Calibration
+    from livedrummer.render.overlay import parse_overlays
 
     from ..display.live import (
         AudioFrameClock,
@@ -214,6 +215,7 @@ def run_live(args: argparse.Namespace) -> int:
     from ..service import serve
 
     window = None
+    overlays = parse_overlays(args.overlay)
     background = background_of(args, window=True)  # live video has no alpha: opaque only
     if not args.headless:
         from ..display.window import WindowOptions
@@ -223,7 +225,8 @@ def run_live(args: argparse.Namespace) -> int:
                               "add --headless")  # fmt: skip
         window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
                                monitor=args.monitor, camera=args.camera, samples=args.aa,
-                               vsync=False, background=background)  # fmt: skip
+                               vsync=False, background=background,
+                               overlays=overlays)  # fmt: skip
     if args.max_frames is not None and args.max_frames < 1:
         raise ConfigError(f"--max-frames: expected >= 1 (got {args.max_frames})")
     if not 0 < args.fps <= 1000:
@@ -251,7 +254,7 @@ def run_live(args: argparse.Namespace) -> int:
         png=not args.no_png, security=security_from_args(args), window=window,
         video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
         control=args.control, avatar=avatar, osc_port=args.osc, osc_allow=osc_allow(args),
-        cues=cues_of(args), background=background,
+        cues=cues_of(args), background=background, overlays=overlays,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     if args.synth_control is not None:  # one line when the synth plays another avatar

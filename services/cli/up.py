@@ -131,6 +131,9 @@ def register(sub: Subparsers) -> None:
                                   "640x360 headless)")  # fmt: skip
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
     p.add_argument("--camera", default="stage", help="display camera (default stage)")
+    p.add_argument("--overlay", default="", metavar="LIST",
+                   help="SMED's strips over the drummer: score, joints or both; keys O and G in "
+                   "the window (default: none)")  # fmt: skip
     p.add_argument("--rig", type=Path, metavar="FILE",
                    help="rig profile whose values are the defaults of these options "
                         "(default $LIVEDRUMMER_HOME/rig.toml when it exists)")  # fmt: skip
@@ -252,6 +255,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
             synth_argv += cues
             display_argv += cues
     display_argv += ["--background", args.background] if args.background else []
+    display_argv += ["--overlay", args.overlay] if args.overlay else []
     display_argv += ["--sound"] if args.sound else []
     if args.sound and args.soundfont is not None and args.soundfont.suffix.lower() == ".sfz":
         display_argv += ["--sfz", str(args.soundfont)]  # the live sound plays the SFZ kit too
@@ -305,6 +309,9 @@ def run(args: argparse.Namespace) -> int:
 
         return run_stage(args)
     apply_profile(args, args.up_defaults)
+    from livedrummer.render.overlay import parse_overlays
+
+    parse_overlays(args.overlay)  # a typo is one line before anything starts
 
     if args.seconds is not None and not args.seconds > 0:
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")

@@ -51,6 +51,12 @@ Show control. With ``config.osc_port``, OSC camera, blackout and cue commands ar
 before each frame (:mod:`services.display.showctl`); frames.jsonl then also names each
 frame's camera and darkness.
 
+Strips. ``config.overlays`` (``display --live --overlay score,joints``; keys O and G in a
+window) draws SMED's score and joint-angle strips over each frame at its show time, from the
+forwarded onsets and the poses received (:class:`~livedrummer.render.live_overlay.LiveStrips`);
+a deferred recording keeps the onsets with their arrival times and replays both into fresh
+strips, so each frame shows what had arrived by its render time.
+
 Life cycle: the service base's (:mod:`services.service`); readiness comes after the first
 frame that drew the drummer, and a control socket answering HELLO with READY (service
 "display", role "frames", the pose format) is bound only when ``config.control`` names one,
@@ -95,6 +101,7 @@ from livedrummer.protocol import (
 )
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import frame_from_pose
+from livedrummer.render.live_overlay import LiveStrips
 
 from ..badmsg import BadMessages
 from ..net import Security, connect, socket, subscribe_protocol
@@ -191,6 +198,7 @@ class LiveConfig:
     osc_port: int | None = None  # OSC camera and blackout (services.display.showctl)
     osc_allow: tuple[str, ...] = ()
     cues: dict[str, Any] = field(default_factory=dict)  # livedrummer.live.cues, by name
+    overlays: frozenset[str] = frozenset()  # strips drawn from the start: "score", "joints"
 
 
 @dataclass
@@ -214,6 +222,16 @@ def missed_ticks(schedule: list[tuple[float, float]], now: float, lead_s: float,
     last = schedule[-1][0]
     count = max(0, round((now - last) / period) - 1)
     return [(last + k * period, last + k * period + lead_s) for k in range(1, count + 1)]
+
+
+def draw_strips(surface: HeadlessSurface | WindowSurface, strips: LiveStrips,
+                show_s: float) -> None:  # fmt: skip
+    """Blend the strips the surface shows, at the frame's show time, over the frame drawn."""
+    if surface.overlays:
+        image = strips.image(surface.renderer.size, surface.overlays)
+        r = image.rect
+        if not image.empty:
+            surface.overlay(image.paint(show_s), (r.x, r.y, r.width, r.height))
 
 
 class LiveDisplay(Service):
@@ -244,6 +262,9 @@ class LiveDisplay(Service):
                                   "the avatar is behind: raise the synth's --delay-ms")  # fmt: skip
         self.held = BehindCounter("frames drawn with a stale pose (the pose stream stalled)")
         self.show: DisplayShow | None = None
+        self.strips = LiveStrips(kit)  # fed only where strips may be drawn (see run)
+        self._strips_fed = False
+        self._onset_log: list[tuple[float, np.ndarray]] = []  # a deferred recording's onsets
 
     def open(self) -> None:
         """Connect to the synth's poses (the base binds the control socket, if one is asked)."""
@@ -286,6 +307,9 @@ class LiveDisplay(Service):
                                           cfg.background)  # fmt: skip
             if surface is not None and self.show is not None:
                 surface.stage = self.show.stage
+            if surface is not None and not isinstance(surface, WindowSurface):
+                surface.overlays = cfg.overlays
+            self._strips_fed = surface is not None and (bool(cfg.overlays) or bool(cfg.window))
             # A set-length headless recording is drawn after the show from what arrived (see
             # the module docstring): every frame at full rate, and no drawing during the show.
             deferred = (cfg.video is not None and isinstance(surface, HeadlessSurface)
@@ -351,6 +375,8 @@ class LiveDisplay(Service):
                         surface.state = "no poses: is the synth running?" if drawn else (
                             "waiting for poses")  # fmt: skip
                     surface.draw(None, now)
+                if surface is not None and not deferred:
+                    draw_strips(surface, self.strips, show)
                 if (
                     recorder is not None
                     and surface is not None
@@ -425,6 +451,9 @@ class LiveDisplay(Service):
 
         pending = messages()
         nxt = next(pending, None)
+        strips = LiveStrips(self.kit)
+        onsets = iter(self._onset_log)
+        nxt_onsets = next(onsets, None)
         started = time.monotonic()
         print(f"display: drawing the recording, {len(schedule)} frames at {cfg.fps:g} fps "
               f"({cfg.size[0]}x{cfg.size[1]}) ...", file=sys.stderr, flush=True)  # fmt: skip
@@ -432,10 +461,16 @@ class LiveDisplay(Service):
             for render_s, show_s in schedule:
                 while nxt is not None and nxt[0] <= render_s:
                     track.add(nxt[1], nxt[2])
+                    if surface.overlays:
+                        strips.add_poses(nxt[1], nxt[2]["position"])
                     nxt = next(pending, None)
+                while nxt_onsets is not None and nxt_onsets[0] <= render_s:
+                    strips.add_onsets(nxt_onsets[1])
+                    nxt_onsets = next(onsets, None)
                 got = track.at(show_s)
                 frame = None if got is None else frame_from_pose(got[1], show_s, self.kit)
                 surface.draw(frame, render_s)
+                draw_strips(surface, strips, show_s)
                 recorder.add(surface.renderer, show_s)
         except BaseException:
             recorder.close()
@@ -459,6 +494,10 @@ class LiveDisplay(Service):
             if msg.kind is Kind.SHOWN_ONSET:  # onsets the synth forwards (sounded apart)
                 self._observe(msg)
                 self.stats.shown_onsets += msg.rows.size
+                if self._spool is not None and self.config.overlays:
+                    self._onset_log.append((self.clock.now(), msg.rows.copy()))
+                elif self._strips_fed:
+                    self.strips.add_onsets(msg.rows)
                 continue
             if not isinstance(msg.body, Pose):
                 self.stats.bad += 1
@@ -472,6 +511,8 @@ class LiveDisplay(Service):
             late = int(show.size > 0 and float(show.max()) < self._last_show)
             self._say(self.late.first(late, self.clock.now()))
             self.track.add(show, rows)
+            if self._strips_fed and self._spool is None:
+                self.strips.add_poses(show, rows["position"])
             if self._spool is not None:
                 self._spool.write(SPOOL_HEAD.pack(self.clock.now(), rows.size))
                 self._spool.write(np.ascontiguousarray(show, np.float64).tobytes())

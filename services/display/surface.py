@@ -5,10 +5,13 @@ live loop the same three calls: :meth:`draw` a scene frame (or the empty kit), :
 it (a window swaps and handles its keys; headless does nothing) and :meth:`close`. The window
 is the file window's (:func:`~services.display.window.open_window`: windowed or full screen on
 a chosen monitor, for projectors) with the camera keys 1..8 (a smooth move between stored
-viewpoints), H (key help), I (hide the readout), F (full screen) and Q/Esc to quit; a live
+viewpoints), O and G (SMED's score and joint-angle strips, :data:`~.window.OVERLAY_KEYS`),
+H (key help), I (hide the readout), F (full screen) and Q/Esc to quit; a live
 show has no transport, since the drummer sets the time. The window's readout says what the
 show is doing: waiting for poses, playing, or holding the last pose while the stream is
-stalled (:attr:`WindowSurface.state`, set by the live loop), and the camera.
+stalled (:attr:`WindowSurface.state`, set by the live loop), and the camera. Both surfaces
+name the strips shown in :attr:`overlays` and blend the live loop's strip image with
+:meth:`overlay` (:mod:`livedrummer.render.live_overlay`).
 
 Limits: a window draws to its own framebuffer, so recording and PNG frames are headless only.
 """
@@ -17,6 +20,8 @@ from __future__ import annotations
 
 from contextlib import ExitStack
 from typing import Any
+
+import numpy as np
 
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
@@ -31,6 +36,7 @@ from .renderer import Renderer
 from .showctl import darken
 from .viewcontrol import ViewControl
 from .window import (
+    OVERLAY_KEYS,
     Readout,
     WindowOptions,
     key_name,
@@ -54,12 +60,16 @@ class HeadlessSurface:
                                  avatar=avatar, background=background)  # fmt: skip
         self._camera = pick_camera(kit, camera)
         self.stage: Stage | None = None  # show control: camera and blackout (showctl)
+        self.overlays: frozenset[str] = frozenset()  # the strips drawn (score, joints)
 
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
         stage = self.stage
         self.renderer.draw(frame, self._camera if stage is None else stage.view(now_s))
         if stage is not None:
             darken(self.renderer, stage.darkness(now_s))
+
+    def overlay(self, image: np.ndarray, rect: tuple[int, int, int, int]) -> None:
+        self.renderer.draw_overlay(image, rect)
 
     def present(self) -> bool:
         return True
@@ -93,6 +103,7 @@ class WindowSurface:
         self.stage: Stage | None = None  # show control: camera and blackout (showctl)
         self._readout = Readout()
         self._show_readout, self._show_help = True, False
+        self.overlays = frozenset(options.overlays)  # the strips drawn; O and G toggle them
 
         def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
             if action in (glfw.PRESS, glfw.REPEAT):
@@ -122,6 +133,9 @@ class WindowSurface:
             self._readout.draw(self.renderer, live_lines(self.state, self.camera, self._show_help),
                                self._ctx.screen)  # fmt: skip
 
+    def overlay(self, image: np.ndarray, rect: tuple[int, int, int, int]) -> None:
+        self.renderer.draw_overlay(image, rect, self._ctx.screen)
+
     def present(self) -> bool:
         glfw = self._glfw
         glfw.swap_buffers(self._window)
@@ -135,6 +149,8 @@ class WindowSurface:
                 self._show_readout = not self._show_readout
             elif name == "f":
                 toggle_fullscreen(glfw, self._window, self._options)
+            elif name in OVERLAY_KEYS:
+                self.overlays = self.overlays ^ {OVERLAY_KEYS[name]}
             elif self.stage is not None and name.isdigit() and 1 <= int(name) <= 8:
                 self.stage.set_camera(name, self._now)
             else:
