@@ -6,12 +6,14 @@ from __future__ import annotations
 import json
 import os
 import random
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import av
 import numpy as np
+import pytest
 
 from livedrummer.render.font5x7 import GLYPH_H
 from livedrummer.render.overlay import HISTORY_S, LOOKAHEAD_S
@@ -76,3 +78,52 @@ def test_up_overlay_draws_scrolling_score_and_angle_strips(tmp_path: Path) -> No
         assert np.count_nonzero(near[:-shift] & m2[:-shift]) >= 0.75 * m2[:-shift].sum()
         pairs += 1
     assert pairs == 6
+
+
+GRAB = """import os, sys, av, numpy as np
+c = av.open(os.environ["DISPLAY"], format="x11grab", options={"video_size": "640x360"})
+np.save(sys.argv[1], next(iter(c.decode(video=0))).to_ndarray(format="rgb24"))
+"""
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
+                    reason="xvfb-run or xdotool not installed")  # fmt: skip
+def test_keys_o_and_g_show_the_strips_in_a_live_window(tmp_path: Path) -> None:
+    """A live window under Xvfb (no synth: the empty kit), grabbed from the X server before
+    any key, after O (the score strip) and after G (the angle graph below it)."""
+    grab = tmp_path / "grab.py"
+    grab.write_text(GRAB)
+    py = sys.executable
+    shots = [tmp_path / f"shot{i}.npy" for i in range(3)]
+    press = "xdotool search --sync --name '^livedrummer' key"
+    script = (f"{py} -m services display --live --sub tcp://127.0.0.1:{random.randrange(30_000, 40_000)} "
+              f"--size {W}x{H} --aa 0 --seconds 8 --clock monotonic & sleep 4; "
+              f"{py} {grab} {shots[0]}; {press} o; sleep 1; {py} {grab} {shots[1]}; "
+              f"{press} g; sleep 1; {py} {grab} {shots[2]}; wait")  # fmt: skip
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    run = subprocess.run(["xvfb-run", "-a", "-s", f"-screen 0 {W}x{H}x24", "sh", "-c", script],
+                         capture_output=True, text=True, timeout=120, env=env)  # fmt: skip
+    assert run.returncode == 0 and all(s.exists() for s in shots), run.stderr[-1500:]
+    plain, score, both = (np.load(s).astype(int) for s in shots)
+    heights = strip_heights(H, frozenset({"score", "joints"}))
+    alone = strip_heights(H, frozenset({"score"}))["score"]
+
+    def changed(img: np.ndarray, top: int, bottom: int) -> float:
+        return float(np.mean(np.abs(img - plain)[top:bottom].max(axis=-1) > 0))
+
+    assert changed(score, 0, H - alone) < 0.01  # the scene is as it was ...
+    assert changed(score, H - alone, H) > 0.9  # ... under the score's panel
+    assert changed(both, H - heights["joints"], H) > 0.9  # and the graph's
+    red = score[H - alone + 20 :, W // 2]  # the now-line
+    assert (red[:, 0] > 200).all() and (red[:, 1] < 80).all()
+
+
+def test_up_names_an_unknown_overlay_in_one_line_and_exits_2() -> None:
+    done = subprocess.run([sys.executable, "-m", "services", "up", "--demo", "--headless",
+                           "--overlay", "score,jionts"], capture_output=True, text=True,
+                          timeout=60, cwd=Path(__file__).resolve().parent.parent)  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [
+        "livedrummer: error: --overlay 'score,jionts': unknown overlay 'jionts' "
+        "(known: score, joints)"
+    ]
