@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from livedrummer.body.skeleton import J
 from livedrummer.kit.loader import load_kit
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import INSTRUMENTS
@@ -94,3 +95,28 @@ def test_strips_image_follows_the_feed(kit: Kit) -> None:
     full = img.paint(101.0)
     assert img is strips.image((320, 240), frozenset({"score", "joints"}))
     assert np.count_nonzero(np.any(full != empty, axis=-1)) > 50
+
+
+def test_the_poses_tell_which_hand_played_a_note(kit: Kit) -> None:
+    """Right stick on the ride, left on the snare: the ride's notes turn right-hand, the
+    snare's left-hand, once poses cover them; a note no pose covers stays grey."""
+    names = [p.name for p in kit.pieces]
+    ride = next(i for i, p in enumerate(kit.pieces) if p.kind.name == "RIDE")
+    snare = next(i for i, p in enumerate(kit.pieces) if p.kind.name == "SNARE")
+    code = {n: i for i, n in enumerate(INSTRUMENTS)}
+    ride_code = next(c for n, c in code.items() if kit.resolve(n) is kit.pieces[ride])
+    snare_code = next(c for n, c in code.items() if kit.resolve(n) is kit.pieces[snare])
+    notes = np.zeros(3, ONSET_DTYPE)
+    notes["time_s"] = [10.0, 10.1, 12.0]
+    notes["instrument"] = [ride_code, snare_code, snare_code]
+    notes["velocity"] = 100
+    strips = LiveStrips(kit)
+    strips.add_onsets(notes)
+    score = strips.scores[False]
+    assert (score.limb == -1).all(), names
+    joints = np.zeros((30, 24, 3))
+    joints[:, J["r_tip"]] = kit.pieces[ride].position_m
+    joints[:, J["l_tip"]] = kit.pieces[snare].position_m
+    strips.add_poses(9.5 + np.arange(30) / 30.0, joints)  # covers 9.5 .. 10.47
+    for s in strips.scores.values():
+        np.testing.assert_array_equal(s.limb, [0, 1, -1])

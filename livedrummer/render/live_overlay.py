@@ -8,9 +8,11 @@ rasteriser (:mod:`livedrummer.render.overlay_raster`) paints them unchanged.
 * :class:`LiveScore`: the forwarded onsets (``SHOWN_ONSET`` rows, ``ONSET_DTYPE`` with the show
   time in ``time_s``), each put on its kit piece's lane with the file score's routing
   (:func:`livedrummer.sticking.prepare.route`: pieces, and the foot that plays a kick or a
-  pedalled hi-hat). The hands' sticking is decided inside the synth and not forwarded, so hand
-  notes are drawn in the not-played grey: the live score is by piece, and by limb for the
-  feet. Onsets the kit has no piece for are counted in :attr:`LiveScore.unplaced`.
+  pedalled hi-hat). The hands' sticking is decided inside the synth and not forwarded; the
+  poses tell it: once a pose message covers a hand note's show time, the stick tip nearer the
+  note's piece then (:meth:`LiveScore.resolve_hands`) gives it its hand's colour; until then
+  (or where no pose covers it) it is grey. Onsets the kit has no piece for are counted in
+  :attr:`LiveScore.unplaced`.
 * :class:`LiveAngles`: the six angles of :func:`~livedrummer.render.overlay.joint_angles` of
   every pose sample received, by show time. A newer message replaces the samples it overlaps
   (the synth re-animates and resends recent samples). :meth:`LiveAngles.view` resamples them
@@ -26,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from livedrummer.body.skeleton import J
 from livedrummer.kit.model import Kit
 from livedrummer.render.font5x7 import GLYPH_H
 from livedrummer.render.overlay import (
@@ -40,6 +43,7 @@ from livedrummer.render.overlay import (
 )
 from livedrummer.render.overlay_raster import OverlayImage, font_scale, strip_heights
 from livedrummer.sticking.prepare import route
+from livedrummer.sticking.result import NOT_PLAYED
 
 KEEP_S = HISTORY_S + 1.0
 
@@ -54,7 +58,9 @@ class LiveScore:
         self.lane = np.zeros(0, np.int64)
         self.velocity = np.zeros(0, np.uint8)
         self.limb = np.zeros(0, np.int8)
+        self.piece = np.zeros(0, np.int64)
         self.unplaced = 0
+        self._centre = np.array([p.position_m for p in kit.pieces], np.float64).reshape(-1, 3)
 
     def add(self, onsets: np.ndarray) -> None:
         """Take forwarded onset rows (``ONSET_DTYPE``, ``time_s`` = show time)."""
@@ -68,10 +74,28 @@ class LiveScore:
         lane = np.concatenate([self.lane, lane])
         vel = np.concatenate([self.velocity, np.asarray(onsets["velocity"], np.uint8)[placed]])
         limb = np.concatenate([self.limb, np.asarray(routed.limb, np.int8)[placed]])
+        piece = np.concatenate([self.piece, np.asarray(routed.piece, np.int64)[placed]])
         order = np.argsort(t, kind="stable")
         keep = order[t[order] >= t.max() - self.keep_s - LOOKAHEAD_S]
         self.time_s, self.lane = t[keep], lane[keep]
-        self.velocity, self.limb = vel[keep], limb[keep]
+        self.velocity, self.limb, self.piece = vel[keep], limb[keep], piece[keep]
+
+    def resolve_hands(self, time_s: np.ndarray, r_tip: np.ndarray, l_tip: np.ndarray) -> None:
+        """Give each grey note inside ``time_s`` (sorted show times of poses, with the right
+        and left stick tips (n, 3)) the hand whose tip is nearer its piece's centre then."""
+        if time_s.size < 2:
+            return
+        todo = np.flatnonzero((self.limb == NOT_PLAYED) & (self.time_s >= time_s[0])
+                              & (self.time_s <= time_s[-1]))  # fmt: skip
+        if todo.size == 0:
+            return
+        t = self.time_s[todo]
+        centre = self._centre[self.piece[todo]]
+        dist = []
+        for tips in (r_tip, l_tip):
+            at = np.stack([np.interp(t, time_s, tips[:, c]) for c in range(3)], axis=-1)
+            dist.append(np.linalg.norm(at - centre, axis=-1))
+        self.limb[todo] = np.where(dist[0] <= dist[1], 0, 1).astype(np.int8)
 
     def view(self, now_s: float) -> ScoreView:
         """The onsets with ``now_s - HISTORY_S <= time_s <= now_s + LOOKAHEAD_S``."""
@@ -128,13 +152,21 @@ class LiveStrips:
         self.scores = {grouped: LiveScore(kit, grouped) for grouped in (False, True)}
         self.angles = LiveAngles()
         self._image: OverlayImage | None = None
+        self._tips = (np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))  # the last message's
 
     def add_onsets(self, onsets: np.ndarray) -> None:
         for score in self.scores.values():
             score.add(onsets)
+            score.resolve_hands(*self._tips)
 
     def add_poses(self, show_s: np.ndarray, joints: np.ndarray) -> None:
         self.angles.add(show_s, joints)
+        t = np.asarray(show_s, np.float64)
+        order = np.argsort(t, kind="stable")
+        p = np.asarray(joints, np.float64)[order]
+        self._tips = (t[order], p[:, J["r_tip"]], p[:, J["l_tip"]])
+        for score in self.scores.values():
+            score.resolve_hands(*self._tips)
 
     def image(self, frame_size: tuple[int, int], names: frozenset[str]) -> OverlayImage:
         img = self._image
