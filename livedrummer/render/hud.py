@@ -18,6 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from livedrummer.midi.keypads import help_lines as keypad_help
 from livedrummer.render.font5x7 import GLYPH_H, text_size
 from livedrummer.render.overlay_raster import draw_text
 
@@ -33,6 +34,7 @@ HELP_LINES: tuple[str, ...] = (
     "SHIFT 1-8  STORE A VIEW (1-8 RECALLS IT)",
     "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
     "F  FULL SCREEN     I  READOUT     H  HELP     Q ESC  QUIT",
+    *keypad_help(),
 )
 PANEL_RGBA = (10, 10, 16, 170)
 TEXT_RGBA = (235, 235, 235, 255)
@@ -81,7 +83,7 @@ def live_lines(state: str, camera: str, show_help: bool = False) -> list[str]:
     if show_help:
         lines += ["", "1-8  CAMERAS     SHIFT 1-8  STORE A VIEW",
                   "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
-                  "F  FULL SCREEN     I  READOUT     Q ESC  QUIT"]  # fmt: skip
+                  "F  FULL SCREEN     I  READOUT     Q ESC  QUIT", *keypad_help()]  # fmt: skip
     return lines
 
 
