@@ -7,6 +7,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -120,3 +121,53 @@ def test_every_key_reaches_a_piece_of_the_default_kit() -> None:
     pieces = {p.note: d.piece_of(d.onset(p.note, MEDIUM, 0.0)) for p in KEYPADS.values()}  # type: ignore[arg-type]
     assert None not in pieces.values()
     assert len(set(pieces.values())) == 8  # kick, snare, hi-hat, 3 toms, crash, ride
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
+                    reason="xvfb-run or xdotool not installed")  # fmt: skip
+def test_keys_in_a_live_window_reach_the_input_daemon_as_notes(jack_server: str,
+                                                               tmp_path: Path) -> None:  # fmt: skip
+    """The live window's keys go out over a real MIDI port (JACK) into ``input --virtual``,
+    which publishes them as onsets (read on its ZeroMQ stream) as a kit's pads would be."""
+    import json
+
+    import zmq
+
+    from livedrummer import protocol as p
+
+    env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
+    inp = subprocess.Popen([sys.executable, "-m", "services", "input", "--virtual",
+                            "livedrummer-keys", "--api", "jack", "--map", "general-midi",
+                            "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
+                            "--no-journal"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True, env=env)  # fmt: skip
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    sub = ctx.socket(zmq.SUB)
+    try:
+        assert inp.stdout is not None
+        info = json.loads(inp.stdout.readline())
+        sub.setsockopt(zmq.LINGER, 0)
+        sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
+        sub.connect(info["pub"])
+        press = ("sleep 3; xdotool search --sync --name '^livedrummer$' key z; sleep 0.3; "
+                 "xdotool search --name '^livedrummer$' key shift+x; sleep 0.3; "
+                 "xdotool search --name '^livedrummer$' key ctrl+u; sleep 1; "
+                 "xdotool search --name '^livedrummer$' key q")  # fmt: skip
+        script = (f"{sys.executable} -m services -v display --live --sub tcp://127.0.0.1:9 "
+                  f"--size 320x180 --aa 0 --keys-port livedrummer-keys & {press}; wait")  # fmt: skip
+        wenv = {k: v for k, v in env.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+        win = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", script],
+                             capture_output=True, text=True, timeout=120, env=wenv)  # fmt: skip
+        assert win.returncode == 0, win.stderr[-2000:]
+        seen: list[tuple[int, int]] = []
+        deadline = time.monotonic() + 5
+        while len(seen) < 3 and time.monotonic() < deadline:
+            if sub.poll(200):
+                msg = p.decode(sub.recv_multipart())
+                seen += [(int(r["note"]), int(r["velocity"])) for r in msg.body]
+        assert seen == [(36, MEDIUM), (38, LOUD), (49, SOFT)], win.stderr[-2000:]
+    finally:
+        sub.close(0)
+        ctx.term()
+        inp.terminate()
+        inp.communicate(timeout=20)

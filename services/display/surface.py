@@ -8,7 +8,10 @@ a chosen monitor, for projectors) with the camera keys 1..8 (a smooth move betwe
 viewpoints), H (key help), I (hide the readout), F (full screen) and Q/Esc to quit; a live
 show has no transport, since the drummer sets the time. The window's readout says what the
 show is doing: waiting for poses, playing, or holding the last pose while the stream is
-stalled (:attr:`WindowSurface.state`, set by the live loop), and the camera.
+stalled (:attr:`WindowSurface.state`, set by the live loop), and the camera. With
+``WindowOptions.keys_port`` the drum keys (:mod:`livedrummer.midi.keypads`, Shift loud, Ctrl
+soft) go out as MIDI notes into that input port (:mod:`services.display.keysend` says why
+this route), so the drummer plays them like a kit's strokes.
 
 Limits: a window draws to its own framebuffer, so recording and PNG frames are headless only.
 """
@@ -21,12 +24,14 @@ from typing import Any
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
 from livedrummer.live.stage import Stage
+from livedrummer.midi.keypads import KEYPADS, keypad_hit
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON
 from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.scene import SceneFrame
 
+from .keysend import KeySender
 from .renderer import Renderer
 from .showctl import darken
 from .viewcontrol import ViewControl
@@ -93,10 +98,16 @@ class WindowSurface:
         self.stage: Stage | None = None  # show control: camera and blackout (showctl)
         self._readout = Readout()
         self._show_readout, self._show_help = True, False
+        self.keys = KeySender(options.keys_port) if options.keys_port else None
 
         def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
-            if action in (glfw.PRESS, glfw.REPEAT):
-                self._keys.append(key_name(glfw, key, mods))
+            name = key_name(glfw, key, mods)
+            if name in KEYPADS:  # a drum key: the first press only (repeat is no roll)
+                hit = keypad_hit(name, bool(mods & glfw.MOD_SHIFT), bool(mods & glfw.MOD_CONTROL))
+                if action == glfw.PRESS and hit is not None and self.keys is not None:
+                    self.keys.send(*hit)  # at once: the poll is on this thread, each frame
+            elif action in (glfw.PRESS, glfw.REPEAT):
+                self._keys.append(name)
 
         glfw.set_key_callback(window, on_key)
         self._view = ViewControl(glfw, window)
@@ -144,4 +155,6 @@ class WindowSurface:
         return not glfw.window_should_close(self._window)
 
     def close(self) -> None:
+        if self.keys is not None:
+            self.keys.close()
         self._stack.close()

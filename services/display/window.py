@@ -76,6 +76,7 @@ class WindowOptions:
     screenshot: Path | None = None  # the last frame drawn, written as a PNG when it closes
     background: Background | None = None  # behind the stage (None: the dark hall)
     frame_log: Path | None = None  # per frame: {"mono": after the swap, "t": position shown}
+    keys_port: str | None = None  # live: the MIDI input the drum keys play into (keysend)
 
 
 DEFAULT_OPTIONS = WindowOptions()
