@@ -171,3 +171,48 @@ def test_keys_in_a_live_window_reach_the_input_daemon_as_notes(jack_server: str,
         ctx.term()
         inp.terminate()
         inp.communicate(timeout=20)
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
+                    reason="xvfb-run or xdotool not installed")  # fmt: skip
+def test_up_keys_plays_the_window_s_keys_into_the_pipeline(jack_server: str,
+                                                           tmp_path: Path) -> None:  # fmt: skip
+    """``up --keys`` out of the box: keys pressed in its window come out of its input daemon's
+    stream as onsets (the show stops ``--seconds`` after the first frame)."""
+    import socket
+
+    import zmq
+
+    from livedrummer import protocol as p
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        base = s.getsockname()[1] + 100
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["LIVEDRUMMER_HOME"] = str(tmp_path / "home")
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    sub = ctx.socket(zmq.SUB)
+    sub.setsockopt(zmq.LINGER, 0)
+    sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
+    sub.connect(f"tcp://127.0.0.1:{base}")
+    press = ("xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1; "
+             "xdotool search --name '^livedrummer$' key z; sleep 0.3; "
+             "xdotool search --name '^livedrummer$' key shift+x")  # fmt: skip
+    script = (f"{sys.executable} -m services up --keys --api jack --port-base {base} "
+              f"--no-journal --size 320x180 --seconds 5 & {press}; wait")  # fmt: skip
+    try:
+        up = subprocess.Popen(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", script],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                              env=env, cwd=REPO)  # fmt: skip
+        seen: list[tuple[int, int]] = []
+        deadline = time.monotonic() + 60
+        while len(seen) < 2 and time.monotonic() < deadline and up.poll() is None:
+            if sub.poll(200):
+                msg = p.decode(sub.recv_multipart())
+                seen += [(int(r["note"]), int(r["velocity"])) for r in msg.body]
+        out, _ = up.communicate(timeout=60)
+        assert seen == [(36, MEDIUM), (38, LOUD)], out[-3000:]
+        assert up.returncode == 0, out[-3000:]
+    finally:
+        sub.close(0)
+        ctx.term()
