@@ -52,6 +52,7 @@ def test_the_help_shows_every_key() -> None:
         assert f"{pad.key.upper()} {pad.label}" in text
     assert help_lines()[-1] == HELP_LINES[-1]
     assert live_lines("playing", "front", True)[-1] == help_lines()[-1]
+    assert help_lines()[0] not in live_lines("playing", "front", True, keys=False)
 
 
 def drum() -> KeyDrum:

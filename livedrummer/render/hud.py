@@ -77,13 +77,15 @@ def hud_lines(
     return lines
 
 
-def live_lines(state: str, camera: str, show_help: bool = False) -> list[str]:
-    """The readout for a live window: the performer's state and the camera."""
+def live_lines(state: str, camera: str, show_help: bool = False, keys: bool = True) -> list[str]:
+    """The readout for a live window: the performer's state and the camera; ``keys``: the
+    help lists the drum keys (they play into an input port)."""
     lines = [f"LIVE   {state.upper()}   CAMERA {camera.upper()}   H HELP"]
     if show_help:
         lines += ["", "1-8  CAMERAS     SHIFT 1-8  STORE A VIEW",
                   "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
-                  "F  FULL SCREEN     I  READOUT     Q ESC  QUIT", *keypad_help()]  # fmt: skip
+                  "F  FULL SCREEN     I  READOUT     Q ESC  QUIT"]  # fmt: skip
+        lines += keypad_help() if keys else []
     return lines
 
 

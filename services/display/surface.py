@@ -130,8 +130,8 @@ class WindowSurface:
         if self._show_readout or self._show_help:
             from livedrummer.render.hud import live_lines
 
-            self._readout.draw(self.renderer, live_lines(self.state, self.camera, self._show_help),
-                               self._ctx.screen)  # fmt: skip
+            lines = live_lines(self.state, self.camera, self._show_help, self.keys is not None)
+            self._readout.draw(self.renderer, lines, self._ctx.screen)
 
     def present(self) -> bool:
         glfw = self._glfw

@@ -149,14 +149,16 @@ def key_name(glfw: Any, key: int, mods: int) -> str:
     return f"shift+{name}" if mods & glfw.MOD_SHIFT and shifted else name
 
 
-def key_drum(body: BodyScene, map_name: str) -> KeyDrum | None:
-    """The keys' drum on the body's kit under the file's note map (None if it won't load)."""
+def key_drum(body: BodyScene, map_name: str, sr: int | None = None) -> KeyDrum | None:
+    """The keys' drum on the body's kit under the file's note map (None if it won't load), its
+    sounds at the player's rate ``sr`` (default the mixer's)."""
     from livedrummer.errors import LivedrummerError
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.render.keydrum import KeyDrum
 
     try:
-        return KeyDrum(body.kit, load_note_map(map_name))
+        drum = KeyDrum(body.kit, load_note_map(map_name))
+        return drum if sr is None else KeyDrum(body.kit, drum.note_map, sr)
     except LivedrummerError as err:
         log.warning("keys: no drum keys (%s)", err)
         return None
@@ -254,7 +256,7 @@ def _loop(
     strips = overlay_image(size, shown, models)
     pending: list[str] = []
     pads: list[tuple[int, int]] = []  # (note, velocity) of keys played since the last frame
-    drum = key_drum(body, performance.map_name)
+    drum = key_drum(body, performance.map_name, player.sr if player is not None else None)
 
     def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
         name = key_name(glfw, key, mods)
