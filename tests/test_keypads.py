@@ -217,3 +217,32 @@ def test_up_keys_plays_the_window_s_keys_into_the_pipeline(jack_server: str,
     finally:
         sub.close(0)
         ctx.term()
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
+                    reason="xvfb-run or xdotool not installed")  # fmt: skip
+def test_a_key_in_the_file_window_is_heard_through_jack(jack_server: str, tmp_path: Path) -> None:
+    """The file's only note comes after the window closes, so the one attack a JACK client
+    records from the window is the key's (Shift+X, the loud snare)."""
+    import mido
+
+    from services.bench._jackrec import JackRecorder, attacks
+
+    mid = mido.MidiFile(ticks_per_beat=480)
+    mid.tracks.append(mido.MidiTrack([
+        mido.Message("note_on", note=36, velocity=100, channel=9, time=9600),  # at 10 s
+        mido.Message("note_off", note=36, velocity=0, channel=9, time=10),
+    ]))  # fmt: skip
+    mid.save(tmp_path / "late.mid")
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    recorder = JackRecorder(env)
+    press = ("xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1.5; "
+             "xdotool search --name '^livedrummer$' key shift+x")  # fmt: skip
+    cmd = (f"{sys.executable} -m services -v display {tmp_path / 'late.mid'} --map general-midi "
+           f"--size 320x180 --aa 0 --seconds 3.5 --audio-device 'system, JACK' & {press}; wait")  # fmt: skip
+    run = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", cmd],
+                         cwd=REPO, capture_output=True, text=True, timeout=180, env=env)  # fmt: skip
+    rec = recorder.stop()
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "no sound" not in run.stderr and "keys: note 38 velocity 120" in run.stderr
+    assert len(attacks(rec)) == 1, run.stderr[-1000:]
