@@ -18,6 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from livedrummer.midi.keypads import help_lines as keypad_help
 from livedrummer.render.font5x7 import GLYPH_H, text_size
 from livedrummer.render.overlay_raster import draw_text
 
@@ -33,6 +34,7 @@ HELP_LINES: tuple[str, ...] = (
     "SHIFT 1-8  STORE A VIEW (1-8 RECALLS IT)",
     "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
     "F  FULL SCREEN     I  READOUT     H  HELP     Q ESC  QUIT",
+    *keypad_help(),
 )
 PANEL_RGBA = (10, 10, 16, 170)
 TEXT_RGBA = (235, 235, 235, 255)
@@ -75,14 +77,16 @@ def hud_lines(
     return lines
 
 
-def live_lines(state: str, camera: str, show_help: bool = False) -> list[str]:
-    """The readout for a live window: the performer's state and the camera."""
+def live_lines(state: str, camera: str, show_help: bool = False, keys: bool = True) -> list[str]:
+    """The readout for a live window: the performer's state and the camera; ``keys``: the
+    help lists the drum keys (they play into an input port)."""
     lines = [f"LIVE   {state.upper()}   CAMERA {camera.upper()}   H HELP"]
     if show_help:
         lines += ["", "1-8  CAMERAS     SHIFT 1-8  STORE A VIEW",
                   "DRAG  TURN     RIGHT DRAG  MOVE     WHEEL  ZOOM",
                   "O  SCORE     G  JOINT ANGLES",
                   "F  FULL SCREEN     I  READOUT     Q ESC  QUIT"]  # fmt: skip
+        lines += keypad_help() if keys else []
     return lines
 
 

@@ -100,6 +100,10 @@ def register(sub: Subparsers) -> None:
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
     live.add_argument("--sub", default="tcp://127.0.0.1:5720",
                       help="the synth's pose endpoint (default tcp://127.0.0.1:5720)")  # fmt: skip
+    live.add_argument("--keys-port", metavar="PORT",
+                      help="window: the drum keys (Z X C V T Y N J K U P E) play MIDI notes into "
+                      "this input port, e.g. an `input --virtual PORT` (default: keys play "
+                      "nothing live)")  # fmt: skip
     live.add_argument("--control", metavar="ENDPOINT",
                       help="answer HELLO with READY here, e.g. tcp://127.0.0.1:5731 "
                            "(default: no control socket)")  # fmt: skip
@@ -226,7 +230,7 @@ def run_live(args: argparse.Namespace) -> int:
         window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
                                monitor=args.monitor, camera=args.camera, samples=args.aa,
                                vsync=False, background=background,
-                               overlays=overlays)  # fmt: skip
+                               overlays=overlays, keys_port=args.keys_port)  # fmt: skip
     if args.max_frames is not None and args.max_frames < 1:
         raise ConfigError(f"--max-frames: expected >= 1 (got {args.max_frames})")
     if not 0 < args.fps <= 1000:

@@ -37,6 +37,7 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
+from ..display.keysend import KEYS_PORT
 from ..program import program_argv
 from .common import (
     DEMO_MAP,
@@ -77,6 +78,10 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--serial", metavar="DEV",
                      help="serial trigger board (default: the rig profile's source)")  # fmt: skip
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
+    src.add_argument("--keys", action="store_true",
+                     help="no kit: the window's drum keys (Z X C V T Y N J K U P E, Shift loud, "
+                     "Ctrl soft) play into a virtual MIDI input, livedrummer-keys, that a "
+                     "DAW can also play into")  # fmt: skip
     src.add_argument("--audio", metavar="DEVICE",
                      help="audio input of an acoustic kit's microphones (default: the rig "
                           "profile's source)")  # fmt: skip
@@ -219,6 +224,9 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     source: list[str]
     if args.demo:
         source = ["--file", str(demo_groove()), "--loop"]
+    elif args.keys:  # the window plays GM drum notes into this port (display/keysend.py)
+        source = ["--virtual", KEYS_PORT, "--api", args.api]
+        map_name = args.map or "general-midi"
     elif args.serial:
         source = ["--serial", args.serial, "--baud", str(args.baud)]
     elif args.audio:
@@ -234,7 +242,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         journal = ["--no-journal"] if args.no_journal or args.demo else []
     # The input service waits for its device: one that vanishes mid-show (and the service
     # restarted meanwhile) must be waited for, not refused; up checked it once at start.
-    source += [] if args.demo else ["--wait"]
+    source += [] if args.demo or args.keys else ["--wait"]
     input_argv = [*me, "input", *source, "--map", map_name, "--pub", ep["in_pub"],
                   "--control", ep["in_ctl"], "--wait-subscribers", str(SYNTH_TOPICS),
                   *journal, *curve["input"]]  # fmt: skip
@@ -256,6 +264,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
             display_argv += cues
     display_argv += ["--background", args.background] if args.background else []
     display_argv += ["--overlay", args.overlay] if args.overlay else []
+    display_argv += ["--keys-port", KEYS_PORT] if args.keys else []
     display_argv += ["--sound"] if args.sound else []
     if args.sound and args.soundfont is not None and args.soundfont.suffix.lower() == ".sfz":
         display_argv += ["--sfz", str(args.soundfont)]  # the live sound plays the SFZ kit too
@@ -285,14 +294,14 @@ def apply_profile(args: argparse.Namespace, defaults: dict[str, object]) -> Path
     used: Path | None = None
     if args.rig is not None or path.exists():
         profile = RigProfile.load(path)
-        source_given = bool(args.midi or args.serial or args.demo or args.audio)
+        source_given = bool(args.midi or args.serial or args.demo or args.audio or args.keys)
         for key, value in profile.options.items():
             if key in ("midi", "serial", "demo") and source_given:
                 continue
             if getattr(args, key) == defaults.get(key):
                 setattr(args, key, value)
         used = path
-    if not (args.midi or args.serial or args.demo or args.audio):
+    if not (args.midi or args.serial or args.demo or args.audio or args.keys):
         where = f" (none in {used})" if used is not None else ""
         raise ConfigError(f"up: give --midi PORT, --serial DEV or --demo (or --audio DEVICE), or "
                           f"a [source] in rig.toml{where}")  # fmt: skip
@@ -398,7 +407,7 @@ def check_before_start(args: argparse.Namespace) -> None:
         )
     if not 0 < args.port_base <= 65535 - 11:
         raise ConfigError(f"--port-base: expected 1..65524 (got {args.port_base})")
-    if args.demo or args.wait:
+    if args.demo or args.wait or args.keys:
         return
     if args.audio:
         from livedrummer.acoustic.pieces import parse_channel_map

@@ -76,6 +76,24 @@ class TrackRenderer:
         self.fade_done = self.fade_n  # samples of the current crossfade done
         self.request: Request | None = None
         self.jumps = 0
+        self.incoming: list[np.ndarray] = []  # one-shots to start (keys played, :meth:`hit`)
+        self._shots: list[tuple[np.ndarray, int]] = []  # (sound, samples of it played)
+
+    def hit(self, sound: np.ndarray) -> None:
+        """Sound ``sound`` (N, 2) over the track from the next buffer on (a key played);
+        safe from another thread (a list append)."""
+        self.incoming.append(np.asarray(sound, np.float32))
+
+    def _mix_shots(self, out: np.ndarray) -> None:
+        while self.incoming:
+            self._shots.append((self.incoming.pop(0), 0))
+        kept = []
+        for sound, done in self._shots:
+            k = min(len(out), len(sound) - done)
+            out[:k] += sound[done : done + k]
+            if done + k < len(sound):
+                kept.append((sound, done + k))
+        self._shots = kept
 
     def _read(self, start: int, n: int) -> np.ndarray:
         out = np.zeros((n, 2), np.float32)
@@ -115,6 +133,8 @@ class TrackRenderer:
                 self.old = None
         if self.pos is not None:
             self.pos += n
+        if self.incoming or self._shots:
+            self._mix_shots(out)
         return out
 
 

@@ -11,7 +11,10 @@ show has no transport, since the drummer sets the time. The window's readout say
 show is doing: waiting for poses, playing, or holding the last pose while the stream is
 stalled (:attr:`WindowSurface.state`, set by the live loop), and the camera. Both surfaces
 name the strips shown in :attr:`overlays` and blend the live loop's strip image with
-:meth:`overlay` (:mod:`livedrummer.render.live_overlay`).
+:meth:`overlay` (:mod:`livedrummer.render.live_overlay`). With
+``WindowOptions.keys_port`` the drum keys (:mod:`livedrummer.midi.keypads`, Shift loud, Ctrl
+soft) go out as MIDI notes into that input port (:mod:`services.display.keysend` says why
+this route), so the drummer plays them like a kit's strokes.
 
 Limits: a window draws to its own framebuffer, so recording and PNG frames are headless only.
 """
@@ -26,12 +29,14 @@ import numpy as np
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
 from livedrummer.live.stage import Stage
+from livedrummer.midi.keypads import KEYPADS, keypad_hit
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON
 from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.scene import SceneFrame
 
+from .keysend import KeySender
 from .renderer import Renderer
 from .showctl import darken
 from .viewcontrol import ViewControl
@@ -104,10 +109,16 @@ class WindowSurface:
         self._readout = Readout()
         self._show_readout, self._show_help = True, False
         self.overlays = frozenset(options.overlays)  # the strips drawn; O and G toggle them
+        self.keys = KeySender(options.keys_port) if options.keys_port else None
 
         def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
-            if action in (glfw.PRESS, glfw.REPEAT):
-                self._keys.append(key_name(glfw, key, mods))
+            name = key_name(glfw, key, mods)
+            if name in KEYPADS:  # a drum key: the first press only (repeat is no roll)
+                hit = keypad_hit(name, bool(mods & glfw.MOD_SHIFT), bool(mods & glfw.MOD_CONTROL))
+                if action == glfw.PRESS and hit is not None and self.keys is not None:
+                    self.keys.send(*hit)  # at once: the poll is on this thread, each frame
+            elif action in (glfw.PRESS, glfw.REPEAT):
+                self._keys.append(name)
 
         glfw.set_key_callback(window, on_key)
         self._view = ViewControl(glfw, window)
@@ -130,8 +141,8 @@ class WindowSurface:
         if self._show_readout or self._show_help:
             from livedrummer.render.hud import live_lines
 
-            self._readout.draw(self.renderer, live_lines(self.state, self.camera, self._show_help),
-                               self._ctx.screen)  # fmt: skip
+            lines = live_lines(self.state, self.camera, self._show_help, self.keys is not None)
+            self._readout.draw(self.renderer, lines, self._ctx.screen)
 
     def overlay(self, image: np.ndarray, rect: tuple[int, int, int, int]) -> None:
         self.renderer.draw_overlay(image, rect, self._ctx.screen)
@@ -160,4 +171,6 @@ class WindowSurface:
         return not glfw.window_should_close(self._window)
 
     def close(self) -> None:
+        if self.keys is not None:
+            self.keys.close()
         self._stack.close()

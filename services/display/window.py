@@ -8,8 +8,11 @@ position (the body model, :class:`~livedrummer.render.body_scene.BodyScene`, sam
 one time) and swaps; keys go through :data:`~livedrummer.render.transport.KEYS` (transport),
 1..8 (cameras, with a smooth move), O and G (show or hide the score and the joint-angle
 overlays, :data:`OVERLAY_KEYS`), F (full screen on and off), H (key help), I (the readout)
-and Q/Esc (quit). A readout in the top-left corner (:mod:`livedrummer.render.hud`) shows the
-position and length, speed, playing/paused/reversed, the camera and a clear end-of-file line;
+and Q/Esc (quit); the keys of :data:`~livedrummer.midi.keypads.KEYPADS` play pieces over the
+file (:class:`~livedrummer.render.keydrum.KeyDrum`: heard through the player, the piece glows
+and wobbles; the file's drummer does not change). A readout in the top-left corner
+(:mod:`livedrummer.render.hud`) shows the position and length, speed,
+playing/paused/reversed, the camera and a clear end-of-file line;
 ``WindowOptions.screenshot`` writes the last frame drawn as a PNG when the window closes. The clock
 is injected (default ``time.monotonic``) as the style guide asks; with sound (a
 :class:`~services.display.audio_out.TrackPlayer`) it is the output's sample clock, each frame
@@ -37,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 from livedrummer.avatar.model import Avatar
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
+from livedrummer.midi.keypads import KEYPADS, keypad_hit
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CameraMove, kit_cameras
@@ -52,6 +56,8 @@ from .renderer import Renderer
 from .viewcontrol import ViewControl
 
 if TYPE_CHECKING:
+    from livedrummer.render.keydrum import KeyDrum
+
     from .midi_out import MidiFileOut
 
 log = logging.getLogger(__name__)
@@ -70,6 +76,7 @@ class WindowOptions:
     screenshot: Path | None = None  # the last frame drawn, written as a PNG when it closes
     background: Background | None = None  # behind the stage (None: the dark hall)
     frame_log: Path | None = None  # per frame: {"mono": after the swap, "t": position shown}
+    keys_port: str | None = None  # live: the MIDI input the drum keys play into (keysend)
 
 
 DEFAULT_OPTIONS = WindowOptions()
@@ -140,6 +147,21 @@ def key_name(glfw: Any, key: int, mods: int) -> str:
         return ""
     shifted = name in ("left", "right") or name.isdigit()  # seek steps; store a viewpoint
     return f"shift+{name}" if mods & glfw.MOD_SHIFT and shifted else name
+
+
+def key_drum(body: BodyScene, map_name: str, sr: int | None = None) -> KeyDrum | None:
+    """The keys' drum on the body's kit under the file's note map (None if it won't load), its
+    sounds at the player's rate ``sr`` (default the mixer's)."""
+    from livedrummer.errors import LivedrummerError
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.render.keydrum import KeyDrum
+
+    try:
+        drum = KeyDrum(body.kit, load_note_map(map_name))
+        return drum if sr is None else KeyDrum(body.kit, drum.note_map, sr)
+    except LivedrummerError as err:
+        log.warning("keys: no drum keys (%s)", err)
+        return None
 
 
 def show(
@@ -233,10 +255,17 @@ def _loop(
     shown = frozenset(options.overlays)
     strips = overlay_image(size, shown, models)
     pending: list[str] = []
+    pads: list[tuple[int, int]] = []  # (note, velocity) of keys played since the last frame
+    drum = key_drum(body, performance.map_name, player.sr if player is not None else None)
 
     def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
-        if action in (glfw.PRESS, glfw.REPEAT):
-            pending.append(key_name(glfw, key, mods))
+        name = key_name(glfw, key, mods)
+        if name in KEYPADS:  # a drum key: the first press only (repeat is no roll)
+            hit = keypad_hit(name, bool(mods & glfw.MOD_SHIFT), bool(mods & glfw.MOD_CONTROL))
+            if action == glfw.PRESS and hit is not None:
+                pads.append(hit)
+        elif action in (glfw.PRESS, glfw.REPEAT):
+            pending.append(name)
 
     glfw.set_key_callback(window, on_key)
     view = ViewControl(glfw, window)
@@ -272,6 +301,12 @@ def _loop(
                 move, label = view.key(name, move, cameras, now)
                 camera = label or camera
         pending.clear()
+        for note, velocity in pads:
+            sound = drum.hit(note, velocity, now) if drum is not None else None
+            if sound is not None and player is not None:
+                player.renderer.hit(sound)
+            log.info("keys: note %d velocity %d", note, velocity)
+        pads.clear()
         move = view.mouse(move, now, renderer.size)
         t = transport.advance(now - last)
         last = now
@@ -292,7 +327,10 @@ def _loop(
         fb = glfw.get_framebuffer_size(window)
         if fb != renderer.size and fb[0] > 0 and fb[1] > 0:
             renderer.size = fb
-        renderer.draw(body.frame_at(t), move.at(now), target=ctx.screen)
+        frame = body.frame_at(t)
+        if drum is not None:
+            frame = drum.light(frame, now)
+        renderer.draw(frame, move.at(now), target=ctx.screen)
         if strips.names != shown or strips.frame_size != renderer.size:
             strips = overlay_image(renderer.size, shown, models)
         if not strips.empty:
