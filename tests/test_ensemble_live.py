@@ -129,3 +129,93 @@ def test_three_copies_play_the_same_notes_each_shifted_within_the_delay(tmp_path
     for i in range(COPIES):
         for j in range(i + 1, COPIES):
             assert np.abs(shifts[i] - shifts[j]).max() > 0.003
+
+
+def test_up_stage_with_three_copies_draws_three_drummers_on_the_same_notes(
+    gl_ok: None, tmp_path: Path
+) -> None:
+    """``up --stage`` with one live performer (a looped file) and ``copies = 3``: one input,
+    three synths (copies 1 and 2 with ``--vary``), one display drawing three drummers."""
+    stage = tmp_path / "stage.toml"
+    stage.write_text(
+        '[formation]\nshape = "line"\nspacing = 4.0\n\n'
+        "[ensemble]\ncopies = 3\nseed = 5\nwarp_ms = 40\namplitude = 0.2\n\n"
+        f'[[performer]]\nid = "a"\nsource = "file:{demo_groove()}"\n'
+    )
+    frames = tmp_path / "frames"
+    base = 7460
+    env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
+    up = subprocess.Popen(
+        [sys.executable, "-m", "services", "up", "--stage", str(stage), "--headless",
+         "--frames-dir", str(frames), "--png", "--fps", "5", "--size", "330x150",
+         "--camera", "front", "--port-base", str(base), "--no-journal",
+         "--delay-ms", str(DELAY_MS), "--lookahead-ms", str(LOOKAHEAD_MS)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=REPO,
+    )  # fmt: skip
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    fmt = p.PoseFormat.from_dtype(pose_dtype(len(load_kit("rock5").pieces)))
+    clock = MonotonicClock()
+    got: list[list[p.Message]] = [[] for _ in range(COPIES + 1)]  # the input, then the synths
+    try:
+        assert up.stdout is not None
+        deadline = time.monotonic() + 120
+        while "display running" not in (line := up.stdout.readline()):
+            assert line and time.monotonic() < deadline, up.stderr.read() if up.stderr else ""
+        subs = []
+        for i, port in enumerate([base] + [base + 20 * k + 10 for k in range(COPIES)]):
+            s = ctx.socket(zmq.SUB)
+            s.setsockopt(zmq.LINGER, 0)
+            for kind in (p.Kind.ONSET,) if i == 0 else (p.Kind.SHOWN_ONSET, p.Kind.POSE):
+                s.setsockopt(zmq.SUBSCRIBE, p.topic(kind))
+            s.connect(f"tcp://127.0.0.1:{port}")
+            subs.append(s)
+        until = clock.now() + 5.0
+        while clock.now() < until:
+            for sock in zmq.select(subs, [], [], 0.01)[0]:
+                got[subs.index(sock)].append(p.decode(sock.recv_multipart(), fmt))
+    finally:
+        up.send_signal(signal.SIGTERM)
+        _, err = up.communicate(timeout=60)
+        ctx.destroy(0)
+    assert up.returncode == 0, err[-2000:]
+    heard = np.concatenate([m.rows for m in got[0]])
+    assert heard.size > 10, err[-1500:]
+    delay, bound = DELAY_MS / 1000, (DELAY_MS - LOOKAHEAD_MS) / 1000
+    hand = {1, 2, 3, 4, 5, 9, 11}
+    mean_shift = []
+    for k in range(COPIES):
+        shown = np.concatenate([m.rows for m in got[k + 1] if m.kind is p.Kind.SHOWN_ONSET])
+        inside = shown[(shown["time_s"] > heard["time_s"][0] + delay + bound)
+                       & (shown["time_s"] < heard["time_s"][-1])]  # fmt: skip
+        assert inside.size > 5
+        track = PoseTrack(keep_s=60.0)
+        for m in got[k + 1]:
+            if isinstance(m.body, p.Pose):
+                track.add(m.body.time_s + m.body.rows["time_s"].astype(np.float64), m.body.rows)
+        show = track.show_s
+        shifts = []
+        for row in inside:  # the same note heard, shown D + 0..D - L after it
+            lag = row["time_s"] - delay - heard["time_s"][heard["note"] == row["note"]]
+            ok = lag[(lag >= -1e-9) & (lag <= bound + 1e-9)]
+            assert ok.size, f"copy {k}: note {row['note']} at {row['time_s']} was not heard"
+            shifts.append(float(ok.min()))
+            if row["instrument"] in hand and show[0] + 0.3 < row["time_s"] < show[-1] - 0.3:
+                assert np.min(np.abs(show - row["time_s"])) < 1e-6, f"copy {k}: no contact"
+        mean_shift.append(float(np.mean(shifts)))
+    # copy 0 is the performer itself; the copies are delayed, each by its own amount
+    assert mean_shift[0] < 1e-6 and mean_shift[1] > 1e-3 and mean_shift[2] > 1e-3, mean_shift
+    assert abs(mean_shift[1] - mean_shift[2]) > 1e-3, mean_shift
+    # the display drew the three drummers, each lighting its kit on the same notes
+    log = [json.loads(line) for line in (frames / "frames.jsonl").read_text().splitlines()]
+    assert [q["id"] for q in log[-1]["performers"]] == ["a", "a.1", "a.2"]
+    lit: dict[str, set[str]] = {"a": set(), "a.1": set(), "a.2": set()}
+    for record in log:
+        for q in record["performers"]:
+            lit[q["id"]].update(q["lit"])
+    assert lit["a"] and lit["a"] == lit["a.1"] == lit["a.2"], lit
+    from PIL import Image
+
+    img = np.asarray(Image.open(sorted(frames.glob("frame_*.png"))[-1])).astype(int)
+    seen = img[..., :3].sum(axis=2) > 120  # drummers and kits under their spots
+    thirds = [int(seen[:, k * 110 : (k + 1) * 110].sum()) for k in range(3)]
+    assert min(thirds) > 100, thirds  # three drummers side by side
