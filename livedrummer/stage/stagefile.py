@@ -91,17 +91,21 @@ class Stage:
         return out
 
     def live(self) -> list[tuple[int, Performer, Placement]]:
-        """The performers played live (with a ``source``), each with its performer id (its
-        index in the file, the id its input, synth and pose stream carry) and its spot.
-        Raises StageError when none has a source, or for an ensemble (copies are for render)."""
-        if self.copies > 1:
-            raise StageError(f"{self.source}: [ensemble] copies are for render --stage; a live "
-                             "stage plays each performer once")  # fmt: skip
-        out = [(k, p, self.placements[k]) for k, p in enumerate(self.performers)
+        """The drummers played live (a performer with a ``source``, and each of its ensemble
+        copies), each with its performer id (its index in :meth:`players`, the id its synth
+        and pose stream carry; a performer's own index in the file when there are no copies)
+        and its spot. A copy (``copy > 0``) plays its performer's input through a synth of its
+        own with :meth:`variation` (``synth --vary``). Raises StageError when none has a
+        source."""
+        out = [(k, p, spot) for k, (p, spot, _var) in enumerate(self.players())
                if p.source is not None]  # fmt: skip
         if not out:
             raise StageError(f'{self.source}: no performer has a live source = "..."')
         return out
+
+    def variation(self, k: int) -> Variation | None:
+        """The variation drummer ``k`` of :meth:`players` plays with (None: the performer)."""
+        return self.players()[k][2]
 
 
 def load_stage(path: Path) -> Stage:

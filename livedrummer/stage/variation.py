@@ -27,6 +27,16 @@ every stroke still ends on its drum:
 Live, a warp must not move a hit earlier than it arrives nor later than the visual delay
 allows: :func:`bounded` caps ``warp_s`` at ``delay - lookahead`` for that use.
 
+Live there are no bar lines to warp by (the stream does not know them) and no lookahead to
+move a hit earlier, so :func:`live_shift` is the live twin of the warp: a shift that is a
+smooth function of the onset time alone, ``0 <= shift(t) <= warp_s``, drawn at a knot every
+:data:`LIVE_KNOT_S` seconds from the seed and the knot's index (no state: any time can be asked
+in any order, and two synths with one seed agree) and joined by the same zero-slope Hermite
+curve as the gain; :func:`live_gain` is the amplitude variation on the same knots. The shift
+never makes a hit show before it is heard, and with ``warp_s <= delay - lookahead``
+(:func:`bounded`) its contact still lands within the visual delay. Its slope is at most
+``1.5·warp_s / LIVE_KNOT_S`` (under 0.19), so shifted hits keep their order.
+
 Limits: warping moves hits by at most ``warp_s`` (30 ms by default, well inside a beat), so
 two hits of one part never swap order; velocities are clipped to 1..127.
 """
@@ -40,6 +50,7 @@ import numpy as np
 
 MODES = ("bar", "piece")
 KNOT_BARS = 2  # amplitude and piece-mode warp knots every this many bars
+LIVE_KNOT_S = 2.0  # live shift and gain knots every this many seconds
 
 
 @dataclass(frozen=True)
@@ -171,3 +182,50 @@ def vary_rows(onsets: np.ndarray, controls: np.ndarray, edges: np.ndarray,
         np.argsort(ctl["time_s"], kind="stable"),
     )
     return on[order_on], ctl[order_ctl]
+
+
+def _live_knots(times: np.ndarray, seed: int, stream: int, values: np.ndarray | None,
+                high: float) -> np.ndarray:  # fmt: skip
+    """The value at each time of a curve through seeded knots every :data:`LIVE_KNOT_S`
+    seconds: uniform in ``0..high``, or picked from ``values`` when given."""
+    k = np.floor(times / LIVE_KNOT_S).astype(np.int64)
+    out = np.empty_like(times)
+    for i in np.unique(k):
+        knot_v = np.empty(2)
+        for j in (0, 1):
+            rng = np.random.default_rng([seed, stream, int(i + j) & 0x7FFFFFFFFFFFFFFF])
+            knot_v[j] = rng.choice(values) if values is not None else rng.uniform(0.0, high)
+        sel = k == i
+        knot_t = np.array([i * LIVE_KNOT_S, (i + 1) * LIVE_KNOT_S])
+        out[sel] = _smooth(knot_t, knot_v, times[sel])
+    return out
+
+
+def live_shift(times: np.ndarray, variation: Variation) -> np.ndarray:
+    """The live time shift at each onset time, in ``0..warp_s`` (see the module docstring)."""
+    t = np.asarray(times, np.float64)
+    if variation.warp_s == 0 or t.size == 0:
+        return np.zeros_like(t)
+    shift: np.ndarray = np.clip(_live_knots(t, variation.seed, 3, None, variation.warp_s), 0,
+                                variation.warp_s)  # fmt: skip
+    return shift
+
+
+def live_gain(times: np.ndarray, variation: Variation) -> np.ndarray:
+    """The live amplitude gain at each onset time, in ``1 - R .. 1 + R``."""
+    t = np.asarray(times, np.float64)
+    if variation.amplitude == 0 or t.size == 0:
+        return np.ones_like(t)
+    r = variation.amplitude
+    return _live_knots(t, variation.seed, 4, np.array([1 - r, 1.0, 1 + r]), 0.0)
+
+
+def vary_live(onsets: np.ndarray, variation: Variation) -> np.ndarray:
+    """A copy of live onset rows, each delayed by :func:`live_shift` and its velocity scaled by
+    :func:`live_gain` (clipped to 1..127); rows stay in their order."""
+    on = onsets.copy()
+    t = onsets["time_s"].astype(np.float64)
+    on["time_s"] = t + live_shift(t, variation)
+    g = live_gain(t, variation)
+    on["velocity"] = np.clip(np.rint(onsets["velocity"] * g), 1, 127).astype(on["velocity"].dtype)
+    return on

@@ -30,7 +30,7 @@ def run_stage_live(args: argparse.Namespace) -> int:
     live = stage.live()
     subs = [s.strip() for s in args.sub.split(",") if s.strip()]
     if len(subs) != len(live):
-        names = ", ".join(p.id for _, p, _ in live)
+        names = ", ".join(p.id if p.copy == 0 else f"{p.id}.{p.copy}" for _, p, _ in live)
         raise ConfigError(f"--sub: {len(subs)} endpoints for {len(live)} live performers of "
                           f"{args.stage} ({names}): give one each, in that order")  # fmt: skip
     if not 0 < args.fps <= 1000:
@@ -54,7 +54,9 @@ def run_stage_live(args: argparse.Namespace) -> int:
         from livedrummer.avatar.loader import load_avatar
 
         avatars = {p.id: load_avatar(p.avatar) for _, p, _ in live if p.avatar is not None}
-    performers = [StagePerformer(p.id, k, sub, load_kit(p.kit), spot, avatars.get(p.id))
+    kits = {p.kit: load_kit(p.kit) for _, p, _ in live}
+    performers = [StagePerformer(p.id if p.copy == 0 else f"{p.id}.{p.copy}", k, sub,
+                                 kits[p.kit], spot, avatars.get(p.id))
                   for (k, p, spot), sub in zip(live, subs, strict=True)]  # fmt: skip
     calibration = Calibration.load()
     config = StageConfig(

@@ -8,7 +8,9 @@ until Ctrl-C / SIGTERM; at exit it prints a one-line summary on stderr.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
+from typing import TYPE_CHECKING
 
 from .common import (
     Subparsers,
@@ -23,6 +25,11 @@ from .common import (
     rig_for,
 )
 from .keys import add_curve_options, security_from_args
+
+if TYPE_CHECKING:
+    from livedrummer.stage.variation import Variation
+
+log = logging.getLogger("livedrummer.synth")
 
 
 def register(sub: Subparsers) -> None:
@@ -47,6 +54,12 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--no-provisional", action="store_true",
                    help="publish a hit only once its hand is decided, L after it")  # fmt: skip
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
+    p.add_argument("--vary", type=int, default=None, metavar="SEED",
+                   help="be an ensemble copy: seeded smooth delay and gain per onset")  # fmt: skip
+    p.add_argument("--vary-ms", type=float, default=30.0, metavar="W",
+                   help="with --vary, most delay in ms, capped at D - L (default 30)")  # fmt: skip
+    p.add_argument("--vary-amplitude", type=float, default=0.2, metavar="R",
+                   help="with --vary, velocities scaled within 1 +- R (default 0.2)")  # fmt: skip
     add_style_options(p)
     add_osc_options(p, "preset, param, state")
     add_curve_options(p, server=True, client=True)
@@ -92,13 +105,14 @@ def run(args: argparse.Namespace) -> int:
     expression = load_expression(args.preset) if args.preset else None
     synth = LiveSynth(rig, params, strokes=StrokeParams(model=args.strokes), cc_open=cc_open,
                       note_map=note_map, expression=expression)  # fmt: skip
+    vary = vary_of(args)
     calibration = Calibration.load()
     config = SynthConfig(
         sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
         tick_hz=args.tick_hz, input_offset_s=calibration.input_ms / 1000.0,
         security=security_from_args(args), avatar="" if avatar is None else avatar.digest,
         osc_port=args.osc, osc_allow=osc_allow(args), preset=args.preset or "neutral",
-        cues=cues_of(args),
+        cues=cues_of(args), vary=vary,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)
@@ -112,3 +126,23 @@ def run(args: argparse.Namespace) -> int:
           f"played with preset {args.preset or 'neutral'}, {args.strokes} strokes",
           file=sys.stderr)  # fmt: skip
     return code
+
+
+def vary_of(args: argparse.Namespace) -> Variation | None:
+    """The copy's live variation from ``--vary``, its delay capped at D - L (``bounded``)."""
+    from livedrummer.errors import ConfigError
+    from livedrummer.stage.variation import Variation, bounded
+
+    if args.vary is None:
+        return None
+    if not 0 <= args.vary_ms <= 250:
+        raise ConfigError(f"--vary-ms {args.vary_ms:g}: expected 0..250 ms")
+    if not 0 <= args.vary_amplitude < 1:
+        raise ConfigError(f"--vary-amplitude {args.vary_amplitude:g}: expected 0 <= R < 1")
+    wanted = Variation(warp_s=args.vary_ms / 1000.0, amplitude=args.vary_amplitude,
+                       seed=args.vary)  # fmt: skip
+    vary = bounded(wanted, args.delay_ms / 1000.0, args.lookahead_ms / 1000.0)
+    if vary.warp_s < wanted.warp_s:
+        log.warning("--vary-ms %g capped at %g ms: D - L (--delay-ms minus --lookahead-ms)",
+                    args.vary_ms, vary.warp_s * 1000)  # fmt: skip
+    return vary

@@ -19,10 +19,20 @@ performer's hand decisions behind the busiest one). Each pose stream then keeps 
 sequence numbers, so a gap is one performer's loss. The cost is one process (about one
 Python interpreter's memory) per performer, and the display's one SUB socket each.
 
+Ensembles. With ``[ensemble] copies = N`` each live performer is drawn N times (at the
+formation's spots, :meth:`~livedrummer.stage.stagefile.Stage.players`): copy ``c`` of the
+performer whose first drummer is ``k0`` has its own synth, ids and ports ``k0 + c``, on the
+performer's one input daemon (which waits for its N subscribers), started with ``synth --vary
+SEED --vary-ms W --vary-amplitude R`` from the stage's ``[ensemble]`` (seed, warp_ms,
+amplitude): a seeded delay of every onset in ``0..D - L`` and a gain on its velocity
+(:func:`livedrummer.stage.variation.vary_live`, the live twin of the offline warp). With the
+default ``--delay-ms`` = ``--lookahead-ms`` there is no slack and the copies only differ in
+loudness: give ``up`` a larger ``--delay-ms``.
+
 Limits: a stage video has no drum track (the journals are per performer; ``render --stage``
-makes one from files); an ensemble's copies are for ``render --stage`` (each performer's
-``preset`` is played live by its synth); the sources are checked for syntax before starting,
-but a missing MIDI port is found by its input daemon (one line, or ``--wait``).
+makes one from files); each performer's ``preset`` is played live by its synth; the sources
+are checked for syntax before starting, but a missing MIDI port is found by its input daemon
+(one line, or ``--wait``).
 """
 
 from __future__ import annotations
@@ -35,6 +45,7 @@ from ..program import program_argv
 
 if TYPE_CHECKING:
     from livedrummer.stage.stagefile import Performer
+    from livedrummer.stage.variation import Variation
 
     from ..supervisor import ServiceSpec
 
@@ -43,7 +54,6 @@ PORTS_PER_PERFORMER = 20
 
 def stage_specs(args: argparse.Namespace, stage_file: Path) -> list[ServiceSpec]:
     """The services of a live stage, in start order (see the module docstring)."""
-    from livedrummer.stage.source import parse_source
     from livedrummer.stage.stagefile import load_stage
 
     from ..supervisor import ServiceSpec
@@ -57,25 +67,18 @@ def stage_specs(args: argparse.Namespace, stage_file: Path) -> list[ServiceSpec]
     specs: list[ServiceSpec] = []
     subs: list[str] = []
     for k, performer, _spot in live:
-        base = args.port_base + PORTS_PER_PERFORMER * k
-        ep = {name: f"tcp://{args.bind}:{base + d}" for name, d in
-              (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))}  # fmt: skip
-        near = {name: e.replace("tcp://0.0.0.0:", "tcp://127.0.0.1:") for name, e in ep.items()}
-        source = parse_source(performer.source or "", stage_file.parent)
-        src = source.input_argv()
-        src += ["--api", args.api] if source.opens_midi else []
-        src += ["--wait"] if args.wait and source.kind in ("midi", "serial") else []
-        journal = ["--no-journal"] if args.no_journal else []
-        specs.append(ServiceSpec(f"input-{performer.id}", [
-            *me, "input", *src, "--map", performer.map, "--performer", str(k),
-            "--pub", ep["in_pub"], "--control", ep["in_ctl"], "--wait-subscribers", "1",
-            *journal, *curve["input"]]))  # fmt: skip
+        ep, near = _endpoints(args, k)
+        name = performer.id if performer.copy == 0 else f"{performer.id}.{performer.copy}"
+        if performer.copy > 0:  # an ensemble copy: its own synth on its performer's input
+            near["in_pub"] = _endpoints(args, k - performer.copy)[1]["in_pub"]
+        else:
+            specs.append(_input(args, stage_file, k, performer, ep, curve["input"], stage.copies))
         synth_map = DEMO_MAP if performer.map == "auto" else performer.map
-        specs.append(ServiceSpec(f"synth-{performer.id}", [
+        specs.append(ServiceSpec(f"synth-{name}", [
             *me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
             "--control", ep["syn_ctl"], "--kit", performer.kit, "--map", synth_map,
             "--lookahead-ms", str(args.lookahead_ms), "--delay-ms", str(args.delay_ms),
-            "--performer", str(k), *_avatar(performer),
+            "--performer", str(k), *_avatar(performer), *_vary(stage.variation(k)),
             *(["--preset", performer.preset] if performer.preset else []),
             *curve["synth"]]))  # fmt: skip
         subs.append(near["syn_pub"])
@@ -92,6 +95,41 @@ def stage_specs(args: argparse.Namespace, stage_file: Path) -> list[ServiceSpec]
         display += ["--seconds", str(args.seconds)] if recorded(args) else []
     specs.append(ServiceSpec("display", display, ends_rig=windowed(args) or recorded(args)))
     return specs
+
+
+def _endpoints(args: argparse.Namespace, k: int) -> tuple[dict[str, str], dict[str, str]]:
+    """Drummer ``k``'s endpoints: as bound, and as a local service connects to them."""
+    base = args.port_base + PORTS_PER_PERFORMER * k
+    ep = {name: f"tcp://{args.bind}:{base + d}" for name, d in
+          (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))}  # fmt: skip
+    near = {name: e.replace("tcp://0.0.0.0:", "tcp://127.0.0.1:") for name, e in ep.items()}
+    return ep, near
+
+
+def _vary(variation: Variation | None) -> list[str]:
+    """``synth --vary`` options for an ensemble copy (the synth caps the shift at D - L)."""
+    if variation is None:
+        return []
+    return ["--vary", str(variation.seed), "--vary-ms", f"{variation.warp_s * 1000:g}",
+            "--vary-amplitude", f"{variation.amplitude:g}"]  # fmt: skip
+
+
+def _input(args: argparse.Namespace, stage_file: Path, k: int, performer: Performer,
+           ep: dict[str, str], curve: list[str], copies: int) -> ServiceSpec:  # fmt: skip
+    """Performer ``k``'s input daemon, waiting for its ``copies`` synths to subscribe."""
+    from livedrummer.stage.source import parse_source
+
+    from ..supervisor import ServiceSpec
+
+    source = parse_source(performer.source or "", stage_file.parent)
+    src = source.input_argv()
+    src += ["--api", args.api] if source.opens_midi else []
+    src += ["--wait"] if args.wait and source.kind in ("midi", "serial") else []
+    journal = ["--no-journal"] if args.no_journal else []
+    return ServiceSpec(f"input-{performer.id}", [
+        *program_argv(), "input", *src, "--map", performer.map, "--performer", str(k),
+        "--pub", ep["in_pub"], "--control", ep["in_ctl"], "--wait-subscribers", str(copies),
+        *journal, *curve])  # fmt: skip
 
 
 def _avatar(performer: Performer) -> list[str]:

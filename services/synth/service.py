@@ -70,6 +70,7 @@ from livedrummer.protocol import (
     decode,
     encode,
 )
+from livedrummer.stage.variation import Variation, vary_live
 from livedrummer.timeline.clock import Clock
 
 from ..badmsg import BadMessages
@@ -106,6 +107,9 @@ class SynthConfig:
     osc_allow: tuple[str, ...] = ()  # OSC senders besides loopback
     preset: str = "neutral"  # the expression's name, for the state reply
     cues: dict[str, Cue] = field(default_factory=dict)  # fired by OSC /livedrummer/cue
+    # an ensemble copy's live variation (livedrummer.stage.variation.vary_live), bounded by
+    # the caller to D - L; None plays the onsets as they come
+    vary: Variation | None = None
 
 
 @dataclass
@@ -369,6 +373,8 @@ class SynthService(Service):
             rows = msg.body.copy()
             if self.config.input_offset_s:
                 rows["time_s"] += self.config.input_offset_s
+            if self.config.vary is not None:
+                rows = vary_live(rows, self.config.vary)
             self.stats.onsets += rows.size
             self._last_onset_s = self.clock.now()
             return rows
