@@ -32,6 +32,7 @@ from livedrummer.audio.soundfont import (
     BLOCK,
     DRUM_CHANNEL,
     NOTE_HOLD_S,
+    _gm_tables,
     _open,
     _render,
     gm_note,
@@ -51,6 +52,7 @@ class SoundFontLiveMixer(LiveMixer):
         self._hold = round(NOTE_HOLD_S * sr)
         # queued events: [sample, velocity (0: note-off), note, the note-on's sample]
         self._events: list[list[int]] = []
+        _gm_tables()  # read the note map now: on the first stroke it would make it late
 
     def add(self, onset: np.void | np.ndarray, start: int) -> None:
         note = gm_note(int(onset["note"]), INSTRUMENTS[int(onset["instrument"])],

@@ -111,8 +111,6 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     sub = socket(ctx, zmq.SUB)
     try:
-        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_ONSET))
-        connect(sub, config.sub, "sound sub", config.security)
         if config.sfz is not None:
             from livedrummer.audio.sfz_live import SfzLiveMixer
             from livedrummer.audio.sfz_render import check_sfz
@@ -124,6 +122,10 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
             mixer = SoundFontLiveMixer(Path(config.soundfont), load_kit(config.kit), RATE)
         else:
             mixer = LiveMixer(load_kit(config.kit), RATE)
+        # subscribed once the kit is loaded (a SoundFont takes a while): what came meanwhile
+        # would queue and be read late
+        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_ONSET))
+        connect(sub, config.sub, "sound sub", config.security)
         cap = _capacity(stream)
         clock = StreamClock(RATE, output_latency_s(stream), period=output_period(stream))
         stats.latency_ms = clock.latency_s * 1000
