@@ -46,7 +46,30 @@ def click_kit(folder: Path) -> Path:
     return path
 
 
-@pytest.mark.parametrize("kit", ["built-in", "sfz"])
+def click_sf2(folder: Path) -> Path:
+    """A SoundFont whose one sample is a short click (a 1.5 kHz tone burst) on every note."""
+    from sf2_writer import write_sf2
+
+    t = np.arange(2400) / 48_000
+    click = 0.8 * np.sin(2 * np.pi * 1500.0 * t) * np.exp(-t / 0.01)
+    return write_sf2(folder / "clicks.sf2", np.round(click * 32767).astype("<i2"))
+
+
+def kit_argv(kit: str, folder: Path) -> list[str]:
+    if kit == "sfz":
+        return ["--sfz", str(click_kit(folder))]
+    if kit == "soundfont":
+        try:
+            import fluidsynth  # noqa: F401
+        except (ImportError, OSError) as exc:
+            if os.environ.get("CI"):
+                pytest.fail(f"FluidSynth not loadable ({exc})")
+            pytest.skip(f"FluidSynth not loadable ({exc})")
+        return ["--soundfont", str(click_sf2(folder))]
+    return []
+
+
+@pytest.mark.parametrize("kit", ["built-in", "sfz", "soundfont"])
 def test_each_onset_is_heard_at_onset_plus_d(jack_default_server: str, tmp_path: Path, kit: str
                                              ) -> None:  # fmt: skip
     from services.bench._jackrec import JackRecorder, attacks, steady
@@ -74,7 +97,7 @@ def test_each_onset_is_heard_at_onset_plus_d(jack_default_server: str, tmp_path:
         syn_eps = first_line(syn, tmp_path, "synth")
         disp = spawn(["display", "--live", "--headless", "--no-render", "--sub", syn_eps["pub"],
                       "--sound", "--audio-device", "system, JACK", "--fps", "30",
-                      *(["--sfz", str(click_kit(tmp_path))] if kit == "sfz" else [])],
+                      *kit_argv(kit, tmp_path)],
                      tmp_path, "display")  # fmt: skip
         procs.append(disp)
         first_line(disp, tmp_path, "display")
@@ -118,6 +141,11 @@ def test_each_onset_is_heard_at_onset_plus_d(jack_default_server: str, tmp_path:
     assert codes == [0, 0], err[-1500:]
     assert "no sound" not in err and rec.sources, err[-1500:]
     heard = attacks(rec)
+    if kit == "soundfont":  # the SoundFont's click sounds, transposed by FluidSynth from key 60
+        spectrum = np.abs(np.fft.rfft(rec.samples))
+        peak_hz = float(np.argmax(spectrum[1:]) + 1) * 48_000 / rec.samples.size
+        clicks_hz = [1500.0 * 2 ** ((note - 60) / 12) for note in (38, 76)]  # snare rim, block
+        assert min(abs(peak_hz / hz - 1) for hz in clicks_hz) < 0.03, (peak_hz, clicks_hz)
     expected = np.array(sent) + DELAY_S
     # each onset's nearest attack (an attack 100 ms off is another onset's, or none)
     near = heard[np.argmin(np.abs(heard[None, :] - expected[:, None]), axis=1)]

@@ -9,7 +9,8 @@ rendered (the new stroke arrives ``D`` before it sounds, so normally all of it).
 is the offline mix, block for block, wherever the offline one was not scaled for headroom.
 
 An SFZ kit plays live the same way (:class:`~livedrummer.audio.sfz_live.SfzLiveMixer`, the
-twin of :func:`~livedrummer.audio.sfz_render.render_sfz`).
+twin of :func:`~livedrummer.audio.sfz_render.render_sfz`), and a SoundFont through FluidSynth
+(:class:`~livedrummer.audio.soundfont_live.SoundFontLiveMixer`).
 
 Limits: no cymbal chokes (a grab arrives as a control, not yet forwarded to displays); a live
 stream cannot be scaled as a whole, so a sum over full scale is clipped at 1 and counted in
@@ -100,3 +101,6 @@ class LiveMixer:
             self.clipped += int(over.sum())
             np.clip(out, -1.0, 1.0, out=out)
         return out
+
+    def close(self) -> None:
+        """Free what the mixer holds (a SoundFont's synth; nothing here)."""

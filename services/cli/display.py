@@ -117,7 +117,7 @@ def register(sub: Subparsers) -> None:
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
     live.add_argument("--sound", action="store_true",
                       help="sound each onset the synth forwards at its show time (onset + D), "
-                      "built-in kit, on --audio-device")  # fmt: skip
+                      "on --audio-device: the built-in kit, --soundfont or --sfz")  # fmt: skip
     add_renamed(live, "--frames", live.add_argument(
         "--max-frames", type=int, metavar="N",
         help="stop after N frames (default: when stopped)"))  # fmt: skip
@@ -272,17 +272,18 @@ def run_live(args: argparse.Namespace) -> int:
     if args.sound:
         from ..display.live_sound import LiveSound, SoundConfig
 
-        sfz = None
-        if args.soundfont is not None:
+        sfz = sf2 = None
+        if args.soundfont is not None:  # an SFZ kit (--sfz) or a SoundFont (--soundfont)
             from livedrummer.audio.kitfile import check_kit_file, is_sfz
 
-            if not is_sfz(args.soundfont):
-                raise ConfigError(f"--live --sound plays the built-in kit or an SFZ kit "
-                                  f"(--sfz), not a SoundFont ({args.soundfont})")  # fmt: skip
             check_kit_file(args.soundfont)
-            sfz = str(args.soundfont)
+            if is_sfz(args.soundfont):
+                sfz = str(args.soundfont)
+            else:
+                sf2 = str(args.soundfont)
         sound = LiveSound(SoundConfig(args.sub, args.audio_device, args.kit,
-                                      security_from_args(args), sfz=sfz))  # fmt: skip
+                                      security_from_args(args), sfz=sfz,
+                                      soundfont=sf2))  # fmt: skip
         if not sound.start():
             sound = None
     try:

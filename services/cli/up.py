@@ -122,13 +122,14 @@ def register(sub: Subparsers) -> None:
                    help="headless: record the show and its drum track as MP4 "
                    "(default: none)")  # fmt: skip
     p.add_argument("--soundfont", type=Path, metavar="SF2",
-                   help="--video: drum track from this General MIDI SoundFont "
+                   help="--video and --sound: drum sounds from this General MIDI SoundFont "
                    "(default: the built-in kit)")  # fmt: skip
     p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
                    help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
                    "default: the built-in kit)")  # fmt: skip
     p.add_argument("--sound", action="store_true",
-                   help="the display sounds each onset at onset + D (built-in kit)")  # fmt: skip
+                   help="the display sounds each onset at onset + D (the built-in kit, "
+                   "--soundfont or --sfz)")  # fmt: skip
     p.add_argument("--audio-device", metavar="NAME",
                    help="--sound: the output, a device name or part of it "
                    "(default: the system's default output)")  # fmt: skip
@@ -266,8 +267,9 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     display_argv += ["--overlay", args.overlay] if args.overlay else []
     display_argv += ["--keys-port", KEYS_PORT] if args.keys else []
     display_argv += ["--sound"] if args.sound else []
-    if args.sound and args.soundfont is not None and args.soundfont.suffix.lower() == ".sfz":
-        display_argv += ["--sfz", str(args.soundfont)]  # the live sound plays the SFZ kit too
+    if args.sound and args.soundfont is not None:  # the live sound plays the kit file too
+        kind = "--sfz" if args.soundfont.suffix.lower() == ".sfz" else "--soundfont"
+        display_argv += [kind, str(args.soundfont)]
     display_argv += ["--audio-device", args.audio_device] if args.audio_device else []
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]

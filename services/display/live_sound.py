@@ -6,7 +6,8 @@ drawing never holds the interpreter the sound needs) subscribes to that kind onl
 small PortAudio output FIFO full (:data:`BUFFER_S`, rounded by PortAudio to a power of two of
 samples: 512 at 48 kHz, 10.7 ms) from a :class:`~livedrummer.audio.live_mix.LiveMixer` (the
 built-in kit; an SFZ kit's :class:`~livedrummer.audio.sfz_live.SfzLiveMixer` with
-``--sfz``), and starts each onset on the sample a
+``--sfz``; a SoundFont's :class:`~livedrummer.audio.soundfont_live.SoundFontLiveMixer` with
+``--soundfont``), and starts each onset on the sample a
 :class:`~livedrummer.audio.stream_clock.StreamClock` says is heard at its show time. An onset
 that arrives after its sample was written starts on the next sample free and is counted late
 (D must exceed the bus latency plus the FIFO: the default 30 ms does).
@@ -17,7 +18,7 @@ the display; it waits for the output to open and, where there is none, says so i
 the display runs silent. At the end the process reports its counts (onsets, late, underruns,
 clipped samples, bad messages) and the parent logs them.
 
-Limits: the built-in kit or an SFZ kit (a SoundFont live is not done); a remote synth's
+Limits: a remote synth's
 CURVE keys are passed to the subscriber as the display has them.
 """
 
@@ -56,6 +57,7 @@ class SoundConfig:
     security: Security = field(default_factory=Security)
     buffer_s: float = BUFFER_S
     sfz: str | None = None  # an SFZ kit instead of the built-in one
+    soundfont: str | None = None  # a General MIDI SoundFont (FluidSynth) instead
 
 
 @dataclass
@@ -105,19 +107,25 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
                     f" ({exc}): the display runs silent"))  # fmt: skip
         return
     stats = SoundStats()
+    mixer: LiveMixer | None = None
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     sub = socket(ctx, zmq.SUB)
     try:
-        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_ONSET))
-        connect(sub, config.sub, "sound sub", config.security)
-        mixer: LiveMixer
         if config.sfz is not None:
             from livedrummer.audio.sfz_live import SfzLiveMixer
             from livedrummer.audio.sfz_render import check_sfz
 
             mixer = SfzLiveMixer(check_sfz(Path(config.sfz)), load_kit(config.kit), RATE)
+        elif config.soundfont is not None:
+            from livedrummer.audio.soundfont_live import SoundFontLiveMixer
+
+            mixer = SoundFontLiveMixer(Path(config.soundfont), load_kit(config.kit), RATE)
         else:
             mixer = LiveMixer(load_kit(config.kit), RATE)
+        # subscribed once the kit is loaded (a SoundFont takes a while): what came meanwhile
+        # would queue and be read late
+        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_ONSET))
+        connect(sub, config.sub, "sound sub", config.security)
         cap = _capacity(stream)
         clock = StreamClock(RATE, output_latency_s(stream), period=output_period(stream))
         stats.latency_ms = clock.latency_s * 1000
@@ -153,6 +161,8 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
                 written += free
         stats.clipped = mixer.clipped
     finally:
+        if mixer is not None:
+            mixer.close()
         sub.close(0)
         ctx.term()
         stream.stop()
