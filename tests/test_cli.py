@@ -112,3 +112,5 @@ def test_demo_takes_size_camera_and_kit(tmp_path: Path) -> None:
         assert (v.width, v.height) == (320, 180)
     bad = run("demo", "--offline", "--camera", "nope", DISPLAY="", WAYLAND_DISPLAY="")
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--camera 'nope'" in bad.stderr
+    bad = run("demo", "--offline", "--map", "nope", DISPLAY="", WAYLAND_DISPLAY="")
+    assert bad.returncode == 2 and "unknown note map 'nope'" in bad.stderr

@@ -8,7 +8,8 @@ a window (Q quits); otherwise the headless display records the show, and its dru
 ``out/demo.mp4`` (1280x720, 30 fps) and the demo says where it is. ``--seconds S`` sets how
 long it plays (default 30; it runs in real time); ``--headless`` records even with a screen.
 
-``--size``, ``--camera`` and ``--kit`` mean what they mean for ``up`` and ``render``.
+``--size``, ``--camera``, ``--kit`` and ``--map`` mean what they mean for ``up`` and
+``render``.
 
 ``--offline`` is the offline twin: the same groove read as a file with full lookahead (the
 sticking of :func:`livedrummer.sticking.stick_performance`, as ``livedrummer sticking`` prints
@@ -67,6 +68,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--camera", metavar="NAME",
                    help="viewpoint (default stage live, front --offline)")  # fmt: skip
     add_kit_option(p)
+    p.add_argument("--map", default=DEMO_MAP,
+                   help=f"note map the groove is read with (default {DEMO_MAP}, the "
+                   "Groove MIDI Dataset's TD-11)")  # fmt: skip
     p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
                    help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
                    "default: the built-in kit)")  # fmt: skip
@@ -96,9 +100,9 @@ def run_live(args: argparse.Namespace) -> int:
 
     groove = demo_groove()
     print(f"demo: {groove.name} (Groove MIDI Dataset, CC BY 4.0), played live into the pipeline")
-    print_summary(read_midi_file(groove, load_note_map(DEMO_MAP)).summary())
+    print_summary(read_midi_file(groove, load_note_map(args.map)).summary())
     seconds = LIVE_SECONDS if args.seconds is None else args.seconds
-    argv = ["up", "--demo", "--seconds", f"{seconds:g}", "--kit", args.kit]
+    argv = ["up", "--demo", "--seconds", f"{seconds:g}", "--kit", args.kit, "--map", args.map]
     if args.camera is not None:
         argv += ["--camera", args.camera]
     if has_screen() and not args.headless:
@@ -135,7 +139,7 @@ def run_file(args: argparse.Namespace) -> int:
         raise RenderOptionError(f"--camera {camera!r}: expected one of {', '.join(CAMERA_NAMES)}")
     kit = load_kit(args.kit)
     groove = demo_groove()
-    note_map = load_note_map(DEMO_MAP)
+    note_map = load_note_map(args.map)
     performance = read_midi_file(groove, note_map)
     if args.seconds is not None:
         performance = first_seconds(performance, args.seconds)
