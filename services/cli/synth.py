@@ -55,7 +55,8 @@ def register(sub: Subparsers) -> None:
                    help="publish a hit only once its hand is decided, L after it")  # fmt: skip
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
     p.add_argument("--vary", type=int, default=None, metavar="SEED",
-                   help="be an ensemble copy: seeded smooth delay and gain per onset")  # fmt: skip
+                   help="be an ensemble copy: seeded smooth delay and gain per onset "
+                   "(default: not a copy)")  # fmt: skip
     p.add_argument("--vary-ms", type=float, default=30.0, metavar="W",
                    help="with --vary, most delay in ms, capped at D - L (default 30)")  # fmt: skip
     p.add_argument("--vary-amplitude", type=float, default=0.2, metavar="R",
