@@ -71,7 +71,9 @@ def test_header_layout_is_the_documented_32_bytes() -> None:
     assert head.startswith(p.topic(p.Kind.HEARTBEAT))
 
 
-@pytest.mark.parametrize("kind,rows", [(p.Kind.ONSET, onsets(5)), (p.Kind.CONTROL, controls(3))])
+@pytest.mark.parametrize("kind,rows", [(p.Kind.ONSET, onsets(5)), (p.Kind.CONTROL, controls(3)),
+                                       (p.Kind.SHOWN_ONSET, onsets(2)),
+                                       (p.Kind.SHOWN_CONTROL, controls(2))])  # fmt: skip
 def test_rows_round_trip_bytes_exactly(kind: p.Kind, rows: np.ndarray) -> None:
     msg = p.Message(kind, rows, performer=4, seq=99, send_time_s=3.25, flags=p.Flag.SIMULATED)
     frames = p.encode(msg)
@@ -251,6 +253,7 @@ def _all_valid_frames() -> list[list[bytes]]:
     return [
         good(),
         p.encode(p.Message(p.Kind.CONTROL, controls(2))),
+        p.encode(p.Message(p.Kind.SHOWN_CONTROL, controls(1), stream=p.Stream.POSES)),
         p.encode(p.Message(p.Kind.READY, hello(fmt))),
         p.encode(p.Message(p.Kind.POSE, p.Pose(1.0, np.zeros(1, POSE_DTYPE))), fmt),
         p.encode(p.Message(p.Kind.GAP, p.Gap(1, 0.0, 1.0, p.GapReason.SOURCE_LOST))),

@@ -37,3 +37,29 @@ def test_its_rows_are_checked_as_onsets_are() -> None:
     frames = p.encode(p.Message(p.Kind.SHOWN_ONSET, rows()))
     with pytest.raises(ProtocolError, match="payload"):
         p.decode([frames[0], frames[1][:30]])
+
+
+def controls() -> np.ndarray:
+    from livedrummer.timeline.events import CONTROL_DTYPE, ControlKind
+
+    r = np.zeros(2, CONTROL_DTYPE)
+    r["time_s"] = [10.5, 10.75]
+    r["kind"] = [ControlKind.CHOKE, ControlKind.HIHAT_PEDAL]
+    r["channel"], r["number"], r["value"] = 9, [49, 4], [127, 120]
+    return r
+
+
+def test_a_shown_control_round_trips_and_its_rows_are_checked_as_controls_are() -> None:
+    msg = p.Message(p.Kind.SHOWN_CONTROL, controls(), performer=2, seq=8, send_time_s=10.0,
+                    stream=p.Stream.POSES)  # fmt: skip
+    frames = p.encode(msg)
+    assert frames[0][:6] == p.topic(p.Kind.SHOWN_CONTROL) and frames[0][5] == 9
+    back = p.decode(frames)
+    assert back.kind is p.Kind.SHOWN_CONTROL and (back.performer, back.seq) == (2, 8)
+    assert back.rows.tobytes() == controls().tobytes()
+    bad = controls()
+    bad["value"][0] = 128
+    with pytest.raises(ProtocolError, match=r"row 0\.value"):
+        p.encode(p.Message(p.Kind.SHOWN_CONTROL, bad))
+    with pytest.raises(ProtocolError, match="needs a 1-d"):  # onset rows are not controls
+        p.encode(p.Message(p.Kind.SHOWN_CONTROL, rows()))

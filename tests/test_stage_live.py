@@ -113,6 +113,47 @@ def test_each_stream_keeps_its_own_sequence_and_refuses_another_performer() -> N
     assert (b["pose_messages"], b["missing"], b["bad"], b["restarts"]) == (5, 0, 1, 1), s
 
 
+def test_the_onsets_and_controls_a_synth_forwards_are_numbered_not_bad() -> None:
+    """A synth's pose stream also carries SHOWN_ONSET and SHOWN_CONTROL (for the sound): the
+    stage display counts their numbers (no false loss) and takes neither for a bad message."""
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.protocol import Kind, Message, Stream, encode
+    from livedrummer.stage.formation import Placement
+    from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
+    from services.display.live import MonotonicFrameClock
+    from services.display.stage_live import StageConfig, StageDisplay, StagePerformer
+
+    kit = load_kit("rock5")
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    pub = ctx.socket(zmq.PUB)
+    ep = f"tcp://127.0.0.1:{pub.bind_to_random_port('tcp://127.0.0.1')}"
+    who = [StagePerformer("a", 3, ep, kit, Placement(0.0, 0.0, 0.0))]
+    clock = MonotonicFrameClock()
+    display = StageDisplay(who, StageConfig(fps=50, render=False, frames=30), clock, ctx)
+    display.start()
+    stop = threading.Event()
+    thread = threading.Thread(target=display.run, args=(stop,))
+    thread.start()
+    try:
+        time.sleep(0.3)  # subscriptions in
+        now = clock.now()
+        onset, control = np.zeros(1, ONSET_DTYPE), np.zeros(1, CONTROL_DTYPE)
+        onset["velocity"], onset["time_s"], control["time_s"] = 90, now, now
+        pub.send_multipart(_pose_message(3, 0, now, len(kit.pieces)))
+        pub.send_multipart(encode(Message(Kind.SHOWN_ONSET, onset, 3, 1, now, Stream.POSES)))
+        pub.send_multipart(encode(Message(Kind.SHOWN_CONTROL, control, 3, 2, now,
+                                          Stream.POSES)))  # fmt: skip
+        pub.send_multipart(_pose_message(3, 3, now + 0.01, len(kit.pieces)))
+        thread.join(10)
+    finally:
+        stop.set()
+        thread.join(5)
+        pub.close(0)
+        ctx.term()
+    a = display.summary()["performers"]["a"]
+    assert (a["pose_messages"], a["missing"], a["bad"], a["restarts"]) == (2, 0, 0, 0), a
+
+
 rtmidi = pytest.importorskip("rtmidi")
 
 

@@ -44,6 +44,12 @@ Kinds (:data:`SPECS`; "frames" counts the payload frames after the header)::
                            on its pose stream as it arrives, so a display can sound it (and
                            draw a score) at the moment the picture shows its contact
                            (version 2; version 1 had no kind 8)
+    SHOWN_CONTROL 9 1      n >= 1 rows of events.CONTROL_DTYPE, ``time_s`` the control's
+                           show time: the synth forwards cymbal grabs and hi-hat pedal
+                           moves as it forwards onsets, so a display's sound cuts a ringing
+                           cymbal or hi-hat when the picture's does. Still version 2: a
+                           peer that predates kind 9 refuses it as an unknown kind (counted
+                           as a bad message, never misread)
 
 Limits checked by :func:`decode`: header size exact; payload_len <= ``max_payload``
 (default :data:`MAX_PAYLOAD`, 16 MiB) and equal to the frames' total; row payloads a whole

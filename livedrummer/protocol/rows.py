@@ -73,7 +73,7 @@ def check_controls(rows: np.ndarray) -> None:
 
 
 ROW_CHECKS = {Kind.ONSET: check_onsets, Kind.CONTROL: check_controls,
-              Kind.SHOWN_ONSET: check_onsets}  # fmt: skip
+              Kind.SHOWN_ONSET: check_onsets, Kind.SHOWN_CONTROL: check_controls}  # fmt: skip
 
 
 def rows_from(data: memoryview, dtype: np.dtype[Any], what: str) -> np.ndarray:

@@ -41,6 +41,7 @@ class Kind(IntEnum):
     HEARTBEAT = 6
     GAP = 7
     SHOWN_ONSET = 8  # an onset forwarded to displays, stamped with its show time
+    SHOWN_CONTROL = 9  # a control (choke, hi-hat pedal) forwarded likewise
 
 
 class Flag(IntFlag):
@@ -57,7 +58,7 @@ class Stream(IntEnum):
     """Conventional stream ids (a sender may use others)."""
 
     EVENTS = 0  # onsets, controls, heartbeats and gaps of one input daemon
-    POSES = 1  # poses of one synth, and the onsets it forwards to displays (SHOWN_ONSET)
+    POSES = 1  # poses of one synth, and the onsets and controls it forwards to displays
     CONTROL = 2  # hello/ready on a control socket (sequence numbers unused there)
 
 
@@ -89,6 +90,7 @@ SPECS: dict[int, KindSpec] = {
         KindSpec(Kind.HEARTBEAT, 1, "empty"),
         KindSpec(Kind.GAP, 1, "struct", fixed=GAP_PAYLOAD),
         KindSpec(Kind.SHOWN_ONSET, 1, "rows", rows=ONSET_DTYPE),
+        KindSpec(Kind.SHOWN_CONTROL, 1, "rows", rows=CONTROL_DTYPE),
     )
 }
 

@@ -58,7 +58,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
     add_kit_option(p)
     p.add_argument("--map", help="note map name or .toml path (default auto: the bundled map "
-                   "that knows the most of the file's notes; roland-td for the demo)")  # fmt: skip
+                   "that knows the most of the file's notes; roland-td for the demo; --live "
+                   "--sound: the synth's map, which reads its grabs and pedal, default "
+                   "roland-td)")  # fmt: skip
     add_channel_option(p)
     p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="first viewpoint")
     p.add_argument("--size", default="1280x720", help="window size WIDTHxHEIGHT")
@@ -281,9 +283,13 @@ def run_live(args: argparse.Namespace) -> int:
                 sfz = str(args.soundfont)
             else:
                 sf2 = str(args.soundfont)
+        from livedrummer.midi.notemap import load_note_map
+
+        note_map = args.map or DEMO_MAP
+        load_note_map(note_map)  # a bad --map is one line here, not a silent sound process
         sound = LiveSound(SoundConfig(args.sub, args.audio_device, args.kit,
-                                      security_from_args(args), sfz=sfz,
-                                      soundfont=sf2))  # fmt: skip
+                                      security_from_args(args), sfz=sfz, soundfont=sf2,
+                                      note_map=note_map))  # fmt: skip
         if not sound.start():
             sound = None
     try:

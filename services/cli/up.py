@@ -266,7 +266,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     display_argv += ["--background", args.background] if args.background else []
     display_argv += ["--overlay", args.overlay] if args.overlay else []
     display_argv += ["--keys-port", KEYS_PORT] if args.keys else []
-    display_argv += ["--sound"] if args.sound else []
+    display_argv += ["--sound", "--map", map_name] if args.sound else []
     if args.sound and args.soundfont is not None:  # the live sound plays the kit file too
         kind = "--sfz" if args.soundfont.suffix.lower() == ".sfz" else "--soundfont"
         display_argv += [kind, str(args.soundfont)]

@@ -21,9 +21,10 @@ received by then, so a test or a bench can check contacts and latency without pi
 
 Bad input. The SUB socket takes every message that starts with the protocol magic (so a
 synth of another protocol version is seen and counted, not filtered into silence); a message
-that fails to decode, or a valid one that is not a POSE (or a SHOWN_ONSET, the onsets the
-synth forwards: counted, sequence-checked and left to the sound process, which subscribes to
-them on its own socket, :mod:`~services.display.live_sound`), is dropped and counted per kind in
+that fails to decode, or a valid one that is not a POSE (or a SHOWN_ONSET or SHOWN_CONTROL,
+the onsets and controls the synth forwards: counted, sequence-checked and left to the sound
+process, which subscribes to them on its own socket, :mod:`~services.display.live_sound`), is
+dropped and counted per kind in
 ``bad`` (:class:`~services.badmsg.BadMessages`, logged once per kind, totals logged when the
 loop ends and in ``summary()``), and the next one is read.
 
@@ -209,6 +210,7 @@ class LiveStats:
     bad: int = 0
     frames: int = 0
     shown_onsets: int = 0  # onsets the synth forwarded (SHOWN_ONSET; --sound plays them)
+    shown_controls: int = 0  # controls it forwarded (SHOWN_CONTROL; --sound cuts by them)
     held: int = 0  # frames drawn with no pose at or after their show time - 1 frame
 
 
@@ -498,6 +500,10 @@ class LiveDisplay(Service):
                     self._onset_log.append((self.clock.now(), msg.rows.copy()))
                 elif self._strips_fed:
                     self.strips.add_onsets(msg.rows)
+                continue
+            if msg.kind is Kind.SHOWN_CONTROL:  # grabs and the pedal (sounded apart)
+                self._observe(msg)
+                self.stats.shown_controls += msg.rows.size
                 continue
             if not isinstance(msg.body, Pose):
                 self.stats.bad += 1

@@ -1,8 +1,9 @@
 """``display --live --sound``: each onset the synth forwards, sounded at its show time.
 
 The synth forwards every onset on its pose stream the moment it reads it, stamped with its
-show time (onset + D; protocol kind SHOWN_ONSET). A process of its own (so the display's
-drawing never holds the interpreter the sound needs) subscribes to that kind only, keeps a
+show time (onset + D; protocol kind SHOWN_ONSET), and every control likewise (SHOWN_CONTROL). A
+process of its own (so the display's drawing never holds the interpreter the sound needs)
+subscribes to those two kinds only, keeps a
 small PortAudio output FIFO full (:data:`BUFFER_S`, rounded by PortAudio to a power of two of
 samples: 512 at 48 kHz, 10.7 ms) from a :class:`~livedrummer.audio.live_mix.LiveMixer` (the
 built-in kit; an SFZ kit's :class:`~livedrummer.audio.sfz_live.SfzLiveMixer` with
@@ -10,7 +11,10 @@ built-in kit; an SFZ kit's :class:`~livedrummer.audio.sfz_live.SfzLiveMixer` wit
 ``--soundfont``), and starts each onset on the sample a
 :class:`~livedrummer.audio.stream_clock.StreamClock` says is heard at its show time. An onset
 that arrives after its sample was written starts on the next sample free and is counted late
-(D must exceed the bus latency plus the FIFO: the default 30 ms does).
+(D must exceed the bus latency plus the FIFO: the default 30 ms does). A control is read
+through the note map (``--map``, the synth's) into a cut (:class:`~livedrummer.audio.cuts.
+CutReader`: a cymbal grab, the hi-hat pedal closing), which the mixer applies on the sample
+heard at its show time: the ringing cymbal or hi-hat stops when the picture's does.
 
 One loop, no Python in the audio thread: wait on the socket for up to a millisecond, read
 what came, look at the FIFO, top it up. :class:`LiveSound` starts and stops the process from
@@ -58,11 +62,13 @@ class SoundConfig:
     buffer_s: float = BUFFER_S
     sfz: str | None = None  # an SFZ kit instead of the built-in one
     soundfont: str | None = None  # a General MIDI SoundFont (FluidSynth) instead
+    note_map: str = "roland-td"  # the synth's note map: which piece a grab is on, the pedal
 
 
 @dataclass
 class SoundStats:
     onsets: int = 0
+    cuts: int = 0  # grabs and hi-hat closings applied
     late: int = 0  # started after their show time (arrived after their sample was written)
     underruns: int = 0
     clipped: int = 0
@@ -72,7 +78,8 @@ class SoundStats:
 
     def line(self) -> str:
         lead = np.percentile(self.lead_ms, [50, 1]) if self.lead_ms else [np.nan, np.nan]
-        return (f"sound: {self.onsets} onsets, {self.late} late, {self.underruns} underruns, "
+        return (f"sound: {self.onsets} onsets, {self.cuts} cuts, {self.late} late, "
+                f"{self.underruns} underruns, "
                 f"{self.clipped} samples clipped, {self.bad} bad messages; onsets placed "
                 f"{lead[0]:.1f} ms (p50) / {lead[1]:.1f} ms (p1) ahead of the output, "
                 f"output latency {self.latency_ms:.2f} ms")  # fmt: skip
@@ -92,9 +99,11 @@ def _capacity(stream: Any) -> int:
 def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
     """The process body: ``report`` (a queue) gets ("ready", None) or ("error", line), and
     ("stats", SoundStats) at the end; runs until ``stop`` (an Event) is set."""
+    from livedrummer.audio.cuts import CutReader
     from livedrummer.audio.live_mix import LiveMixer
     from livedrummer.audio.stream_clock import StreamClock
     from livedrummer.kit.loader import load_kit
+    from livedrummer.midi.notemap import load_note_map
 
     try:
         import sounddevice as sd
@@ -111,20 +120,23 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     sub = socket(ctx, zmq.SUB)
     try:
+        kit = load_kit(config.kit)
+        cuts = CutReader(load_note_map(config.note_map), kit)
         if config.sfz is not None:
             from livedrummer.audio.sfz_live import SfzLiveMixer
             from livedrummer.audio.sfz_render import check_sfz
 
-            mixer = SfzLiveMixer(check_sfz(Path(config.sfz)), load_kit(config.kit), RATE)
+            mixer = SfzLiveMixer(check_sfz(Path(config.sfz)), kit, RATE)
         elif config.soundfont is not None:
             from livedrummer.audio.soundfont_live import SoundFontLiveMixer
 
-            mixer = SoundFontLiveMixer(Path(config.soundfont), load_kit(config.kit), RATE)
+            mixer = SoundFontLiveMixer(Path(config.soundfont), kit, RATE)
         else:
-            mixer = LiveMixer(load_kit(config.kit), RATE)
+            mixer = LiveMixer(kit, RATE)
         # subscribed once the kit is loaded (a SoundFont takes a while): what came meanwhile
         # would queue and be read late
         sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_ONSET))
+        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_CONTROL))
         connect(sub, config.sub, "sound sub", config.security)
         cap = _capacity(stream)
         clock = StreamClock(RATE, output_latency_s(stream), period=output_period(stream))
@@ -141,9 +153,17 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
                     except zmq.Again:
                         break
                     try:
-                        rows = decode(frames).rows
+                        msg = decode(frames)
+                        rows = msg.rows
                     except ProtocolError:
                         stats.bad += 1
+                        continue
+                    if msg.kind is Kind.SHOWN_CONTROL:
+                        for row in rows:
+                            cut = cuts.take(row)
+                            if cut is not None:
+                                mixer.cut(cut[0], cut[1], max(written, clock.sample_for(cut[1])))
+                                stats.cuts += 1
                         continue
                     for row in rows:
                         at = clock.sample_for(float(row["time_s"]))

@@ -75,6 +75,7 @@ from .video import VideoSettings, VideoWriter
 from .window import WindowOptions
 
 log = logging.getLogger("livedrummer.display")
+_FORWARDED = (Kind.SHOWN_ONSET, Kind.SHOWN_CONTROL)  # the synth's forwards: no poses, not bad
 GLOW_LIT = 0.1  # a piece glowing above this was struck within about 0.3 s (a contact)
 
 
@@ -157,7 +158,7 @@ class _Stream:
                 self.stats.bad += 1
                 self.bad.unexpected(f"{msg.kind.name} of performer {msg.performer}")
                 continue
-            if msg.kind is Kind.SHOWN_ONSET:  # the synth's forwarded onsets share its numbers
+            if msg.kind in _FORWARDED:  # the synth's forwarded onsets/controls share its numbers
                 self._observe(msg)
                 continue
             if not isinstance(msg.body, Pose):

@@ -14,7 +14,10 @@ it reads the socket there, so a hit is answered within a step (a few ms) even wh
 is busy.
 Each onset is also forwarded on the pose socket the moment it is read, before the synth
 works on it, as a SHOWN_ONSET message stamped with its show time (onset + D): a display sounds
-it then (``display --live --sound``), a score strip can draw it.
+it then (``display --live --sound``), a score strip can draw it. Each control (a cymbal grab,
+the hi-hat pedal) is forwarded likewise as SHOWN_CONTROL, so the display's sound stops a
+grabbed cymbal or a closing hi-hat at the show time the picture's stops (an ensemble copy's
+``vary`` shift is not applied to controls: a grab stays where it was played).
 Sequence numbers of the input stream are tracked, so a gap upstream is counted and logged. The
 service base (:mod:`services.service`) runs the control socket (a second thread answering HELLO
 with READY; the READY carries the pose format, which a display checks against its own), start-up
@@ -121,6 +124,7 @@ class SynthStats:
     pose_messages: int = 0
     pose_samples: int = 0
     forwarded: int = 0  # onsets forwarded to displays (SHOWN_ONSET)
+    forwarded_controls: int = 0  # controls forwarded to displays (SHOWN_CONTROL)
     first_seq: int | None = None
     last_seq: int | None = None
     # read -> quick contacts sent, per batch (the latest ones: a show runs for hours)
@@ -301,16 +305,20 @@ class SynthService(Service):
         self.stats.pose_messages += 1
         self.stats.pose_samples += batch.show_s.size
 
-    def _forward(self, rows: np.ndarray) -> None:
-        """The onsets as they arrive, on the pose stream, stamped with their show time
-        (onset + D): SHOWN_ONSET, for displays that sound them or draw a score."""
+    def _forward(self, rows: np.ndarray, kind: Kind = Kind.SHOWN_ONSET) -> None:
+        """Onsets (SHOWN_ONSET) or controls (SHOWN_CONTROL) as they arrive, on the pose
+        stream, stamped with their show time (time + D), for displays that sound them or
+        draw a score."""
         shown = rows.copy()
         shown["time_s"] += self.synth.params.delay_s
-        msg = Message(Kind.SHOWN_ONSET, shown, self.config.performer, self._seq,
-                      self.clock.now(), Stream.POSES)  # fmt: skip
+        msg = Message(kind, shown, self.config.performer, self._seq, self.clock.now(),
+                      Stream.POSES)  # fmt: skip
         self._pub.send_multipart(encode(msg), copy=False)
         self._seq += 1
-        self.stats.forwarded += shown.size
+        if kind is Kind.SHOWN_ONSET:
+            self.stats.forwarded += shown.size
+        else:
+            self.stats.forwarded_controls += shown.size
 
     def _drain(self) -> None:
         """Everything waiting on the SUB socket, in batches of up to :data:`DRAIN_BATCH`
@@ -379,6 +387,11 @@ class SynthService(Service):
             self._last_onset_s = self.clock.now()
             return rows
         if msg.kind is Kind.CONTROL and isinstance(msg.body, np.ndarray):
+            controls = msg.body
+            if self.config.input_offset_s:
+                controls = controls.copy()
+                controls["time_s"] += self.config.input_offset_s
+            self._forward(controls, Kind.SHOWN_CONTROL)  # in arrival order with the onsets
             for row in msg.body:
                 self.synth.control(row)
             self.stats.controls += msg.body.size
@@ -399,6 +412,7 @@ class SynthService(Service):
         return {
             "onsets": s.onsets,
             "controls": s.controls,
+            "forwarded_controls": s.forwarded_controls,
             "missing": s.missing,
             "bad": s.bad,
             "pose_messages": s.pose_messages,
