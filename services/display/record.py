@@ -12,7 +12,8 @@ only; its timing goes into a sidecar ``<file>.timing.json`` (``show0_s``, ``fps`
 ``frames``), and whoever knows the onsets (``livedrummer up --video`` reads them back from the
 session journal) makes the track with :func:`recording_track` (onsets at onset + D on the
 video's time, cymbal chokes from the journaled controls stopping the sound as they stop the
-cymbal, the built-in kit or a SoundFont) and calls :func:`mux_audio`, which copies the video
+cymbal, and the hi-hat pedal closing the ringing hi-hat, as the live sound does; the built-in
+kit or a SoundFont) and calls :func:`mux_audio`, which copies the video
 packets into a new file beside an AAC track (no re-encoding of the picture).
 
 Memory stays bounded however long the show: the recorder keeps one image (the last, for
@@ -122,19 +123,21 @@ def recording_track(
     """The drum track of a recording, (frames / fps * sample_rate, 2) float32: ``onsets`` and
     ``controls`` (stamped on the shared clock) sounded at ``time + delay_s`` on the video's
     time, each grab in ``controls`` stopping its cymbal (the notes read through ``note_map``
-    onto ``kit``'s pieces, as the body does), with ``soundfont``'s kit when given.
+    onto ``kit``'s pieces, as the body does) and each closing of the hi-hat pedal its ringing
+    hi-hat (:func:`~livedrummer.audio.cuts.sound_chokes`, as the live sound cuts them), with
+    ``soundfont``'s kit when given.
 
     The track is mixed into :func:`spooled_track`, not into the process's memory: a show's
     track is 1.4 GB an hour."""
+    from livedrummer.audio.cuts import sound_chokes
     from livedrummer.audio.mix import mix_onsets
-    from livedrummer.body.sample import kit_choke_times
 
     shift = delay_s - timing.show0_s
     on = np.sort(onsets, order="time_s")
     on["time_s"] += shift
     ctl = np.sort(controls, order="time_s")
     ctl["time_s"] += shift
-    chokes = kit_choke_times(ctl, note_map, kit)
+    chokes = sound_chokes(ctl, note_map, kit)  # grabs, and the pedal closing the hi-hat
     duration = timing.frames / timing.fps
     out = spooled_track(round(duration * sample_rate))
     if soundfont is not None:
