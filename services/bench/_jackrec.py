@@ -6,8 +6,10 @@ connected as it appears (JACK sums them), written per cycle with the shared-cloc
 (``CLOCK_MONOTONIC``) time the cycle ran (not JACK's frame time: on the dummy driver its
 estimate drifts by tens of ms in the first seconds). :meth:`JackRecorder.stop` returns a
 :class:`Recording`: the samples and, per sample, the time it is heard (its cycle's time plus
-its place in the cycle and the playback latency the source port reports). :func:`attacks`
-finds the sound's attacks in it. Tests and ``bench audio`` use both.
+its place in the cycle and the playback latency the source port reports, the highest read
+every 20 ms while connected: right after the connection JACK may not have computed it yet,
+and a run read 0 then came out 5.3 ms early throughout). :func:`attacks` finds the sound's
+attacks in it. Tests and ``bench audio`` use both.
 """
 
 from __future__ import annotations
@@ -70,13 +72,17 @@ class JackRecorder:
         self.proc.terminate()
         out, _ = self.proc.communicate(timeout=10)
         sources, latency, stats = [], 0, (0, 0.0, 0.0)
+        final: list[int] = []  # the latency read while connected (see jack_rec.c)
         for line in out.splitlines():
             word = line.split()
             if word and word[0] == "connected":
                 sources.append(word[1])
                 latency = max(latency, int(word[2]))
+            elif word and word[0] == "latency":
+                final.append(int(word[1]))
             elif word and word[0] == "stats":
                 stats = (int(word[1]), float(word[2]), float(word[3]))
+        latency = max(final, default=latency)
         raw = self._out.read_bytes()
         shutil.rmtree(self._dir, ignore_errors=True)
         chunks, times, cycles, at = [], [], [], 0

@@ -10,6 +10,8 @@ sent. A JACK client records everything the display sounds (:mod:`._jackrec`). Pr
 - onset on the bus -> sound at the output, minus D: p50 / p99 / max over every onset, and over
   the onsets where the JACK graph ran steadily (the dummy driver of a loaded machine stalls;
   a stall moves every sound around it);
+- onset on the bus -> forwarded by the synth (SHOWN_ONSET, seen here): how many came too late
+  to be placed on their sample (later than D less the sound's FIFO);
 - the sound process's own counts: onsets placed late (they arrived after their sample was
   written), output underruns, clipped samples;
 - JACK's xruns and DSP load (mean and max, sampled every 20 ms): the callback load.
@@ -68,8 +70,10 @@ def stop(proc: subprocess.Popen[str]) -> None:
 def pct(x: np.ndarray) -> str:
     if not x.size:
         return "n/a"
-    q = np.percentile(np.abs(x) * 1000, [50, 99])
-    return f"p50 {q[0]:.2f} / p99 {q[1]:.2f} / max {np.abs(x).max() * 1000:.2f} ms"
+    q = np.percentile(np.abs(x) * 1000, [50, 90, 99])
+    return (f"p50 {q[0]:.2f} / p90 {q[1]:.2f} / p99 {q[2]:.2f} / max "
+            f"{np.abs(x).max() * 1000:.2f} ms (sizes; signed median "
+            f"{np.median(x) * 1000:+.2f})")  # fmt: skip
 
 
 def run(seconds: float, rate: float, delay_s: float, period: int) -> int:
@@ -84,6 +88,13 @@ def run(seconds: float, rate: float, delay_s: float, period: int) -> int:
         port = bus.bind_to_random_port("tcp://127.0.0.1")
         procs: list[subprocess.Popen[str]] = []
         sent: list[float] = []
+        came: dict[float, float] = {}  # an onset's bus time -> when the synth forwarded it
+
+        def back(frames: list[bytes]) -> None:
+            at = time.monotonic()
+            for row in p.decode(frames).rows:
+                came.setdefault(round(float(row["time_s"]) - delay_s, 6), at)
+
         recorder = JackRecorder(env)
         try:
             syn = spawn(["synth", "--sub", f"tcp://127.0.0.1:{port}", "--pub",
@@ -114,8 +125,9 @@ def run(seconds: float, rate: float, delay_s: float, period: int) -> int:
             start = time.monotonic()
             for k in range(round(seconds * rate)):
                 due = start + k / rate
-                if due - time.monotonic() > 0.002:
-                    time.sleep(due - time.monotonic() - 0.002)
+                while (left := due - time.monotonic() - 0.002) > 0:  # forwards seen as they come
+                    if shown.poll(max(1, int(left * 1000))):
+                        back(shown.recv_multipart())
                 while time.monotonic() < due:
                     time.sleep(0.0002)
                 t = time.monotonic()
@@ -124,8 +136,11 @@ def run(seconds: float, rate: float, delay_s: float, period: int) -> int:
                 seq += 1
                 sent.append(t)
                 while shown.poll(0):
-                    shown.recv_multipart()
-            time.sleep(0.6)
+                    back(shown.recv_multipart())
+            until = time.monotonic() + 0.6
+            while (left := until - time.monotonic()) > 0:
+                if shown.poll(max(1, int(left * 1000))):
+                    back(shown.recv_multipart())
         finally:
             for proc in reversed(procs):
                 stop(proc)
@@ -148,6 +163,14 @@ def run(seconds: float, rate: float, delay_s: float, period: int) -> int:
     print(f"  heard: {int(found.sum())} of {len(sent)} onsets")
     print(f"  onset on the bus -> sound at the output, - D: {pct(lag[found])}")
     print(f"    where the JACK graph ran steadily ({int(ok.sum())} onsets): {pct(lag[ok])}")
+    forward = np.array([came.get(round(t, 6), np.inf) - t for t in sent])
+    # the sound process writes about BUFFER_S ahead: an onset forwarded later than D - that
+    # cannot be placed on its sample
+    in_time = delay_s - 0.0107
+    late_fw, unseen = int(np.sum(forward > in_time)), int(np.sum(~np.isfinite(forward)))
+    print(f"  onset on the bus -> forwarded by the synth (SHOWN_ONSET): "
+          f"{pct(forward[np.isfinite(forward)])}; {late_fw} later than D - 10.7 ms (the "
+          f"sound's FIFO), {unseen} not seen")  # fmt: skip
     print(f"  {line}")
     print(f"  JACK: {rec.xruns} xruns, DSP load mean {rec.load_mean:.1f} % / max "
           f"{rec.load_max:.1f} %; late onsets {late.group(1) if late else '?'}")  # fmt: skip

@@ -3,7 +3,10 @@
  * Usage: jack_rec OUT.bin.  File: per cycle int64 mono_us (CLOCK_MONOTONIC when the cycle
  * runs), uint32 nframes, nframes float32.  Stdout: "ready JACK_US MONO_US", at exit "stats
  * XRUNS LOAD_MEAN LOAD_MAX" (JACK's xruns and DSP load, %, sampled every 20 ms) and, per source
- * connected, "connected PORT LATENCY_FRAMES" (the port's playback latency, max). */
+ * connected, "connected PORT LATENCY_FRAMES" (the port's playback latency, max) and, at exit,
+ * "latency LATENCY_FRAMES": the highest of the sources' latencies read every 20 ms while they
+ * were connected, since right after a connection JACK may not have computed it yet (a port
+ * not yet connected to the playback ports reads 0). */
 #include <jack/jack.h>
 #include <jack/ringbuffer.h>
 #include <signal.h>
@@ -57,6 +60,20 @@ static void connect_new(void) {
     jack_free(ports);
 }
 
+static jack_nframes_t latency_max;
+
+static void read_latency(void) {
+    const char **ports = jack_port_get_all_connections(client, port);
+    for (int i = 0; ports && ports[i]; i++) {
+        jack_port_t *src = jack_port_by_name(client, ports[i]);
+        if (!src) continue;
+        jack_latency_range_t range;
+        jack_port_get_latency_range(src, JackPlaybackLatency, &range);
+        if (range.max > latency_max) latency_max = range.max;
+    }
+    if (ports) jack_free(ports);
+}
+
 int main(int argc, char **argv) {
     if (argc < 2) { fprintf(stderr, "usage: jack_rec OUT.bin\n"); return 1; }
     FILE *out = fopen(argv[1], "wb");
@@ -85,10 +102,12 @@ int main(int argc, char **argv) {
         loads++;
         if (load > load_max) load_max = load;
         connect_new();
+        read_latency();
         size_t got;
         while ((got = jack_ringbuffer_read(rb, chunk, sizeof chunk)) > 0) fwrite(chunk, 1, got, out);
         usleep(20000);
     }
+    printf("latency %u\n", (unsigned)latency_max);
     jack_deactivate(client);
     size_t got;
     while ((got = jack_ringbuffer_read(rb, chunk, sizeof chunk)) > 0) fwrite(chunk, 1, got, out);
