@@ -10,8 +10,11 @@ built-in kit; an SFZ kit's :class:`~livedrummer.audio.sfz_live.SfzLiveMixer` wit
 ``--sfz``; a SoundFont's :class:`~livedrummer.audio.soundfont_live.SoundFontLiveMixer` with
 ``--soundfont``), and starts each onset on the sample a
 :class:`~livedrummer.audio.stream_clock.StreamClock` says is heard at its show time. An onset
-that arrives after its sample was written starts on the next sample free and is counted late
-(D must exceed the bus latency plus the FIFO: the default 30 ms does). A control is read
+is held until the block its sample falls in is about to be written and mapped to its sample
+then, not when it arrives (a D earlier): a slip of the device meanwhile (JACK's dummy driver on
+a loaded machine) is then already in the clock. An onset whose sample was written already
+starts on the next sample free and is counted late (D must exceed the bus latency plus the
+FIFO: the default 30 ms does). A control is read
 through the note map (``--map``, the synth's) into a cut (:class:`~livedrummer.audio.cuts.
 CutReader`: a cymbal grab, the hi-hat pedal closing), which the mixer applies on the sample
 heard at its show time: the ringing cymbal or hi-hat stops when the picture's does.
@@ -69,7 +72,7 @@ class SoundConfig:
 class SoundStats:
     onsets: int = 0
     cuts: int = 0  # grabs and hi-hat closings applied
-    late: int = 0  # started after their show time (arrived after their sample was written)
+    late: int = 0  # onsets and cuts started after their show time (their sample was written)
     underruns: int = 0
     clipped: int = 0
     bad: int = 0
@@ -144,38 +147,16 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
         written = 0
         clock.look(time.monotonic(), written, cap - stream.write_available)
         report.put(("ready", None))
+        pending: list[Pending] = []  # read, not yet placed: (show time, onset row or cut)
         while not stop.is_set():
             if sub.poll(POLL_MS):
                 clock.look(time.monotonic(), written, cap - stream.write_available)
-                while True:
-                    try:
-                        frames = sub.recv_multipart(zmq.NOBLOCK)
-                    except zmq.Again:
-                        break
-                    try:
-                        msg = decode(frames)
-                        rows = msg.rows
-                    except ProtocolError:
-                        stats.bad += 1
-                        continue
-                    if msg.kind is Kind.SHOWN_CONTROL:
-                        for row in rows:
-                            cut = cuts.take(row)
-                            if cut is not None:
-                                mixer.cut(cut[0], cut[1], max(written, clock.sample_for(cut[1])))
-                                stats.cuts += 1
-                        continue
-                    for row in rows:
-                        at = clock.sample_for(float(row["time_s"]))
-                        stats.lead_ms.append((at - written) / RATE * 1000)
-                        if at < written:
-                            stats.late += 1
-                            at = written
-                        mixer.add(row, at)
-                        stats.onsets += 1
+                _read(sub, cuts, clock, written, pending, stats)
+            now = time.monotonic()  # read before the FIFO (StreamClock.look)
             free = stream.write_available
-            clock.look(time.monotonic(), written, cap - free)
+            clock.look(now, written, cap - free)
             if free >= MIN_WRITE:
+                _place(mixer, clock, written, written + free, pending, stats)
                 if stream.write(mixer.render(free)):
                     stats.underruns += 1
                 written += free
@@ -188,6 +169,59 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
         stream.stop()
         stream.close()
         report.put(("stats", stats))
+
+
+Pending = tuple[float, Any]  # (show time s, an onset row or a cut (piece, show time s))
+
+
+def _read(sub: Any, cuts: Any, clock: Any, written: int, pending: list[Pending],
+          stats: SoundStats) -> None:  # fmt: skip
+    """Every message waiting: its onsets, and its controls read into cuts, onto ``pending``
+    (placed as late as the FIFO allows, :func:`_place`: the clock is freshest then)."""
+    while True:
+        try:
+            frames = sub.recv_multipart(zmq.NOBLOCK)
+        except zmq.Again:
+            return
+        try:
+            msg = decode(frames)
+            rows = msg.rows
+        except ProtocolError:
+            stats.bad += 1
+            continue
+        if msg.kind is Kind.SHOWN_CONTROL:
+            for row in rows:
+                cut = cuts.take(row)  # in arrival order: the pedal's state
+                if cut is not None:
+                    pending.append((cut[1], cut))
+            continue
+        for row in rows:
+            show = float(row["time_s"])
+            stats.lead_ms.append((clock.sample_for(show) - written) / RATE * 1000)
+            pending.append((show, row))
+
+
+def _place(mixer: Any, clock: Any, written: int, end: int, pending: list[Pending],
+           stats: SoundStats) -> None:  # fmt: skip
+    """Give the mixer, in arrival order, what is heard before sample ``end`` (the end of the
+    block about to be written), each on the sample the clock maps its show time to now; one
+    whose sample was written already starts at ``written`` and is counted late."""
+    keep: list[Pending] = []
+    for show, what in pending:
+        at = clock.sample_for(show)
+        if at >= end:
+            keep.append((show, what))
+            continue
+        if at < written:
+            stats.late += 1
+            at = written
+        if isinstance(what, tuple):
+            mixer.cut(what[0], what[1], at)
+            stats.cuts += 1
+        else:
+            mixer.add(what, at)
+            stats.onsets += 1
+    pending[:] = keep
 
 
 class LiveSound:
