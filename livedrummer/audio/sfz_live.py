@@ -24,7 +24,7 @@ from livedrummer.audio.live_mix import LiveMixer, Voice
 from livedrummer.audio.mix import GRAB_FADE_S, _pan
 from livedrummer.audio.sfz import SfzKit
 from livedrummer.audio.sfz_render import MIN_FADE_S, _pitched, choose, read_sample
-from livedrummer.audio.soundfont import _gm_tables, gm_note
+from livedrummer.audio.soundfont import gm_note, warm_note_tables
 from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES
@@ -38,7 +38,7 @@ class SfzLiveMixer(LiveMixer):
         self.sfz = sfz
         self.counts: dict[int, int] = {}
         self.rng = np.random.default_rng(zlib.crc32(str(sfz.path).encode()))
-        _gm_tables()  # read the note map now: on the first stroke it would make it late
+        warm_note_tables()  # now: on the first stroke it would make it late
 
     def add(self, onset: np.void | np.ndarray, start: int) -> None:
         instrument = INSTRUMENTS[int(onset["instrument"])]

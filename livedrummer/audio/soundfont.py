@@ -89,6 +89,12 @@ class SoundFontError(LivedrummerError):
 GmKey = tuple[str, Zone, HiHat]
 
 
+def warm_note_tables() -> None:
+    """Read the bundled General MIDI map that :func:`gm_note` uses now (it is read once and
+    kept): a live mixer calls this when it is made, so its first stroke is not late."""
+    _gm_tables()
+
+
 @cache
 def _gm_tables() -> tuple[dict[int, GmKey], dict[GmKey, int], dict[str, int]]:
     from livedrummer.midi.notemap import load_note_map

@@ -48,10 +48,10 @@ from livedrummer.audio.soundfont import (
     DRUM_CHANNEL,
     DRUM_PRESET,
     NOTE_HOLD_S,
-    _gm_tables,
     _open,
     _render,
     gm_note,
+    warm_note_tables,
 )
 from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.kit.model import Kit
@@ -79,7 +79,7 @@ class SoundFontLiveMixer(LiveMixer):
         n_pieces = len(kit.pieces) if kit is not None else 0
         for channel in self._channels[:n_pieces]:
             self._synth.program_select(channel, sfid, DRUM_BANK, DRUM_PRESET)
-        _gm_tables()  # read the note map now: on the first stroke it would make it late
+        warm_note_tables()  # now: on the first stroke it would make it late
 
     def _channel(self, piece: int) -> int:
         return self._channels[piece] if 0 <= piece < len(self._channels) else DRUM_CHANNEL
