@@ -33,12 +33,14 @@ def dummy_jack(
     sync: bool = True,
     realtime: bool = False,
     rate: int = 48_000,
+    priority: int | None = None,
 ) -> Iterator[str]:
     """Run a server named ``PREFIX-xxxxxxxx`` while the block runs; yields its name.
 
     ``sync=False`` runs JACK's default asynchronous mode, ``realtime=True`` asks for realtime
     scheduling (``-R``; it falls back to normal scheduling where that is not permitted); ``rate``
-    is the sample rate in Hz.
+    is the sample rate in Hz, ``priority`` the real-time priority (``-P``; jackd's default
+    where None).
     """
     if shutil.which("jackd") is None or shutil.which("jack_wait") is None:
         raise JackError("jackd not installed (Debian: apt-get install jackd2)")
@@ -48,7 +50,8 @@ def dummy_jack(
     env = {**os.environ, **jack_env(name)}
     out = log if log is not None else subprocess.DEVNULL
     proc = subprocess.Popen(
-        ["jackd", "-R" if realtime else "--no-realtime", *(["-S"] if sync else []), "-n", name,
+        ["jackd", "-R" if realtime else "--no-realtime", *(["-S"] if sync else []),
+         *(["-P", str(priority)] if realtime and priority is not None else []), "-n", name,
          "-d", "dummy", "-r", str(rate), "-p", str(period)],
         stdout=out, stderr=subprocess.STDOUT, env=env,
     )  # fmt: skip

@@ -1,7 +1,8 @@
 """``livedrummer bench audio``: live sound through a real JACK server, measured at its output.
 
 A private JACK server on the dummy driver (no sound card; ``--period`` frames, default 128;
-JACK's default asynchronous mode, real-time scheduling asked for, as a rig runs it),
+JACK's default asynchronous mode, real-time scheduling asked for, as a rig runs it; the
+``--jack-*`` options change that),
 a synth and a ``display --live --headless --no-render --sound`` on it, and this process as the
 input daemon: it publishes ``--rate`` onsets a second (a rim click and a woodblock in turn,
 short sounds whose attacks stand apart) for ``--seconds`` on the bus, each stamped when it is
@@ -76,10 +77,12 @@ def pct(x: np.ndarray) -> str:
             f"{np.median(x) * 1000:+.2f})")  # fmt: skip
 
 
-def run(seconds: float, rate: float, delay_s: float, period: int) -> int:
+def run(seconds: float, rate: float, delay_s: float, period: int, sync: bool = False,
+        realtime: bool = True, priority: int | None = None) -> int:  # fmt: skip
     folder = Path(tempfile.mkdtemp(prefix="ldbench-audio-"))
     log = (folder / "jackd.log").open("w")
-    with dummy_jack("ldaudio", period=period, log=log, sync=False, realtime=True) as name:
+    with dummy_jack("ldaudio", period=period, log=log, sync=sync, realtime=realtime,
+                    priority=priority) as name:  # fmt: skip
         env = {**os.environ, **jack_env(name)}
         env.pop("DISPLAY", None)
         ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
@@ -158,8 +161,12 @@ def run(seconds: float, rate: float, delay_s: float, period: int) -> int:
     ok = steady(rec, expected) & found
     line = next((x for x in err.splitlines() if x.startswith("sound:")), "sound: (no summary)")
     late = re.search(r"(\d+) late", line)
+    mode = ("synchronous (-S)" if sync else "asynchronous") + (
+        f", real-time (-R{'' if priority is None else f' -P {priority}'})" if realtime
+        else ", no real-time")  # fmt: skip
     print(f"bench audio: {len(sent)} onsets at {rate:g}/s for {seconds:g} s, D {delay_s * 1000:g}"
-          f" ms, JACK dummy {period} frames at 48 kHz ({period / 48:.2f} ms)")  # fmt: skip
+          f" ms, JACK dummy {period} frames at 48 kHz ({period / 48:.2f} ms), {mode}; load "
+          f"average {os.getloadavg()[0]:.2f}")  # fmt: skip
     print(f"  heard: {int(found.sum())} of {len(sent)} onsets")
     print(f"  onset on the bus -> sound at the output, - D: {pct(lag[found])}")
     print(f"    where the JACK graph ran steadily ({int(ok.sum())} onsets): {pct(lag[ok])}")
@@ -183,9 +190,16 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--rate", type=float, default=10.0, help="onsets a second (default 10)")
     parser.add_argument("--delay-ms", type=float, default=30.0, help="D (default 30)")
     parser.add_argument("--period", type=int, default=128, help="JACK frames (default 128)")
+    parser.add_argument("--jack-sync", action="store_true",
+                        help="run jackd synchronous (-S; default: asynchronous)")  # fmt: skip
+    parser.add_argument("--jack-no-realtime", action="store_true",
+                        help="run jackd without real-time scheduling (default: -R)")  # fmt: skip
+    parser.add_argument("--jack-priority", type=int, metavar="P",
+                        help="jackd's real-time priority (-P; default: jackd's)")  # fmt: skip
     args = parser.parse_args(argv)
     try:
-        return run(args.seconds, args.rate, args.delay_ms / 1000.0, args.period)
+        return run(args.seconds, args.rate, args.delay_ms / 1000.0, args.period,
+                   args.jack_sync, not args.jack_no_realtime, args.jack_priority)  # fmt: skip
     except JackError as exc:
         print(f"bench audio: {exc}", file=sys.stderr)
         return 2
