@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 import zmq
 
@@ -29,6 +30,7 @@ from livedrummer.live.synth import LiveSynth, SynthParams
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
 from livedrummer.timeline.clock import MonotonicClock
+from livedrummer.timeline.events import CONTROL_DTYPE
 from services.cli.common import DEMO_MAP, demo_groove
 from services.net import request_ready
 from services.synth.service import SynthConfig, SynthService
@@ -108,6 +110,9 @@ def test_poses_reach_every_display_through_a_tree_of_relays(tmp_path: Path) -> N
             while clock.now() < float(row["time_s"]):
                 time.sleep(0.001)
             pub.send_multipart(p.encode(p.Message(p.Kind.ONSET, onsets[seq : seq + 1], seq=seq)))
+        grab = np.zeros(1, CONTROL_DTYPE)  # a cymbal grab: forwarded as SHOWN_CONTROL
+        grab["time_s"], grab["kind"], grab["number"], grab["value"] = clock.now(), 1, 49, 127
+        pub.send_multipart(p.encode(p.Message(p.Kind.CONTROL, grab, seq=len(onsets))))
         time.sleep(0.5)
         stop_synth.set()  # the synth publishes poses as long as it runs: stop, then compare
         thread.join(5)
@@ -130,6 +135,8 @@ def test_poses_reach_every_display_through_a_tree_of_relays(tmp_path: Path) -> N
         ctx.term()
     direct = got[0]
     assert len(direct) > 50, "the synth published too few messages to judge"
+    kinds = [{frames[5] for _, frames in msgs} for msgs in got]  # the header's kind byte
+    assert all({p.Kind.POSE, p.Kind.SHOWN_ONSET, p.Kind.SHOWN_CONTROL} <= k for k in kinds)
     assert [seq for seq, _ in direct] == list(range(direct[0][0], direct[0][0] + len(direct)))
     # The synth publishes from its start (the idle drummer too): a subscriber behind a relay
     # joins a few messages later, once its subscription has climbed the tree; from then on it
