@@ -191,3 +191,37 @@ def test_the_live_soundfont_cuts_its_pieces_channel_and_sounds_as_offline_withou
         assert near < 0.25 * far, (a, near, far)
     # and before the first cut it is the offline track but for the reverb (shared there)
     assert rms_of(got - offline, 0.0, 0.4) < 0.1 * rms_of(offline, 0.0, 0.4)
+
+
+def test_a_cut_that_comes_after_its_sample_was_rendered_stops_the_sound_from_there() -> None:
+    kit = load_kit("rock5")
+    mixer = LiveMixer(kit, SR)
+    crash = strokes()[:1]
+    crash["time_s"] = 0.0
+    mixer.add(crash[0], 0)
+    before = mixer.render(4800)
+    mixer.cut(mixer.piece_of("crash1"), 0.05, 2400)  # its sample went out 50 ms ago
+    after = mixer.render(4800)
+    fade = round(0.005 * SR)
+    assert np.abs(before[-100:]).max() > 0.05  # it rang up to the cut's arrival
+    assert np.abs(after[:10]).max() > 0.02 and np.all(after[fade:] == 0)  # then faded out
+    half = fade // 2  # a fade, not a step
+    assert np.abs(after[:half]).max() > 2 * np.abs(after[half:fade]).max()
+
+
+def test_a_hihat_stroke_during_a_cuts_fade_does_not_lengthen_it() -> None:
+    kit = load_kit("rock5")
+    hat = strokes()[1:2]  # the open hi-hat
+    hat["time_s"] = 0.0
+    later = hat.copy()
+    later["time_s"], later["hihat"] = 0.06, HIHATS.index(HiHat.CLOSED)
+    mixer, alone = LiveMixer(kit, SR), LiveMixer(kit, SR)
+    mixer.add(hat[0], 0)
+    mixer.cut(mixer.piece_of("hihat"), 0.05, 2400)  # the pedal closes: faded out by 2640
+    first = mixer.render(2500)
+    mixer.add(later[0], 2880)  # struck after the fade, arriving during it
+    alone.add(later[0], 2880)
+    alone.render(2500)
+    rest = mixer.render(2000) - alone.render(2000)  # the open hat's own sound from 2500 on
+    assert np.abs(first[2300:2400]).max() > 0.01  # it rang to the cut
+    assert np.all(rest[2640 - 2500 :] == 0), np.flatnonzero(rest[:, 0])[-3:]

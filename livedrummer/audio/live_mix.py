@@ -95,7 +95,7 @@ class LiveMixer:
                 self._cut_voice(v, time_s, at)
 
     def _cut_voice(self, v: Voice, time_s: float, at: int) -> None:
-        v.cut_s, v.cut_at = time_s, at
+        v.cut_s, v.cut_at = time_s, max(at, self.rendered)  # what is rendered stays
         self._settle(v)
 
     def _settle(self, v: Voice) -> None:
@@ -105,7 +105,7 @@ class LiveMixer:
         fade = min(length, int(CUT_FADE_S * self.sr)) if v.hat_len >= 0 else 0
         if v.cut_s < math.inf:
             grab_fade = max(1, round(GRAB_FADE_S * self.sr))
-            grab = max(v.cut_at - v.start, self.rendered - v.start) + grab_fade
+            grab = v.cut_at - v.start + grab_fade
             if grab < length:
                 length, fade = grab, grab_fade
         v.length, v.fade = length, fade
