@@ -14,10 +14,10 @@ is held until the block its sample falls in is about to be written and mapped to
 then, not when it arrives (a D earlier): a slip of the device meanwhile (JACK's dummy driver on
 a loaded machine) is then already in the clock. An onset whose sample was written already
 starts on the next sample free and is counted late (D must exceed the bus latency plus the
-FIFO: the default 30 ms does). A control is read
-through the note map (``--map``, the synth's) into a cut (:class:`~livedrummer.audio.cuts.
-CutReader`: a cymbal grab, the hi-hat pedal closing), which the mixer applies on the sample
-heard at its show time: the ringing cymbal or hi-hat stops when the picture's does.
+FIFO: the default 30 ms does). A control is read through the note map (``--map``, the
+synth's) into a cut (:class:`~livedrummer.audio.cuts.CutReader`: a cymbal grab, the hi-hat
+pedal closing), held and placed the same way: the mixer applies it on the sample heard at its
+show time, and the ringing cymbal or hi-hat stops when the picture's does.
 
 One loop, no Python in the audio thread: wait on the socket for up to a millisecond, read
 what came, look at the FIFO, top it up. :class:`LiveSound` starts and stops the process from
