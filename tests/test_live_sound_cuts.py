@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 import zmq
 from test_live_e2e import first_line, spawn, stop
 from test_live_sound import onset
@@ -50,8 +51,24 @@ def ring_end(samples: np.ndarray, times: np.ndarray, cut_heard: float) -> tuple[
     return end, float(after / before)
 
 
+def ringing_sfz(folder: Path) -> Path:
+    """An SFZ kit whose crash and open hi-hat ring for seconds (tones), and a rim click."""
+    import soundfile as sf
+
+    t = np.arange(2 * 48_000) / 48_000
+    for name, hz in (("crash.wav", 700.0), ("open.wav", 1100.0), ("rim.wav", 1500.0)):
+        decay = 0.01 if name == "rim.wav" else 1.5
+        sf.write(str(folder / name), (0.5 * np.sin(2 * np.pi * hz * t) * np.exp(-t / decay))
+                 .astype(np.float32), 48_000)  # fmt: skip
+    path = folder / "ringing.sfz"
+    path.write_text("<region> key=49 sample=crash.wav\n<region> key=46 sample=open.wav\n"
+                    "<region> key=37 sample=rim.wav\n")  # fmt: skip
+    return path
+
+
+@pytest.mark.parametrize("kit", ["built-in", "sfz"])
 def test_a_grab_and_a_closing_hihat_stop_the_ring_at_their_time_plus_d(
-    jack_default_server: str, tmp_path: Path
+    jack_default_server: str, tmp_path: Path, kit: str
 ) -> None:
     from services.bench._jackrec import JackRecorder, steady
 
@@ -85,7 +102,9 @@ def test_a_grab_and_a_closing_hihat_stop_the_ring_at_their_time_plus_d(
         syn_eps = first_line(syn, tmp_path, "synth")
         disp = spawn(["display", "--live", "--headless", "--no-render", "--sub", syn_eps["pub"],
                       "--sound", "--audio-device", "system, JACK", "--fps", "30",
-                      "--map", "roland-td"], tmp_path, "display")  # fmt: skip
+                      "--map", "roland-td",
+                      *(["--sfz", str(ringing_sfz(tmp_path))] if kit == "sfz" else [])],
+                     tmp_path, "display")  # fmt: skip
         procs.append(disp)
         first_line(disp, tmp_path, "display")
         shown = ctx.socket(zmq.SUB)
