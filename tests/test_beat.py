@@ -174,9 +174,10 @@ def test_bar_cues_fire_once_each_in_bar_order() -> None:
                                {"name": "n"}]}, "test")  # fmt: skip
     fire = BarCues(cues)
     assert fire.due([]) == [] and fire.due([(0.0, 1)]) == []
-    assert [c.name for c in fire.due([(2.0, 2)])] == ["a"]
+    assert [(t, c.name) for t, c in fire.due([(2.0, 2)])] == [(2.0, "a")]
     assert fire.due([(2.0, 2), (4.0, 3)]) == []  # a repeated bar fires nothing again
-    assert [c.name for c in fire.due([(9.0, 6)])] == ["b"]  # a skipped bar 5 still fires
+    # a skipped bar 5 still fires, at the start of the first bar past it
+    assert [(t, c.name) for t, c in fire.due([(8.0, 4), (9.0, 6)])] == [(9.0, "b")]
     assert fire.due([(11.0, 7)]) == []
 
 

@@ -44,6 +44,12 @@ Kinds (:data:`SPECS`; "frames" counts the payload frames after the header)::
                            on its pose stream as it arrives, so a display can sound it (and
                            draw a score) at the moment the picture shows its contact
                            (version 2; version 1 had no kind 8)
+    STAGE_CUE  9    1      n >= 1 rows of events.STAGE_CUE_DTYPE (15 bytes: time_s f64 show
+                           time, bar u32, camera u8 0 or 1..8, cut u8 0/1, blackout i8
+                           -1/0/1): a cue's camera and blackout, which the synth sends on
+                           its pose stream when the beat tracker reaches the cue's bar, for
+                           every display to apply at that show time (a version-2 peer from
+                           before kind 9 refuses it as an unknown kind: counted, not misread)
 
 Limits checked by :func:`decode`: header size exact; payload_len <= ``max_payload``
 (default :data:`MAX_PAYLOAD`, 16 MiB) and equal to the frames' total; row payloads a whole
@@ -79,7 +85,7 @@ from livedrummer.errors import ProtocolError
 from livedrummer.protocol.bodies import Body, Gap, Hello, Message, Pose
 from livedrummer.protocol.codec import decode, encode
 from livedrummer.protocol.poseformat import PoseFormat
-from livedrummer.protocol.rows import check_controls, check_onsets
+from livedrummer.protocol.rows import check_controls, check_onsets, check_stage_cues
 from livedrummer.protocol.sequence import SeqReport, SeqStats, SeqStatus, SequenceTracker
 from livedrummer.protocol.spec import (
     GAP_PAYLOAD,
@@ -135,6 +141,7 @@ __all__ = [
     "WireError",
     "check_controls",
     "check_onsets",
+    "check_stage_cues",
     "decode",
     "encode",
     "topic",

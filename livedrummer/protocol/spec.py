@@ -17,9 +17,11 @@ from typing import Any
 import numpy as np
 
 from livedrummer.errors import ProtocolError
-from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, STAGE_CUE_DTYPE
 
-PROTOCOL_VERSION = 2  # 2: SHOWN_ONSET
+# 2: SHOWN_ONSET. STAGE_CUE (9) came later without a bump: a version-2 peer that lacks it
+# refuses kind 9 as unknown (counted and dropped), it never misreads one.
+PROTOCOL_VERSION = 2
 MAGIC = b"LDRM"
 HEADER = struct.Struct("<4sBBHHHQdI")
 POSE_HEADER = struct.Struct("<8sI4xd")
@@ -41,6 +43,7 @@ class Kind(IntEnum):
     HEARTBEAT = 6
     GAP = 7
     SHOWN_ONSET = 8  # an onset forwarded to displays, stamped with its show time
+    STAGE_CUE = 9  # a cue's camera and blackout, sent to displays stamped with its show time
 
 
 class Flag(IntFlag):
@@ -57,7 +60,7 @@ class Stream(IntEnum):
     """Conventional stream ids (a sender may use others)."""
 
     EVENTS = 0  # onsets, controls, heartbeats and gaps of one input daemon
-    POSES = 1  # poses of one synth, and the onsets it forwards to displays (SHOWN_ONSET)
+    POSES = 1  # poses of one synth, the onsets it forwards and its stage cues (displays)
     CONTROL = 2  # hello/ready on a control socket (sequence numbers unused there)
 
 
@@ -89,6 +92,7 @@ SPECS: dict[int, KindSpec] = {
         KindSpec(Kind.HEARTBEAT, 1, "empty"),
         KindSpec(Kind.GAP, 1, "struct", fixed=GAP_PAYLOAD),
         KindSpec(Kind.SHOWN_ONSET, 1, "rows", rows=ONSET_DTYPE),
+        KindSpec(Kind.STAGE_CUE, 1, "rows", rows=STAGE_CUE_DTYPE),
     )
 }
 

@@ -157,8 +157,8 @@ class _Stream:
                 self.stats.bad += 1
                 self.bad.unexpected(f"{msg.kind.name} of performer {msg.performer}")
                 continue
-            if msg.kind is Kind.SHOWN_ONSET:  # the synth's forwarded onsets share its numbers
-                self._observe(msg)
+            if msg.kind in (Kind.SHOWN_ONSET, Kind.STAGE_CUE):  # they share the synth's numbers
+                self._observe(msg)  # (the stage display has no camera cues: they are left)
                 continue
             if not isinstance(msg.body, Pose):
                 self.stats.bad += 1

@@ -1,0 +1,124 @@
+"""Bar cues with a camera and a blackout, live: the synth counts bars with its beat tracker and
+sends each bar cue's stage part to the displays (protocol kind STAGE_CUE) stamped with the
+bar's show time; the display applies it in the first frame that shows that time.
+
+The end-to-end test runs ``up --demo --headless --cues FILE`` (no OSC) with a cut at bar 3 and a
+blackout at bar 5, and reads the frames the display recorded: frames.jsonl names the frame in
+which each cue was applied and its show time, every frame before it keeps the old camera (or
+is lit), every one after has the new one (or goes black), and the PNGs change with them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from livedrummer import protocol as p
+from livedrummer.errors import ProtocolError
+from livedrummer.live.beat import BeatTracker, downbeat_weights, onset_weights
+from livedrummer.live.cues import Cue, parse_cues, stage_cue_of, stage_cue_rows
+from tests.test_live_osc import Frames
+from tests.test_live_up import launch
+
+
+def test_a_stage_cue_round_trips_on_the_pose_stream_and_is_checked() -> None:
+    cues = parse_cues({"cue": [{"name": "cut", "bar": 3, "camera": 4, "cut": True},
+                               {"name": "dark", "bar": 5, "blackout": True},
+                               {"name": "style", "bar": 6, "preset": "relaxed"}]}, "test")  # fmt: skip
+    rows = stage_cue_rows([(10.5, 3, cues["cut"]), (13.5, 5, cues["dark"]),
+                           (15.0, 6, cues["style"])])  # fmt: skip
+    assert rows.size == 2, "a cue with no camera or blackout sends nothing to the displays"
+    frames = p.encode(p.Message(p.Kind.STAGE_CUE, rows, performer=1, seq=4, stream=p.Stream.POSES))
+    back = p.decode(frames)
+    assert back.kind is p.Kind.STAGE_CUE and back.rows.tobytes() == rows.tobytes()
+    assert stage_cue_of(back.rows[0]) == Cue("bar 3", bar=3, camera="overhead", cut=True)
+    assert stage_cue_of(back.rows[1]) == Cue("bar 5", bar=5, blackout=True)
+    bad = rows.copy()
+    bad["camera"][1] = 9
+    with pytest.raises(ProtocolError, match=r"row 1\.camera"):
+        p.encode(p.Message(p.Kind.STAGE_CUE, bad))
+    bad = rows.copy()
+    bad["blackout"][0] = 2
+    with pytest.raises(ProtocolError, match=r"row 0\.blackout"):
+        p.decode([frames[0], bad.tobytes()])
+
+
+def test_the_display_applies_a_stage_cue_at_its_show_time_and_a_replay_agrees() -> None:
+    from livedrummer.kit.loader import load_kit
+    from services.display.showctl import DisplayShow, replay_stage
+
+    kit = load_kit("rock5")
+    show = DisplayShow(kit, "stage", None)
+    cues = parse_cues({"cue": [{"name": "cut", "bar": 3, "camera": "front", "cut": True},
+                               {"name": "dark", "bar": 5, "blackout": True}]}, "t")  # fmt: skip
+    show.schedule(stage_cue_rows([(2.05, 5, cues["dark"]), (1.02, 3, cues["cut"])]))
+    seen = []
+    for k in range(40):  # 10 fps, each frame shown 0.1 s after it is rendered
+        render = k * 0.1
+        fired = show.apply(render, render + 0.1)
+        seen.append((render, show.stage.camera, show.stage.darkness(render), fired))
+    cut = next(k for k, s in enumerate(seen) if s[1] == "front")
+    assert seen[cut][3] == [("bar 3", 1.02)] and cut == 10  # the frame shown at 1.1 s
+    assert all(s[1] == "stage" for s in seen[:cut]) and all(s[1] == "front" for s in seen[cut:])
+    dark = next(k for k, s in enumerate(seen) if s[2] > 0)
+    assert seen[dark][3] == [("bar 5", 2.05)] and dark == 20  # shown at 2.1 s
+    # the fade starts on the cue's show time (render 1.95 s), not at the frame: 0.05 s into
+    # the 0.5 s smoothstep
+    assert seen[dark][2] == pytest.approx(0.1 * 0.1 * (3 - 2 * 0.1))
+    assert seen[-1][2] == 1.0
+    replay = replay_stage(kit, show)
+    for render, camera, darkness, _ in seen:
+        view, dark_now = replay.at(render)
+        assert replay.stage.camera == camera and dark_now == pytest.approx(darkness)
+        assert view == show.stage.cameras[camera]
+
+
+def demo_period_s() -> float:
+    """The beat period the tracker settles on for the demo groove (played offline)."""
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.midi.smf import read_midi_file
+    from services.cli.common import demo_groove
+
+    on = read_midi_file(demo_groove(), load_note_map("general-midi")).onsets
+    on = on[on["time_s"] < 20.0]
+    tracker = BeatTracker()
+    for t, w, d in zip(on["time_s"], onset_weights(on), downbeat_weights(on), strict=True):
+        tracker.process(float(t), float(w), float(d))
+    assert tracker.period_s is not None
+    return tracker.period_s
+
+
+def test_up_cuts_the_camera_and_blacks_out_on_the_bars_the_tracker_counts(
+    gl_ok: None, tmp_path: Path
+) -> None:
+    cues = tmp_path / "cues.toml"
+    cues.write_text('[[cue]]\nname = "cut"\nbar = 3\ncamera = "front"\ncut = true\n\n'
+                    '[[cue]]\nname = "dark"\nbar = 5\nblackout = true\n')  # fmt: skip
+    proc = launch(tmp_path, "--headless", "--seconds", "14", "--png", "--fps", "10",
+                  "--cues", str(cues))  # fmt: skip
+    out, _ = proc.communicate(timeout=180)
+    assert proc.returncode == 0, out[-3000:]
+    frames = Frames(tmp_path / "frames")
+    rows = frames.read()
+    applied = {name: (k, at) for k, r in enumerate(rows) for name, at in r.get("cues", [])}  # type: ignore[attr-defined]
+    assert set(applied) == {"bar 3", "bar 5"}, f"cues applied: {applied}\n{out[-2000:]}"
+    (cut, cut_s), (dark, dark_s) = applied["bar 3"], applied["bar 5"]
+    show = [float(r["show_s"]) for r in rows]  # type: ignore[arg-type]
+    # each lands in the first frame whose show time reaches the bar's show time
+    assert show[cut - 1] < cut_s <= show[cut] and show[dark - 1] < dark_s <= show[dark]
+    assert all(r["camera"] == "stage" for r in rows[:cut])
+    assert all(r["camera"] == "front" for r in rows[cut:])
+    assert all(r["dark"] == 0.0 for r in rows[:dark]) and float(rows[dark]["dark"]) > 0  # type: ignore[arg-type]
+    before, after = frames.png(rows[cut - 1]), frames.png(rows[cut])
+    assert np.abs(after.astype(int) - before.astype(int)).mean() > 5.0, "the cut shows"
+    black = [r for r in rows if float(r["show_s"]) > dark_s + 0.6]  # type: ignore[arg-type]
+    assert black and all(r["dark"] == 1.0 for r in black)
+    assert all(frames.png(r).max() <= 1 for r in black[:3]), "blacked-out frames are black"
+    assert frames.png(rows[dark - 1]).mean() > 5, "lit before the blackout's bar"
+    # the bars are the tracker's: two bars of four of its beats apart (a corrected downbeat
+    # may move a bar start by one beat), on its beat grid, after its first two seconds
+    beats = (dark_s - cut_s) / demo_period_s()
+    assert 7 <= round(beats) <= 9 and abs(beats - round(beats)) < 0.2, beats
+    assert cut_s - show[next(k for k, r in enumerate(rows) if r["pose_s"] is not None)] > 2.0
