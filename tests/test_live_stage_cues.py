@@ -122,3 +122,29 @@ def test_up_cuts_the_camera_and_blacks_out_on_the_bars_the_tracker_counts(
     beats = (dark_s - cut_s) / demo_period_s()
     assert 7 <= round(beats) <= 9 and abs(beats - round(beats)) < 0.2, beats
     assert cut_s - show[next(k for k, r in enumerate(rows) if r["pose_s"] is not None)] > 2.0
+
+
+def test_bench_latency_measures_with_and_without_show_control(gl_ok: None) -> None:
+    """``bench latency --both``: each rate with nothing and with OSC ports and both strips on,
+    and a table of the medians side by side (figures, not asserted: the README quotes them)."""
+    import subprocess
+    import sys
+
+    from tests.test_live_up import REPO
+
+    bad = subprocess.run([sys.executable, "-m", "services", "bench", "latency", "--overlay",
+                          "scroe"], capture_output=True, text=True, cwd=REPO)  # fmt: skip
+    assert bad.returncode == 2 and "unknown overlay 'scroe'" in bad.stderr
+    run = subprocess.run([sys.executable, "-m", "services", "bench", "latency", "--rates", "10",
+                          "--seconds", "0.5", "--both"], capture_output=True, text=True,
+                         cwd=REPO, timeout=240)  # fmt: skip
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    out = run.stdout
+    assert "10 plain" in out and "10 show" in out
+    table = out[out.index("show control off / on") :].splitlines()
+    assert "load average" in table[0]
+    row = next(line for line in table if line.strip().startswith("10 D=30"))
+    cells = [c.split("/") for c in row.split("|")[1:]]
+    assert len(cells) == 5 and all(len(c) == 2 for c in cells)
+    medians = [float(x.split("(")[0]) for c in cells for x in c]
+    assert all(np.isfinite(m) and m > 0 for m in medians), row  # every stage measured both ways
