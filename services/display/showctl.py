@@ -20,7 +20,9 @@ blackout's fade) through the renderer's overlay pass, so PNGs, recordings and th
 see it.
 
 Limits: a stage cue that arrives after its show time (the synth later than D) is applied at
-once, as of its time (a fade already under way); black frames are drawn, not skipped.
+once, as of its time (a fade already under way); black frames are drawn, not skipped; a
+window with a stage (``--osc`` or ``--cues``) takes its camera from it, so the mouse does
+not orbit there.
 """
 
 from __future__ import annotations
