@@ -2,8 +2,8 @@
 sends each bar cue's stage part to the displays (protocol kind STAGE_CUE) stamped with the
 bar's show time; the display applies it in the first frame that shows that time.
 
-The end-to-end test runs ``up --demo --headless --cues FILE`` (no OSC) with a cut at bar 3 and a
-blackout at bar 5, and reads the frames the display recorded: frames.jsonl names the frame in
+The end-to-end test runs ``up --demo --headless --cues FILE`` (no OSC) with a cut at bar 4 and a
+blackout at bar 6 (bars the tracker has settled on), and reads the frames the display recorded: frames.jsonl names the frame in
 which each cue was applied and its show time, every frame before it keeps the old camera (or
 is lit), every one after has the new one (or goes black), and the PNGs change with them.
 """
@@ -60,14 +60,18 @@ def test_the_display_applies_a_stage_cue_at_its_show_time_and_a_replay_agrees() 
         fired = show.apply(render, render + 0.1)
         seen.append((render, show.stage.camera, show.stage.darkness(render), fired))
     cut = next(k for k, s in enumerate(seen) if s[1] == "front")
-    assert seen[cut][3] == [("bar 3", 1.02)] and cut == 10  # the frame shown at 1.1 s
+    assert seen[cut][3] == [("bar 3", 1.02, False)] and cut == 10  # the frame shown at 1.1 s
     assert all(s[1] == "stage" for s in seen[:cut]) and all(s[1] == "front" for s in seen[cut:])
     dark = next(k for k, s in enumerate(seen) if s[2] > 0)
-    assert seen[dark][3] == [("bar 5", 2.05)] and dark == 20  # shown at 2.1 s
+    assert seen[dark][3] == [("bar 5", 2.05, False)] and dark == 20  # shown at 2.1 s
     # the fade starts on the cue's show time (render 1.95 s), not at the frame: 0.05 s into
     # the 0.5 s smoothstep
     assert seen[dark][2] == pytest.approx(0.1 * 0.1 * (3 - 2 * 0.1))
-    assert seen[-1][2] == 1.0
+    assert seen[-1][2] == 1.0 and show.late_cues == 0
+    # a cue that arrives after the frame that should have shown it: in the next frame, late
+    show.schedule(stage_cue_rows([(3.5, 9, cues["cut"])]))
+    assert show.late_cues == 1
+    assert show.apply(4.0, 4.1) == [("bar 9", 3.5, True)]
     replay = replay_stage(kit, show)
     for render, camera, darkness, _ in seen:
         view, dark_now = replay.at(render)
@@ -75,39 +79,57 @@ def test_the_display_applies_a_stage_cue_at_its_show_time_and_a_replay_agrees() 
         assert view == show.stage.cameras[camera]
 
 
-def demo_period_s() -> float:
-    """The beat period the tracker settles on for the demo groove (played offline)."""
+def offline_bar_cues(bars: tuple[int, ...]) -> tuple[list[float], float]:
+    """The offline twin of the synth's bar counting on the demo groove: its onsets fed to a
+    tracker as they come, the tracker asked for bars at 120 Hz as the synth ticks (a lead
+    ahead, as the synth asks); the start times that fire cues at ``bars``
+    (:class:`~livedrummer.live.cues.BarCues`), and the tracker's beat period at the end."""
+    from livedrummer.live.cues import BarCues
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.midi.smf import read_midi_file
     from services.cli.common import demo_groove
+    from services.synth.service import BAR_LEAD_S
 
     on = read_midi_file(demo_groove(), load_note_map("general-midi")).onsets
     on = on[on["time_s"] < 20.0]
-    tracker = BeatTracker()
-    for t, w, d in zip(on["time_s"], onset_weights(on), downbeat_weights(on), strict=True):
-        tracker.process(float(t), float(w), float(d))
-    assert tracker.period_s is not None
-    return tracker.period_s
+    weights, down = onset_weights(on), downbeat_weights(on)
+    cues = BarCues({f"b{n}": Cue(f"b{n}", bar=n) for n in bars})
+    tracker, i, start, fired = BeatTracker(), 0, -1e9, {}
+    for now in np.arange(0.0, 20.0, 1 / 120):
+        while i < on.size and on["time_s"][i] <= now:
+            tracker.process(float(on["time_s"][i]), float(weights[i]), float(down[i]))
+            i += 1
+        ahead = now + BAR_LEAD_S
+        for at, cue in cues.due(tracker.bars(max(start, now - 1.0), ahead)):
+            fired[cue.bar] = at
+        start = ahead
+    assert tracker.period_s is not None and set(fired) == set(bars)
+    return [fired[n] for n in bars], tracker.period_s
 
 
 def test_up_cuts_the_camera_and_blacks_out_on_the_bars_the_tracker_counts(
     gl_ok: None, tmp_path: Path
 ) -> None:
     cues = tmp_path / "cues.toml"
-    cues.write_text('[[cue]]\nname = "cut"\nbar = 3\ncamera = "front"\ncut = true\n\n'
-                    '[[cue]]\nname = "dark"\nbar = 5\nblackout = true\n')  # fmt: skip
-    proc = launch(tmp_path, "--headless", "--seconds", "14", "--png", "--fps", "10",
+    cues.write_text('[[cue]]\nname = "cut"\nbar = 4\ncamera = "front"\ncut = true\n\n'
+                    '[[cue]]\nname = "dark"\nbar = 6\nblackout = true\n')  # fmt: skip
+    proc = launch(tmp_path, "--headless", "--seconds", "17", "--png", "--fps", "10",
                   "--cues", str(cues))  # fmt: skip
     out, _ = proc.communicate(timeout=180)
     assert proc.returncode == 0, out[-3000:]
     frames = Frames(tmp_path / "frames")
     rows = frames.read()
-    applied = {name: (k, at) for k, r in enumerate(rows) for name, at in r.get("cues", [])}  # type: ignore[attr-defined]
-    assert set(applied) == {"bar 3", "bar 5"}, f"cues applied: {applied}\n{out[-2000:]}"
-    (cut, cut_s), (dark, dark_s) = applied["bar 3"], applied["bar 5"]
+    applied = {name: (k, at, late) for k, r in enumerate(rows)
+               for name, at, late in r.get("cues", [])}  # type: ignore[attr-defined]  # fmt: skip
+    assert set(applied) == {"bar 4", "bar 6"}, f"cues applied: {applied}\n{out[-2000:]}"
+    (cut, cut_s, cut_late), (dark, dark_s, dark_late) = applied["bar 4"], applied["bar 6"]
     show = [float(r["show_s"]) for r in rows]  # type: ignore[arg-type]
-    # each lands in the first frame whose show time reaches the bar's show time
-    assert show[cut - 1] < cut_s <= show[cut] and show[dark - 1] < dark_s <= show[dark]
+    # each lands in the first frame whose show time reaches the bar's show time (or, where
+    # an overloaded machine made the synth send it late, counted, in the next frame drawn)
+    assert cut_s <= show[cut] and dark_s <= show[dark]
+    assert cut_late or show[cut - 1] < cut_s
+    assert dark_late or show[dark - 1] < dark_s
+    assert ("stage cue" in out) == (cut_late or dark_late), out[-2000:]
     assert all(r["camera"] == "stage" for r in rows[:cut])
     assert all(r["camera"] == "front" for r in rows[cut:])
     assert all(r["dark"] == 0.0 for r in rows[:dark]) and float(rows[dark]["dark"]) > 0  # type: ignore[arg-type]
@@ -117,10 +139,13 @@ def test_up_cuts_the_camera_and_blacks_out_on_the_bars_the_tracker_counts(
     assert black and all(r["dark"] == 1.0 for r in black)
     assert all(frames.png(r).max() <= 1 for r in black[:3]), "blacked-out frames are black"
     assert frames.png(rows[dark - 1]).mean() > 5, "lit before the blackout's bar"
-    # the bars are the tracker's: two bars of four of its beats apart (a corrected downbeat
-    # may move a bar start by one beat), on its beat grid, after its first two seconds
-    beats = (dark_s - cut_s) / demo_period_s()
-    assert 7 <= round(beats) <= 9 and abs(beats - round(beats)) < 0.2, beats
+    # the bars are the tracker's (it follows this 80 bpm groove at 160: two of the file's bars
+    # are 16 of its beats): as many of its beats apart as its offline twin counts between
+    # those bars (8), give or take the beats a corrected downbeat moves a bar start by (the
+    # live onsets' timing under load moves the tracker's corrections)
+    (twin_cut, twin_dark), period = offline_bar_cues((4, 6))
+    beats = (dark_s - cut_s) / period
+    assert abs(beats - (twin_dark - twin_cut) / period) <= 2.5, (beats, twin_cut, twin_dark)
     assert cut_s - show[next(k for k, r in enumerate(rows) if r["pose_s"] is not None)] > 2.0
 
 

@@ -51,7 +51,8 @@ Show control. With ``config.osc_port`` or ``config.cues``, OSC camera, blackout 
 commands, and the synth's STAGE_CUE messages (a bar cue's camera and blackout, at its show
 time), are applied before each frame (:mod:`services.display.showctl`); frames.jsonl then also
 names each frame's camera and darkness (and ``cues``: the stage cues applied in it, with
-their show times), and a recording drawn after the show replays them.
+their show times and whether they arrived late), and a recording drawn after the show
+replays them.
 
 Strips. ``config.overlays`` (``display --live --overlay score,joints``; keys O and G in a
 window) draws SMED's score and joint-angle strips over each frame at its show time, from the

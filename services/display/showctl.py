@@ -28,6 +28,7 @@ not orbit there.
 from __future__ import annotations
 
 import logging
+import math
 from typing import Any
 
 import numpy as np
@@ -53,30 +54,44 @@ class DisplayShow:
                                                          log, allow)  # fmt: skip
         self.frames = 0
         self.history: list[tuple[float, Cue]] = []  # (render time, change), as applied
-        self._timed: list[tuple[float, Cue]] = []  # stage cues waiting for their show time
+        # stage cues waiting for their show time: (show time, cue, arrived after a frame
+        # that should have shown it)
+        self._timed: list[tuple[float, Cue, bool]] = []
         self.stage_cues = 0  # stage cues received from the synth
+        self.late_cues = 0  # ... of which arrived after the frame that should have shown them
+        self._shown_s = -math.inf  # the show time of the last frame
 
     def schedule(self, rows: np.ndarray) -> None:
         """STAGE_CUE rows from the synth: applied when a frame's show time reaches theirs."""
         for row in rows:
-            self._timed.append((float(row["time_s"]), stage_cue_of(row)))
+            at_s = float(row["time_s"])
+            late = at_s <= self._shown_s
+            self._timed.append((at_s, stage_cue_of(row), late))
+            if late:
+                self.late_cues += 1
+                log.warning("display: a stage cue (bar %d) arrived %.0f ms after its show time: "
+                            "raise the synth's --delay-ms or lighten the machine",
+                            int(row["bar"]), 1000 * (self._shown_s - at_s))  # fmt: skip
         self._timed.sort(key=lambda tc: tc[0])
         self.stage_cues += rows.size
 
-    def apply(self, now_s: float, show_s: float | None = None) -> list[tuple[str, float]]:
+    def apply(self, now_s: float, show_s: float | None = None) -> list[tuple[str, float, bool]]:
         """Before the frame drawn at the display's clock ``now_s`` for show time ``show_s``:
         every OSC command received since the last frame, and the stage cues due by
-        ``show_s``; gives the stage cues applied, (name, show time), for the frame's log."""
+        ``show_s``; gives the stage cues applied, (name, show time, arrived late), for the
+        frame's log."""
         if self.osc is not None:
             for cmd in self.osc.take():
                 self.command(cmd, now_s)
-        fired: list[tuple[str, float]] = []
+        fired: list[tuple[str, float, bool]] = []
         while show_s is not None and self._timed and self._timed[0][0] <= show_s:
-            at_s, cue = self._timed.pop(0)
+            at_s, cue, late = self._timed.pop(0)
             self.fire(cue, now_s - (show_s - at_s))
-            fired.append((cue.name, at_s))
+            fired.append((cue.name, at_s, late))
             log.info("display: %s: %s at show %.3f s (frame %d)", cue.name, describe(cue),
                      at_s, self.frames)  # fmt: skip
+        if show_s is not None:
+            self._shown_s = show_s
         self.frames += 1
         return fired
 
