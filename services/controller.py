@@ -4,7 +4,8 @@ Why this shape. A :class:`~livedrummer.live.controlmap.ControlMap` turns each co
 pad message into the OSC command a cue desk would send; :class:`ControllerBridge` reads the
 controller's port (:class:`~services.input.midiport.MidiPortSource`, the same code that reads
 a kit) on a thread of its own and sends those commands as OSC datagrams to ``up``'s OSC port
-on loopback, so a fader, a cue desk and a cue list all reach the synth and the display by the
+on loopback (:class:`~services.osc.LoopbackSender`, which ``up``'s router forwards with too),
+so a fader, a cue desk and a cue list all reach the synth and the display by the
 one route of :mod:`services.osc`.
 
 Limits: the controller must be there when ``up`` starts (it is checked then, one line naming
@@ -14,7 +15,6 @@ the ports that exist); a controller unplugged mid-show stops steering (the show 
 from __future__ import annotations
 
 import logging
-import socket
 import threading
 
 from livedrummer.live.controlmap import ControlMap
@@ -24,7 +24,7 @@ from livedrummer.timeline.clock import MonotonicClock
 
 from .input.base import RawMidi
 from .input.midiport import MidiPortSource
-from .osc import encode
+from .osc import LoopbackSender
 
 log = logging.getLogger("livedrummer.up")
 
@@ -35,14 +35,18 @@ class ControllerBridge:
     def __init__(self, port: str, mapping: ControlMap, osc_port: int, api: str = "auto") -> None:
         self.mapping = mapping
         self.osc_port = osc_port
-        self.sent = 0
         decoder = MessageDecoder(load_note_map("general-midi"))  # unused: only the tap is read
         self.source = MidiPortSource(port, MonotonicClock(), decoder, api=api)
         self.source.check()
         self.source.tap = self._heard
-        self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self._out = LoopbackSender()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="up-controller", daemon=True)
+
+    @property
+    def sent(self) -> int:
+        """OSC commands sent to ``up``'s port."""
+        return self._out.sent
 
     def start(self) -> ControllerBridge:
         self.source.open()
@@ -54,7 +58,7 @@ class ControllerBridge:
         if self._thread.is_alive():
             self._thread.join(2.0)
         self.source.close()
-        self._sock.close()
+        self._out.close()
 
     def _run(self) -> None:
         try:
@@ -72,5 +76,4 @@ class ControllerBridge:
         else:
             return
         for address, args in cmds:
-            self._sock.sendto(encode(address, args), ("127.0.0.1", self.osc_port))
-            self.sent += 1
+            self._out.send(self.osc_port, address, args)

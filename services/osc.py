@@ -132,6 +132,49 @@ def _bind_udp(port: int, allow: Sequence[str], what: str) -> socket.socket:
     return sock
 
 
+def receive(sock: socket.socket, allow: frozenset[str], bad: BadMessages
+            ) -> list[tuple[str, tuple[Arg, ...], Address]] | None:  # fmt: skip
+    """One datagram from ``sock``: its messages with their sender, after the sender and
+    packet checks (a failed one is counted in ``bad`` and gives []); None when there is
+    nothing to read (a non-blocking socket, or a timeout) or the socket is closed. The one
+    reading of OSC input, for a service's endpoint and for ``up``'s router."""
+    try:
+        dgram, sender = sock.recvfrom(MAX_DATAGRAM)
+    except (BlockingIOError, InterruptedError, TimeoutError):
+        return None
+    except OSError as exc:  # e.g. an ICMP error for an earlier reply, or a closed socket
+        if sock.fileno() >= 0:
+            bad.count("socket", str(exc))
+        return None
+    if sender[0] not in allow:
+        bad.count("sender", f"{sender[0]} is not in --osc-allow")
+        return []
+    try:
+        messages = decode(dgram)
+    except ValueError as exc:
+        bad.count("packet", str(exc))
+        return []
+    return [(address, args, (sender[0], int(sender[1]))) for address, args in messages]
+
+
+class LoopbackSender:
+    """OSC messages sent to services' ports on loopback, from one socket of its own (bound,
+    so a service's reply comes back to it): ``up``'s router forwards a cue desk's commands
+    with it and the MIDI controller bridge sends its commands with it."""
+
+    def __init__(self) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sent = 0
+
+    def send(self, port: int, address: str, args: Iterable[Arg]) -> None:
+        self.sock.sendto(encode(address, args), ("127.0.0.1", port))
+        self.sent += 1
+
+    def close(self) -> None:
+        self.sock.close()
+
+
 class OscEndpoint:
     """A service's OSC port (see the module docstring): :meth:`take` the commands received
     from the service's own loop (between frames or ticks), :meth:`reply` to a sender,
@@ -155,28 +198,14 @@ class OscEndpoint:
     def take(self) -> list[Command]:
         """The commands received since the last call, in order (never waits)."""
         out: list[Command] = []
-        while True:
-            try:
-                dgram, sender = self._sock.recvfrom(MAX_DATAGRAM)
-            except (BlockingIOError, InterruptedError):
-                return out
-            except OSError as exc:  # e.g. an ICMP error for an earlier reply
-                self.bad.count("socket", str(exc))
-                return out
-            if sender[0] not in self.allow:
-                self.bad.count("sender", f"{sender[0]} is not in --osc-allow")
-                continue
-            try:
-                messages = decode(dgram)
-            except ValueError as exc:
-                self.bad.count("packet", str(exc))
-                continue
-            for address, args in messages:
+        while (messages := receive(self._sock, self.allow, self.bad)) is not None:
+            for address, args, sender in messages:
                 if not (address == STATE or serves(self.serves, address)):
                     self.bad.count("address", f"{address} is not served here")
                     continue
                 self.received += 1
-                out.append(Command(address, args, (sender[0], int(sender[1]))))
+                out.append(Command(address, args, sender))
+        return out
 
     def reply(self, to: Address, address: str, args: Iterable[Arg]) -> None:
         try:
@@ -211,8 +240,8 @@ class OscRouter:
         self.forwarded = 0
         self._sock = _bind_udp(port, allow, "up --osc")
         self.port = int(self._sock.getsockname()[1])
-        self._inner = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._inner.bind(("127.0.0.1", 0))
+        self._out = LoopbackSender()
+        self._inner = self._out.sock  # the services' state replies come back here
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._serve, name="up-osc", daemon=True)
 
@@ -225,27 +254,15 @@ class OscRouter:
         if self._thread.is_alive():
             self._thread.join(2.0)
         self._sock.close()
-        self._inner.close()
+        self._out.close()
         self.bad.log_summary()
 
     def _serve(self) -> None:
         while not self._stop.is_set():
-            try:
-                dgram, sender = self._sock.recvfrom(MAX_DATAGRAM)
-            except TimeoutError:
-                continue
-            except OSError:
+            if self._sock.fileno() < 0:
                 return
-            if sender[0] not in self.allow:
-                self.bad.count("sender", f"{sender[0]} is not in --osc-allow")
-                continue
-            try:
-                messages = decode(dgram)
-            except ValueError as exc:
-                self.bad.count("packet", str(exc))
-                continue
-            for address, args in messages:
-                self._route(address, args, (sender[0], int(sender[1])))
+            for address, args, sender in receive(self._sock, self.allow, self.bad) or ():
+                self._route(address, args, sender)
 
     def _route(self, address: str, args: tuple[Arg, ...], sender: Address) -> None:
         if address == STATE:
@@ -256,7 +273,7 @@ class OscRouter:
             self.bad.count("address", f"{address} is not served here")
             return
         for port in targets:
-            self._inner.sendto(encode(address, args), ("127.0.0.1", port))
+            self._out.send(port, address, args)
         self.forwarded += 1
 
     def _gather(self) -> list[Arg]:
@@ -271,7 +288,7 @@ class OscRouter:
                 break
         self._inner.settimeout(0.05)
         for port in ports:
-            self._inner.sendto(encode(STATE, ()), ("127.0.0.1", port))
+            self._out.send(port, STATE, ())
         got: dict[str, list[Arg]] = {}
         deadline = time.monotonic() + self.wait_s
         while len(got) < len(ports) and time.monotonic() < deadline:

@@ -14,6 +14,7 @@ import pytest
 from livedrummer.live.beat import (
     BeatTracker,
     beat_accuracy,
+    beat_precision,
     downbeat_weights,
     onset_weights,
     track_beats,
@@ -174,9 +175,10 @@ def test_bar_cues_fire_once_each_in_bar_order() -> None:
                                {"name": "n"}]}, "test")  # fmt: skip
     fire = BarCues(cues)
     assert fire.due([]) == [] and fire.due([(0.0, 1)]) == []
-    assert [c.name for c in fire.due([(2.0, 2)])] == ["a"]
+    assert [(t, c.name) for t, c in fire.due([(2.0, 2)])] == [(2.0, "a")]
     assert fire.due([(2.0, 2), (4.0, 3)]) == []  # a repeated bar fires nothing again
-    assert [c.name for c in fire.due([(9.0, 6)])] == ["b"]  # a skipped bar 5 still fires
+    # a skipped bar 5 still fires, at the start of the first bar past it
+    assert [(t, c.name) for t, c in fire.due([(8.0, 4), (9.0, 6)])] == [(9.0, "b")]
     assert fire.due([(11.0, 7)]) == []
 
 
@@ -189,3 +191,16 @@ def test_a_flood_keeps_each_update_bounded() -> None:
     for k in range(3000):
         tracker.process(100.0 + k / 1000.0, 1.0)
     assert len(tracker._onsets) <= BeatParams().max_onsets
+
+
+def test_precision_counts_the_extra_beats_that_accuracy_forgives() -> None:
+    reference = np.arange(0.0, 20.0, 0.5)
+    double = np.arange(0.0, 20.0, 0.25)  # double tempo: every reference beat, and one between
+    off = reference + 0.25  # on the "and": none
+    assert beat_accuracy(double, reference, 2.0) == 1.0
+    assert beat_precision(double, reference, 2.0) == pytest.approx(0.5, abs=0.02)
+    assert beat_precision(reference + 0.02, reference, 2.0) == 1.0
+    assert beat_precision(off, reference, 2.0) == 0.0
+    assert beat_precision(np.zeros(0), reference, 2.0) == 0.0
+    late = np.concatenate([reference, [25.0, 30.0]])  # past the reference's end: not counted
+    assert beat_precision(late, reference, 2.0) == 1.0

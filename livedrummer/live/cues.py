@@ -24,11 +24,15 @@ preset and parameters, the display its camera and blackout.
 Live, bars are counted by the beat tracker (:meth:`livedrummer.live.beat.BeatTracker.bars`:
 bar 1 is the first bar it hears start once it has a tempo, 4/4 assumed) and :class:`BarCues`
 fires each ``bar`` cue once, when its bar starts (or at the next bar start, should a corrected
-downbeat skip its number); the synth applies its style.
+downbeat skip its number), with that bar's start time (the synth asks a moment ahead of the
+predicted start, so the cue is on time). The synth eases in its style from the bar, and sends
+its camera and blackout to every display (:func:`stage_cue_rows`, protocol kind STAGE_CUE)
+stamped with the bar's show time (its start + D); a display turns a row back into a cue
+(:func:`stage_cue_of`) and applies it with :func:`fire_stage` when a frame reaches that show
+time, the one function that applies a cue to a :class:`~livedrummer.live.stage.Stage`.
 
-Limits: bars are counted on a file's tempo map and meter; live, a bar cue's camera and blackout
-are not applied (the display counts no bars: fire those by name); a cue's preset is read when
-the list is loaded.
+Limits: bars are counted on a file's tempo map and meter (live: the tracker's, 4/4); a cue's
+preset is read when the list is loaded.
 """
 
 from __future__ import annotations
@@ -43,7 +47,8 @@ from livedrummer.body.expression import PARAM_NAMES, Expression, load_expression
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import ConfigError, LivedrummerError
 from livedrummer.live.stage import Stage, camera_name
-from livedrummer.render.camera import Camera
+from livedrummer.render.camera import CAMERA_NAMES, Camera
+from livedrummer.timeline.events import STAGE_CUE_DTYPE
 
 
 class CueError(ConfigError):
@@ -72,6 +77,11 @@ class Cue:
     @property
     def styles(self) -> bool:
         return self.expression is not None or bool(self.params)
+
+    @property
+    def stages(self) -> bool:
+        """Whether it moves the camera or the blackout (a display's part)."""
+        return self.camera is not None or self.blackout is not None
 
 
 def parse_cues(data: dict[str, object], source: str) -> dict[str, Cue]:
@@ -162,7 +172,7 @@ class CuedStage:
 
     def __init__(self, stage: Stage, timed: list[tuple[float, Cue]]) -> None:
         self.stage = stage
-        self._pending = [(t, c) for t, c in timed if c.camera is not None or c.blackout is not None]
+        self._pending = [(t, c) for t, c in timed if c.stages]
         self._next = 0
 
     def at(self, t: float) -> tuple[Camera, float]:
@@ -183,16 +193,39 @@ def fire_stage(stage: Stage, cue: Cue, now_s: float) -> None:
 
 class BarCues:
     """The ``bar`` cues of a list, fired live as bars are counted: :meth:`due` takes the bar
-    starts heard since the last call and gives the cues due, each once, in bar order."""
+    starts heard since the last call, (start time, bar number), and gives the cues due, each
+    once, in bar order, with the start of the first bar given at or past the cue's bar."""
 
     def __init__(self, cues: dict[str, Cue]) -> None:
         self._pending = sorted((c for c in cues.values() if c.bar is not None),
                                key=lambda c: c.bar or 0)  # fmt: skip
 
-    def due(self, bars: list[tuple[float, int]]) -> list[Cue]:
+    def due(self, bars: list[tuple[float, int]]) -> list[tuple[float, Cue]]:
         if not bars or not self._pending:
             return []
         reached = max(bar for _, bar in bars)
         out = [c for c in self._pending if (c.bar or 0) <= reached]
         self._pending = self._pending[len(out) :]
-        return out
+        return [(min(t for t, bar in bars if bar >= (c.bar or 0)), c) for c in out]
+
+
+def stage_cue_rows(fired: list[tuple[float, int, Cue]]) -> np.ndarray:
+    """The stage part of cues fired at (show time, bar, cue), as STAGE_CUE_DTYPE rows (the
+    wire's kind STAGE_CUE); cues without one are left out."""
+    fired = [f for f in fired if f[2].stages]
+    out = np.zeros(len(fired), STAGE_CUE_DTYPE)
+    for i, (show_s, bar, cue) in enumerate(fired):
+        camera = 0 if cue.camera is None else CAMERA_NAMES.index(cue.camera) + 1
+        blackout = -1 if cue.blackout is None else int(cue.blackout)
+        out[i] = (show_s, bar, camera, int(cue.cut), blackout)
+    return out
+
+
+def stage_cue_of(row: np.void) -> Cue:
+    """A STAGE_CUE row back as the cue it came from (its stage part; named after its bar)."""
+    camera = int(row["camera"])
+    blackout = int(row["blackout"])
+    bar = int(row["bar"])
+    return Cue(f"bar {bar}", bar=bar or None,
+               camera=CAMERA_NAMES[camera - 1] if camera else None, cut=bool(row["cut"]),
+               blackout=None if blackout < 0 else bool(blackout))  # fmt: skip

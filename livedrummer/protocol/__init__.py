@@ -50,6 +50,12 @@ Kinds (:data:`SPECS`; "frames" counts the payload frames after the header)::
                            cymbal or hi-hat when the picture's does. Still version 2: a
                            peer that predates kind 9 refuses it as an unknown kind (counted
                            as a bad message, never misread)
+    STAGE_CUE 10    1      n >= 1 rows of events.STAGE_CUE_DTYPE (15 bytes: time_s f64 show
+                           time, bar u32, camera u8 0 or 1..8, cut u8 0/1, blackout i8
+                           -1/0/1): a cue's camera and blackout, which the synth sends on
+                           its pose stream when the beat tracker reaches the cue's bar, for
+                           every display to apply at that show time (a version-2 peer from
+                           before kind 10 refuses it as an unknown kind: counted, not misread)
 
 Limits checked by :func:`decode`: header size exact; payload_len <= ``max_payload``
 (default :data:`MAX_PAYLOAD`, 16 MiB) and equal to the frames' total; row payloads a whole
@@ -85,7 +91,7 @@ from livedrummer.errors import ProtocolError
 from livedrummer.protocol.bodies import Body, Gap, Hello, Message, Pose
 from livedrummer.protocol.codec import decode, encode
 from livedrummer.protocol.poseformat import PoseFormat
-from livedrummer.protocol.rows import check_controls, check_onsets
+from livedrummer.protocol.rows import check_controls, check_onsets, check_stage_cues
 from livedrummer.protocol.sequence import SeqReport, SeqStats, SeqStatus, SequenceTracker
 from livedrummer.protocol.spec import (
     GAP_PAYLOAD,
@@ -141,6 +147,7 @@ __all__ = [
     "WireError",
     "check_controls",
     "check_onsets",
+    "check_stage_cues",
     "decode",
     "encode",
     "topic",

@@ -1,4 +1,4 @@
-"""Validation of row payloads (ONSET, CONTROL), shared by encode and decode.
+"""Validation of row payloads (ONSET, CONTROL, STAGE_CUE), shared by encode and decode.
 
 A fast whole-array path for the common case (every row valid); only when it fails are the
 fields checked one by one, so the error names the first bad row and field.
@@ -72,8 +72,16 @@ def check_controls(rows: np.ndarray) -> None:
     _check_range(rows, "value", 128)
 
 
+def check_stage_cues(rows: np.ndarray) -> None:
+    _check_time(rows)
+    _check_range(rows, "camera", 9)
+    _check_range(rows, "cut", 2)
+    _check_range(rows, "blackout", 2, lo=-1)
+
+
 ROW_CHECKS = {Kind.ONSET: check_onsets, Kind.CONTROL: check_controls,
-              Kind.SHOWN_ONSET: check_onsets, Kind.SHOWN_CONTROL: check_controls}  # fmt: skip
+              Kind.SHOWN_ONSET: check_onsets, Kind.SHOWN_CONTROL: check_controls,
+              Kind.STAGE_CUE: check_stage_cues}  # fmt: skip
 
 
 def rows_from(data: memoryview, dtype: np.dtype[Any], what: str) -> np.ndarray:

@@ -17,9 +17,11 @@ from typing import Any
 import numpy as np
 
 from livedrummer.errors import ProtocolError
-from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
+from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, STAGE_CUE_DTYPE
 
-PROTOCOL_VERSION = 2  # 2: SHOWN_ONSET
+# 2: SHOWN_ONSET. SHOWN_CONTROL (9) and STAGE_CUE (10) came later without a bump: a version-2
+# peer that lacks them refuses them as unknown kinds (counted and dropped), never misreads one.
+PROTOCOL_VERSION = 2
 MAGIC = b"LDRM"
 HEADER = struct.Struct("<4sBBHHHQdI")
 POSE_HEADER = struct.Struct("<8sI4xd")
@@ -42,6 +44,7 @@ class Kind(IntEnum):
     GAP = 7
     SHOWN_ONSET = 8  # an onset forwarded to displays, stamped with its show time
     SHOWN_CONTROL = 9  # a control (choke, hi-hat pedal) forwarded likewise
+    STAGE_CUE = 10  # a cue's camera and blackout, sent to displays stamped with its show time
 
 
 class Flag(IntFlag):
@@ -58,7 +61,7 @@ class Stream(IntEnum):
     """Conventional stream ids (a sender may use others)."""
 
     EVENTS = 0  # onsets, controls, heartbeats and gaps of one input daemon
-    POSES = 1  # poses of one synth, and the onsets and controls it forwards to displays
+    POSES = 1  # poses of one synth, the onsets and controls it forwards, its stage cues
     CONTROL = 2  # hello/ready on a control socket (sequence numbers unused there)
 
 
@@ -91,6 +94,7 @@ SPECS: dict[int, KindSpec] = {
         KindSpec(Kind.GAP, 1, "struct", fixed=GAP_PAYLOAD),
         KindSpec(Kind.SHOWN_ONSET, 1, "rows", rows=ONSET_DTYPE),
         KindSpec(Kind.SHOWN_CONTROL, 1, "rows", rows=CONTROL_DTYPE),
+        KindSpec(Kind.STAGE_CUE, 1, "rows", rows=STAGE_CUE_DTYPE),
     )
 }
 

@@ -45,6 +45,21 @@ CONTROL_DTYPE = np.dtype(
     ]
 )
 
+#: A cue's stage part (camera, blackout) sent from the synth to its displays (protocol kind
+#: STAGE_CUE): ``time_s`` is the show time it takes effect at; ``camera`` 0 keeps the camera,
+#: 1..8 names one (render.camera.CAMERA_NAMES, the window's keys); ``cut`` 1 cuts there, no
+#: move; ``blackout`` -1 keeps it, 0 fades back to the picture, 1 fades to black; ``bar`` the
+#: bar that fired it (0: none). See :mod:`livedrummer.live.cues`.
+STAGE_CUE_DTYPE = np.dtype(
+    [
+        ("time_s", "<f8"),
+        ("bar", "<u4"),
+        ("camera", "u1"),
+        ("cut", "u1"),
+        ("blackout", "i1"),
+    ]
+)
+
 
 class ControlKind(IntEnum):
     """What a control event carries."""

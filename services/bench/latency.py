@@ -24,6 +24,13 @@ sample. Measured per note, on the shared clock, from the moment the note-on is s
 Prints p50/p99 per stage and rate and the counts lost at each stage (sent vs on the bus, on
 the bus vs contact samples; a note the sticking leaves out, e.g. a third hand note of a
 chord, has no contact sample). Figures from one run; no assertions.
+
+Show control on: ``--osc`` gives the synth and the display an OSC port each (read every tick
+and every frame, as in a show), ``--overlay score,joints`` has the display draw SMED's strips
+over every frame. ``--both`` measures every rate twice in one run, with nothing and with
+both on (OSC and the strips; ``--overlay`` picks which), in alternating order so that a load
+that changes during the run weighs on both alike, and ends with the medians side by side and
+the load average: the cost of the show control, measured under the same load.
 """
 
 from __future__ import annotations
@@ -276,11 +283,35 @@ def main(argv: list[str]) -> int:
         action="store_true",
         help="synth and display read an OSC port too (show control on)",
     )
+    parser.add_argument(
+        "--overlay",
+        metavar="LIST",
+        help="the display draws these strips over every frame: score, joints (needs "
+        "rendering; default none; score,joints with --both)",
+    )
+    parser.add_argument("--repeat", type=int, default=1, metavar="N",
+                        help="measure every rate N times (--both: median of medians)")  # fmt: skip
+    parser.add_argument("--both", action="store_true",
+                        help="measure each rate twice: without and with show control (OSC "
+                        "ports and the strips), alternating, and compare the medians")  # fmt: skip
     args = parser.parse_args(argv)
+    if args.overlay:
+        from livedrummer.render.overlay import parse_overlays
+
+        parse_overlays(args.overlay)  # a typo is one line (exit 2), before JACK starts
     synth_args = ["--no-provisional"] if args.no_provisional else []
-    osc = ["--osc", "0"] if args.osc else []  # a port the system picks: polled, never sent to
-    synth_args += osc
+    osc = ["--osc", "0"]  # a port the system picks: polled, never sent to
+    overlay = ["--overlay", args.overlay or "score,joints"]
+    render = ["--no-render"] if args.no_render else []
+    # (name, synth options, display options) of each way measured
+    if args.both:
+        modes = [("plain", synth_args, render), ("show", synth_args + osc,
+                                                  render + osc + overlay)]  # fmt: skip
+    else:
+        shown = (osc if args.osc else []) + (overlay if args.overlay else [])
+        modes = [("", synth_args + (osc if args.osc else []), render + shown)]
     input_args = ["--realtime", str(args.realtime)] if args.realtime else []
+    results: list[tuple[str, str, dict[str, Any]]] = []  # (mode, rate, run)
     jack = Jack()
     try:
         with tempfile.TemporaryDirectory() as tmp:
@@ -289,7 +320,12 @@ def main(argv: list[str]) -> int:
                     for rate in args.rates]  # fmt: skip
             if args.groove > 0:
                 runs.append(("groove", groove_schedule(args.groove)))
-            for delay_ms, (label, schedule) in ((d, run) for d in args.delay_ms for run in runs):
+            todo = [
+                (rep + k, d, run)
+                for rep in range(args.repeat)
+                for k, (d, run) in enumerate((d, run) for d in args.delay_ms for run in runs)
+            ]
+            for flip, delay_ms, (label, schedule) in todo:  # each way first as often
                 lookahead_ms = args.lookahead_ms or min(30.0, delay_ms)
                 if label == runs[0][0]:
                     print(f"D = {delay_ms:g} ms, L = {lookahead_ms:g} ms; ms from note-on "
@@ -299,20 +335,50 @@ def main(argv: list[str]) -> int:
                           f"{'JACK loop':>15} | {'onset on bus':>15} | {'pose at display':>15} | "
                           f"{'frame rendered':>15} | {'pose - onset':>15} | "
                           f"{'pose - bus':>15}")  # fmt: skip
-                r = run_rate(jack, label, schedule, delay_ms, lookahead_ms,
-                             Path(tmp), synth_args, input_args,
-                             (["--no-render"] if args.no_render else []) + osc)  # fmt: skip
-                print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
-                      f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
-                      f"{_pct(r['pose'])} | {_pct(r['frame'])} | "
-                      f"{_pct(r['after_onset'])} | {_pct(r['after_bus'])}", flush=True)  # fmt: skip
-                ab = r["after_bus"]
-                fast = float(np.mean(ab <= 0.001)) if ab.size else 0.0
-                print(f"         pose within 1 ms of the onset on the bus: {fast:.0%} of "
-                      f"contacts; frame - onset {_pct(r['frame_onset'])}; in the input daemon "
-                      f"(stamp -> sent) {_pct(r['in_daemon'])}; {r['late_where']}; "
-                      f"{r['synth']}",
-                      flush=True)  # fmt: skip
+                for mode, synth_mode, display_mode in modes if flip % 2 == 0 else modes[::-1]:
+                    r = run_rate(jack, label, schedule, delay_ms, lookahead_ms,
+                                 Path(tmp), synth_mode, input_args, display_mode)  # fmt: skip
+                    results.append((mode, f"{label} D={delay_ms:g}", r))
+                    _print_run(r, label if not mode else f"{label} {mode}")
+            if args.both:
+                _print_both(results)
     finally:
         jack.close()
     return 0
+
+
+def _print_run(r: dict[str, Any], label: str) -> None:
+    """One pipeline's row and its detail line."""
+    print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
+          f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
+          f"{_pct(r['pose'])} | {_pct(r['frame'])} | "
+          f"{_pct(r['after_onset'])} | {_pct(r['after_bus'])}", flush=True)  # fmt: skip
+    ab = r["after_bus"]
+    fast = float(np.mean(ab <= 0.001)) if ab.size else 0.0
+    print(f"         pose within 1 ms of the onset on the bus: {fast:.0%} of "
+          f"contacts; frame - onset {_pct(r['frame_onset'])}; in the input daemon "
+          f"(stamp -> sent) {_pct(r['in_daemon'])}; {r['late_where']}; "
+          f"{r['synth']}",
+          flush=True)  # fmt: skip
+
+
+def _print_both(results: list[tuple[str, str, dict[str, Any]]]) -> None:
+    """``--both``: the medians of each stage without and with show control, per rate (with
+    ``--repeat``, the median of the runs' medians)."""
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    print(f"\nshow control off / on (OSC ports and the strips): medians in ms; load average "
+          f"{load} (1, 5, 15 min)")  # fmt: skip
+    stages = (("bus", "onset on bus"), ("pose", "pose at display"), ("frame", "frame rendered"),
+              ("frame_onset", "frame - onset"), ("after_onset", "pose - onset"))  # fmt: skip
+    print(f"{'run':>14} | " + " | ".join(f"{name:>21}" for _, name in stages))
+    for run in dict.fromkeys(label for _, label, _ in results):
+        cells = []
+        for key, _ in stages:
+            med = [
+                float(np.median([np.median(r[key]) for m, label, r in results
+                                 if m == mode and label == run and r[key].size] or [np.nan]))
+                * 1000
+                for mode in ("plain", "show")
+            ]  # fmt: skip
+            cells.append(f"{med[0]:6.2f} / {med[1]:6.2f} ({med[1] - med[0]:+5.2f})")
+        print(f"{run:>14} | " + " | ".join(cells), flush=True)

@@ -347,8 +347,8 @@ def add_osc_options(p: argparse.ArgumentParser, what: str) -> None:
         help="also take OSC from these sender addresses (default: loopback only)",
     )
     p.add_argument("--cues", type=Path, metavar="FILE",
-                   help="cue list (TOML) whose cues OSC /livedrummer/cue NAME fires "
-                   "(default: none)")  # fmt: skip
+                   help="cue list (TOML): OSC /livedrummer/cue NAME fires a cue, and live "
+                   "its bar cues fire as the beat tracker counts bars (default: none)")  # fmt: skip
 
 
 def cues_of(args: argparse.Namespace) -> dict[str, Any]:

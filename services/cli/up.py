@@ -259,10 +259,10 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     if args.osc is not None or args.control is not None:  # up's OSC port forwards here
         synth_argv += ["--osc", str(base + OSC_SYNTH)]
         display_argv += ["--osc", str(base + OSC_DISPLAY)]
-        if args.cues is not None:
-            cues = ["--cues", str(args.cues.resolve())]
-            synth_argv += cues
-            display_argv += cues
+    if args.cues is not None:  # bar cues fire in the synth, by name over OSC in both
+        cues = ["--cues", str(args.cues.resolve())]
+        synth_argv += cues
+        display_argv += cues
     display_argv += ["--background", args.background] if args.background else []
     display_argv += ["--overlay", args.overlay] if args.overlay else []
     display_argv += ["--keys-port", KEYS_PORT] if args.keys else []

@@ -48,9 +48,12 @@ ticks (a machine loaded by other work), the missed frames are scheduled too, ``1
 drawing time after the show (about 90 s for the 30 s demo here). Open-ended recordings are
 still drawn live.
 
-Show control. With ``config.osc_port``, OSC camera, blackout and cue commands are applied
-before each frame (:mod:`services.display.showctl`); frames.jsonl then also names each
-frame's camera and darkness.
+Show control. With ``config.osc_port`` or ``config.cues``, OSC camera, blackout and cue
+commands, and the synth's STAGE_CUE messages (a bar cue's camera and blackout, at its show
+time), are applied before each frame (:mod:`services.display.showctl`); frames.jsonl then also
+names each frame's camera and darkness (and ``cues``: the stage cues applied in it, with
+their show times and whether they arrived late), and a recording drawn after the show
+replays them.
 
 Strips. ``config.overlays`` (``display --live --overlay score,joints``; keys O and G in a
 window) draws SMED's score and joint-angle strips over each frame at its show time, from the
@@ -108,7 +111,7 @@ from ..badmsg import BadMessages
 from ..net import Security, connect, socket, subscribe_protocol
 from ..service import OnReady, Service
 from .record import LiveRecorder
-from .showctl import DisplayShow
+from .showctl import DisplayShow, replay_stage
 from .surface import HeadlessSurface, WindowSurface
 from .video import VideoSettings
 from .window import WindowOptions
@@ -275,9 +278,10 @@ class LiveDisplay(Service):
         connect(self._sub, self.config.sub, "sub endpoint", self.config.security)
         self.endpoints["sub"] = self.config.sub
         port = self.config.osc_port
-        if port is not None:
+        if port is not None or self.config.cues:
             self.show = DisplayShow(self.kit, self.config.camera, port, self.config.osc_allow,
                                     self.config.cues)  # fmt: skip
+        if self.show is not None and self.show.osc is not None:
             self.endpoints["osc"] = f"udp://127.0.0.1:{self.show.osc.port}"
 
     def release(self) -> None:
@@ -355,7 +359,8 @@ class LiveDisplay(Service):
                                           "show_s": show, "pose_s": None,
                                           "newest_s": self.track.newest_s}  # fmt: skip
                 if self.show is not None:  # OSC commands reach this very frame
-                    self.show.apply(now)
+                    if fired := self.show.apply(now, show):  # and stage cues due by its show
+                        record["cues"] = fired
                     record["camera"] = self.show.stage.camera
                     record["dark"] = round(self.show.stage.darkness(now), 3)
                 if got is not None:
@@ -456,6 +461,8 @@ class LiveDisplay(Service):
         strips = LiveStrips(self.kit)
         onsets = iter(self._onset_log)
         nxt_onsets = next(onsets, None)
+        stage = None if self.show is None else replay_stage(self.kit, self.show)
+        surface.stage = None if stage is None else stage.stage
         started = time.monotonic()
         print(f"display: drawing the recording, {len(schedule)} frames at {cfg.fps:g} fps "
               f"({cfg.size[0]}x{cfg.size[1]}) ...", file=sys.stderr, flush=True)  # fmt: skip
@@ -470,6 +477,8 @@ class LiveDisplay(Service):
                     strips.add_onsets(nxt_onsets[1])
                     nxt_onsets = next(onsets, None)
                 got = track.at(show_s)
+                if stage is not None:
+                    stage.at(render_s)  # the camera and blackout as they were at this frame
                 frame = None if got is None else frame_from_pose(got[1], show_s, self.kit)
                 surface.draw(frame, render_s)
                 draw_strips(surface, strips, show_s)
@@ -492,6 +501,14 @@ class LiveDisplay(Service):
             except ProtocolError as exc:
                 self.stats.bad += 1
                 self.bad.drop(exc)
+                continue
+            if msg.kind is Kind.STAGE_CUE:  # a bar cue's camera and blackout (showctl)
+                self._observe(msg)
+                if self.show is None:
+                    self.stats.bad += 1
+                    self.bad.unexpected("STAGE_CUE (no stage here: give --cues or --osc)")
+                else:
+                    self.show.schedule(msg.rows)
                 continue
             if msg.kind is Kind.SHOWN_ONSET:  # onsets the synth forwards (sounded apart)
                 self._observe(msg)

@@ -1,28 +1,41 @@
-"""The live display's show control: OSC camera and blackout commands applied frame by frame.
+"""The live display's show control: camera and blackout, from OSC and from bar cues, applied
+frame by frame.
 
 Why here and not in the loop. The display's loop draws frames; what the audience sees besides
 the drummer (the camera, the blackout) is the pure :class:`~livedrummer.live.stage.Stage`,
-fed by this module from an :class:`~services.osc.OscEndpoint` (``display --osc PORT``, or
-``up --osc``'s forwarding). :meth:`DisplayShow.apply` runs on the loop's thread before each
-frame, so a command reaches the very next frame drawn (the OSC thread only queues it), and
-the stage is read by the surface that draws (:mod:`services.display.surface`).
-:func:`darken` blends black over a drawn frame (the blackout's fade) through the renderer's
-overlay pass, so PNGs, recordings and the window all see it.
+fed by this module from two sources: an :class:`~services.osc.OscEndpoint` (``display --osc
+PORT``, or ``up --osc``'s forwarding), and the synth's STAGE_CUE messages (a ``bar`` cue's
+camera and blackout, sent when the synth's beat tracker reaches the bar, stamped with the
+bar's show time; the loop hands them to :meth:`DisplayShow.schedule`). :meth:`DisplayShow.apply`
+runs on the loop's thread before each frame: an OSC command reaches the very next frame drawn
+(the OSC socket only queues it), a stage cue the first frame whose show time reaches the cue's,
+applied as of that show time (a render time ``show - cue`` earlier than the frame's, so a
+fade starts on the bar, not a frame late). Every change goes through :meth:`DisplayShow.fire`,
+as a :class:`~livedrummer.live.cues.Cue` applied by
+:func:`~livedrummer.live.cues.fire_stage`, and is kept in :attr:`DisplayShow.history`, from
+which a set-length recording drawn after the show replays the stage
+(:func:`replay_stage`). The stage is read by the surface that draws
+(:mod:`services.display.surface`); :func:`darken` blends black over a drawn frame (the
+blackout's fade) through the renderer's overlay pass, so PNGs, recordings and the window all
+see it.
 
-Limits: a set-length headless recording (``up --video --seconds``), drawn after the show,
-uses the camera it was started with; black frames are drawn, not skipped.
+Limits: a stage cue that arrives after its show time (the synth later than D) is applied at
+once, as of its time (a fade already under way); black frames are drawn, not skipped; a
+window with a stage (``--osc`` or ``--cues``) takes its camera from it, so the mouse does
+not orbit there.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 from typing import Any
 
 import numpy as np
 
 from livedrummer.kit.model import Kit
-from livedrummer.live.cues import Cue, fire_stage
-from livedrummer.live.stage import Stage
+from livedrummer.live.cues import Cue, CuedStage, fire_stage, stage_cue_of
+from livedrummer.live.stage import Stage, camera_name
 
 from ..osc import CUE, DISPLAY_ADDRESSES, PREFIX, STATE, Command, OscEndpoint, state_pairs
 
@@ -30,23 +43,68 @@ log = logging.getLogger("livedrummer.display")
 
 
 class DisplayShow:
-    """The stage and the OSC endpoint that steers it (see the module docstring)."""
+    """The stage and what steers it (see the module docstring); ``port`` None: no OSC."""
 
-    def __init__(self, kit: Kit, camera: str, port: int, allow: tuple[str, ...] = (),
+    def __init__(self, kit: Kit, camera: str, port: int | None, allow: tuple[str, ...] = (),
                  cues: dict[str, Cue] | None = None) -> None:  # fmt: skip
         self.stage = Stage(kit, camera)
+        self.camera = camera  # the first one, for a replay
         self.cues = cues or {}
-        self.osc = OscEndpoint(port, DISPLAY_ADDRESSES, "display", log, allow)
+        self.osc = None if port is None else OscEndpoint(port, DISPLAY_ADDRESSES, "display",
+                                                         log, allow)  # fmt: skip
         self.frames = 0
+        self.history: list[tuple[float, Cue]] = []  # (render time, change), as applied
+        # stage cues waiting for their show time: (show time, cue, arrived after a frame
+        # that should have shown it)
+        self._timed: list[tuple[float, Cue, bool]] = []
+        self.stage_cues = 0  # stage cues received from the synth
+        self.late_cues = 0  # ... of which arrived after the frame that should have shown them
+        self._shown_s = -math.inf  # the show time of the last frame
 
-    def apply(self, now_s: float) -> None:
-        """Every command received since the last frame, at the display's clock ``now_s``."""
-        for cmd in self.osc.take():
-            self.command(cmd, now_s)
+    def schedule(self, rows: np.ndarray) -> None:
+        """STAGE_CUE rows from the synth: applied when a frame's show time reaches theirs."""
+        for row in rows:
+            at_s = float(row["time_s"])
+            late = at_s <= self._shown_s
+            self._timed.append((at_s, stage_cue_of(row), late))
+            if late:
+                self.late_cues += 1
+                log.warning("display: a stage cue (bar %d) arrived %.0f ms after its show time: "
+                            "raise the synth's --delay-ms or lighten the machine",
+                            int(row["bar"]), 1000 * (self._shown_s - at_s))  # fmt: skip
+        self._timed.sort(key=lambda tc: tc[0])
+        self.stage_cues += rows.size
+
+    def apply(self, now_s: float, show_s: float | None = None) -> list[tuple[str, float, bool]]:
+        """Before the frame drawn at the display's clock ``now_s`` for show time ``show_s``:
+        every OSC command received since the last frame, and the stage cues due by
+        ``show_s``; gives the stage cues applied, (name, show time, arrived late), for the
+        frame's log."""
+        if self.osc is not None:
+            for cmd in self.osc.take():
+                self.command(cmd, now_s)
+        fired: list[tuple[str, float, bool]] = []
+        while show_s is not None and self._timed and self._timed[0][0] <= show_s:
+            at_s, cue, late = self._timed.pop(0)
+            self.fire(cue, now_s - (show_s - at_s))
+            fired.append((cue.name, at_s, late))
+            log.info("display: %s: %s at show %.3f s (frame %d)", cue.name, describe(cue),
+                     at_s, self.frames)  # fmt: skip
+        if show_s is not None:
+            self._shown_s = show_s
         self.frames += 1
+        return fired
+
+    def fire(self, cue: Cue, now_s: float) -> None:
+        """Apply a cue's camera and blackout at the display's clock ``now_s`` (every change
+        to the stage comes here), and keep it for a replay."""
+        fire_stage(self.stage, cue, now_s)
+        self.history.append((now_s, cue))
 
     def command(self, cmd: Command, now_s: float) -> None:
         stage, args = self.stage, cmd.args
+        if self.osc is None:
+            return
         if cmd.address == STATE:
             self.osc.reply(cmd.sender, STATE, state_pairs({
                 "camera": stage.camera, "blackout": int(stage.blackout),
@@ -61,22 +119,39 @@ class DisplayShow:
                 cue = self.cues.get(args[0]) if isinstance(args[0], str) else None
                 if cue is None:
                     raise ValueError(f"no cue of that name (known: {', '.join(self.cues)})")
-                fire_stage(stage, cue, now_s)
             elif cmd.address == PREFIX + "blackout":
                 if isinstance(args[0], str) or args[0] not in (0, 1):
                     raise ValueError("expected 0 or 1")
-                stage.set_blackout(bool(args[0]), now_s)
+                cue = Cue(cmd.address, blackout=bool(args[0]))
             else:
                 value = args[0]
-                spec = value if isinstance(value, str) else float(value)
-                stage.set_camera(spec, now_s, cut=cmd.address.endswith("/cut"))
+                name = camera_name(value if isinstance(value, str) else float(value))
+                cue = Cue(cmd.address, camera=name, cut=cmd.address.endswith("/cut"))
         except ValueError as exc:
             self.osc.argument(cmd, str(exc))
             return
+        self.fire(cue, now_s)
         log.info("display: %s %s", cmd.address, args[0])
 
     def close(self) -> None:
-        self.osc.stop()
+        if self.osc is not None:
+            self.osc.stop()
+
+
+def describe(cue: Cue) -> str:
+    """A cue's stage part in words, for the log: "camera front (cut), blackout 1"."""
+    parts = []
+    if cue.camera is not None:
+        parts.append(f"camera {cue.camera}" + (" (cut)" if cue.cut else ""))
+    if cue.blackout is not None:
+        parts.append(f"blackout {int(cue.blackout)}")
+    return ", ".join(parts) or "nothing"
+
+
+def replay_stage(kit: Kit, show: DisplayShow) -> CuedStage:
+    """A fresh stage that replays ``show``'s changes: ``.at(render_s)`` before each frame of
+    a recording drawn after the show puts the stage where it was at that frame."""
+    return CuedStage(Stage(kit, show.camera), list(show.history))
 
 
 _black: dict[tuple[int, int, int], np.ndarray] = {}

@@ -75,7 +75,8 @@ from .video import VideoSettings, VideoWriter
 from .window import WindowOptions
 
 log = logging.getLogger("livedrummer.display")
-_FORWARDED = (Kind.SHOWN_ONSET, Kind.SHOWN_CONTROL)  # the synth's forwards: no poses, not bad
+_FORWARDED = (Kind.SHOWN_ONSET, Kind.SHOWN_CONTROL, Kind.STAGE_CUE)  # no poses, not bad:
+# the stage display sounds nothing and has no camera cues, but they share the synth's numbers
 GLOW_LIT = 0.1  # a piece glowing above this was struck within about 0.3 s (a contact)
 
 
@@ -158,7 +159,7 @@ class _Stream:
                 self.stats.bad += 1
                 self.bad.unexpected(f"{msg.kind.name} of performer {msg.performer}")
                 continue
-            if msg.kind in _FORWARDED:  # the synth's forwarded onsets/controls share its numbers
+            if msg.kind in _FORWARDED:
                 self._observe(msg)
                 continue
             if not isinstance(msg.body, Pose):

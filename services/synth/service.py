@@ -35,7 +35,10 @@ Show control. With ``config.osc_port`` the loop also reads an OSC port
 (eased in, :mod:`livedrummer.live.style`), ``/livedrummer/state`` is answered with the preset,
 every parameter and the performer's state. A cue list's ``bar`` cues fire when the beat
 tracker (:mod:`livedrummer.live.beat`) hears their bar start
-(:class:`~livedrummer.live.cues.BarCues`).
+(:class:`~livedrummer.live.cues.BarCues`), :data:`BAR_LEAD_S` before its predicted start: the
+synth eases in their style from the bar's start, and sends their camera and blackout on the
+pose stream as a STAGE_CUE message stamped with the bar's show time (its start + D), which
+every display applies in the frame that shows that time.
 
 Limits: the pose socket is a plain PUB (a slow display loses samples past the high-water
 mark; it sees the gap in the sequence numbers); one performer per synth.
@@ -59,7 +62,7 @@ import zmq
 
 from livedrummer.errors import ProtocolError
 from livedrummer.live.behind import BehindCounter
-from livedrummer.live.cues import BarCues, Cue
+from livedrummer.live.cues import BarCues, Cue, stage_cue_rows
 from livedrummer.live.synth import LiveSynth, PoseBatch
 from livedrummer.protocol import (
     Hello,
@@ -94,6 +97,10 @@ _EVENT_KINDS = (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT)
 DEFAULT_PUB = "tcp://127.0.0.1:5720"
 DEFAULT_CONTROL = "tcp://127.0.0.1:5721"
 DRAIN_BATCH = 64  # input messages read before their quick contacts are published
+#: A bar cue fires this long before the beat tracker's predicted start of its bar, so that its
+#: stage cue reaches a display that draws ahead of the synth (its render-ahead lead can be
+#: longer than D) before the frame that shows the bar; its style still eases in on the bar.
+BAR_LEAD_S = 0.2
 
 
 @dataclass
@@ -125,6 +132,7 @@ class SynthStats:
     pose_samples: int = 0
     forwarded: int = 0  # onsets forwarded to displays (SHOWN_ONSET)
     forwarded_controls: int = 0  # controls forwarded to displays (SHOWN_CONTROL)
+    stage_cues: int = 0  # bar cues' cameras and blackouts sent to displays (STAGE_CUE)
     first_seq: int | None = None
     last_seq: int | None = None
     # read -> quick contacts sent, per batch (the latest ones: a show runs for hours)
@@ -279,13 +287,25 @@ class SynthService(Service):
 
     def _fire_bar_cues(self, now: float) -> None:
         """The cue list's ``bar`` cues whose bar the beat tracker has heard start: their style
-        (their camera and blackout are the display's, which counts no bars)."""
-        bars = self.synth.window.beat.bars(max(self._bars_from, now - 1.0), now)
-        self._bars_from = now
-        for cue in self.bar_cues.due(bars):
-            self.synth.set_expression(cue.apply(self.synth.style.target), now)
-            self.preset = cue.preset or self.preset
-            log.info("synth: bar %d: cue %s", cue.bar or 0, cue.name)
+        now, their camera and blackout to the displays at the bar's show time (STAGE_CUE)."""
+        ahead = now + BAR_LEAD_S
+        bars = self.synth.window.beat.bars(max(self._bars_from, now - 1.0), ahead)
+        self._bars_from = ahead
+        fired = self.bar_cues.due(bars)
+        delay_s = self.synth.params.delay_s
+        for start_s, cue in fired:
+            if cue.styles:  # eased in from the bar's start on
+                self.synth.set_expression(cue.apply(self.synth.style.target), start_s)
+                self.preset = cue.preset or self.preset
+            log.info("synth: bar %d: cue %s (bar start %.3f s, show %.3f s)", cue.bar or 0,
+                     cue.name, start_s, start_s + delay_s)  # fmt: skip
+        rows = stage_cue_rows([(t + delay_s, cue.bar or 0, cue) for t, cue in fired])
+        if rows.size:
+            msg = Message(Kind.STAGE_CUE, rows, self.config.performer, self._seq,
+                          self.clock.now(), Stream.POSES)  # fmt: skip
+            self._pub.send_multipart(encode(msg), copy=False)
+            self._seq += 1
+            self.stats.stage_cues += rows.size
 
     def _answer_hits(self) -> None:
         """Passed to ``LiveSynth.poses_until`` as ``answer`` (see :meth:`tick`): called
@@ -420,6 +440,7 @@ class SynthService(Service):
             "animations": self.synth.animations,
             "quick_contacts": self.synth.quick_contacts,
             "late_contacts": self.late.total,
+            "stage_cues": s.stage_cues,
             "answer_ms": [
                 round(float(np.percentile(s.answer_s, q)) * 1000, 2) if s.answer_s else None
                 for q in (50, 99)
