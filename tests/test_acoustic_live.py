@@ -53,7 +53,7 @@ def _same_hits(live: np.ndarray, offline: np.ndarray) -> float:
 def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, groove) -> None:  # type: ignore[no-untyped-def]
     _ex, mix, (stems, names) = groove
     profile = load_profile(None)
-    run = play_into_daemon(mix)
+    run = play_into_daemon(mix, trace=True)
     offline = detect(mix, SR, profile)
     assert len(offline) > 10
     assert "input:" in run.stderr
@@ -65,6 +65,12 @@ def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, g
     arrivals = np.sort(run.arrival_s)
     latency = arrivals - attacks
     assert (latency > 0).all() and np.median(latency) < 0.2, latency
+    # input --trace: each hit's path through the daemon, in order: audio callback, taken by
+    # the detector's thread, given by the detector; then sent and received on the bus
+    assert run.trace.shape == (len(offline), 3), run.stderr
+    path = np.column_stack([run.trace, run.sent_s, run.arrival_s])
+    assert (np.diff(path, axis=1) >= 0).all(), path
+    assert (path[:, 0] < arrivals).all() and (path[:, 0] > attacks).all()
     # one microphone per drum, two of them on the daemon's two JACK inputs
     two = stems[:, :2]
     spec = f"1={names[0]},2={names[1]}"

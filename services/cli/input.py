@@ -60,6 +60,10 @@ def register(sub: Subparsers) -> None:
                    help="open the source after N subscriptions (1 per SUB topic)")  # fmt: skip
     p.add_argument("--exit-at-end", action="store_true", help="--file: exit when played")
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
+    p.add_argument("--trace", type=Path, metavar="FILE",
+                   help="--audio: on exit, write each hit's times through the daemon (audio "
+                   "callback, hand-off, detector) to FILE as JSON, for bench transcribe --live "
+                   "(default: none)")  # fmt: skip
     p.add_argument("--realtime", type=int, default=0, metavar="PRIO",
                    help="SCHED_FIFO priority 1..60 when permitted (default 0: off)")  # fmt: skip
     p.add_argument(
@@ -123,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
 
         mapping = parse_channel_map(args.channels) if args.channels else None
         source = AudioSource(args.audio, clock, load_profile(args.audio_profile), mapping,
-                             args.performer)  # fmt: skip
+                             args.performer, trace=args.trace)  # fmt: skip
         note_map = load_note_map("general-midi")  # what its onsets' notes mean
     elif args.file is not None:
         from ..input.fileplayer import FileSource
