@@ -338,3 +338,33 @@ def test_a_side_stick_is_heard_as_a_snare_stroke(sf2: Path) -> None:
     assert np.abs(hits[is_snare]["time_s"] - notes["time_s"]).max() < 0.01
     # (the click's high band rings on: a hi-hat of velocity 15-18 is heard 16 ms after two)
     assert (hits[~is_snare]["velocity"] < 20).all(), hits
+
+
+def test_a_lookahead_one_profile_decides_a_frame_sooner(held_out, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """``audio profile --lookahead 1``: its templates are read one frame after the onset, and
+    its online detector gives its offline hits one frame (2.67 ms) sooner than the default."""
+    ex, mix, _ = held_out
+    out = _cli("audio", "profile", "--soundfont", str(DEFAULT_SF2), "--lookahead", "1",
+               "-o", str(tmp_path / "fast.toml"))  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    fast = load_profile(str(tmp_path / "fast.toml"))
+    assert fast.settings.lookahead == 1
+    assert not np.allclose(fast.templates, load_profile(None).templates)  # read sooner
+    clip = mix[: 6 * SR]
+    offline = detect(clip, SR, fast)
+    online, fed_at = _online(OnlineDetector(fast, SR), clip, seed=4)
+    assert len(offline) > 20
+    np.testing.assert_array_equal(online, offline)
+    decided = np.round((offline["time_s"] + fast.settings.offset_ms / 1000) * SR) + HOP
+    fed = np.array(fed_at)
+    assert (fed >= decided).all()  # no hit before its decision frame is in
+    assert (fed - decided < 3000).all()  # and out with the block that carried that frame
+    hits = detect(mix, SR, fast)
+    s = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
+              ex.onsets["velocity"], GROUPS_MIX)  # fmt: skip
+    # measured kick 0.895, snare 0.870, hi-hat 0.933
+    assert s["kick"].f >= 0.80 and s["snare"].f >= 0.80 and s["hihat"].f >= 0.80, s
+    bad = _cli("audio", "profile", "--soundfont", str(DEFAULT_SF2), "--lookahead", "0",
+               "-o", str(tmp_path / "x.toml"))  # fmt: skip
+    assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0, bad.stderr
+    assert "--lookahead" in bad.stderr

@@ -87,9 +87,12 @@ _SKIP_NOTES = frozenset({39})  # hand clap: no drum of the kit
 _OWN_SOUND_NOTES = frozenset({37})
 
 
-def soundfont_profile(sf2: object, sr: int, name: str = "general-midi") -> AudioProfile:
+def soundfont_profile(
+    sf2: object, sr: int, name: str = "general-midi", settings: DetectorSettings | None = None
+) -> AudioProfile:
     """A profile from isolated hits of every General MIDI drum note of a SoundFont (each
-    class's notes, at :data:`SOUNDFONT_VELOCITIES`), rendered by FluidSynth."""
+    class's notes, at :data:`SOUNDFONT_VELOCITIES`), rendered by FluidSynth; its hits picked
+    and its templates read with ``settings`` (e.g. another ``lookahead``), which it keeps."""
     from pathlib import Path
 
     from livedrummer.acoustic.pieces import class_of
@@ -111,12 +114,13 @@ def soundfont_profile(sf2: object, sr: int, name: str = "general-midi") -> Audio
         hits["zone"], hits["hihat"] = spec.zone.code, spec.hihat.code
         duration = float(hits["time_s"][-1]) + SOUNDFONT_SPACING_S
         audio = render_soundfont(hits, duration, Path(str(sf2)), sr).mean(axis=1)
-        found = hit_rises(audio, sr)
+        found = hit_rises(audio, sr, settings)
         if note in _OWN_SOUND_NOTES:
             own.setdefault(code, []).append(found)
         else:
             rises.setdefault(code, []).extend(found)
-    return build_profile(name, {c: np.array(r) for c, r in rises.items()}, other_sounds=own)
+    return build_profile(name, {c: np.array(r) for c, r in rises.items()}, settings,
+                         other_sounds=own)  # fmt: skip
 
 
 class HitCollector:

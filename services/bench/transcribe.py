@@ -132,7 +132,8 @@ def live(args: argparse.Namespace) -> int:
         for i, path in enumerate(files):
             ex = excerpt(path, 5.0, args.seconds)
             mix = render_mix(ex, seed=i)
-            run = play_into_daemon(mix, trace=True)
+            extra = [] if args.audio_profile is None else ["--audio-profile", args.audio_profile]
+            run = play_into_daemon(mix, extra, trace=True)
             offline = np.sort(detect(mix, SR, profile)["time_s"])
             if len(run.onsets) != len(offline):
                 print(f"  {path.name}: {len(run.onsets)} live hits, {len(offline)} offline")
