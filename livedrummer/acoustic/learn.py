@@ -83,8 +83,9 @@ def build_profile(
 SOUNDFONT_VELOCITIES = (127, 112, 96, 80, 64, 48)
 SOUNDFONT_SPACING_S = 0.6
 _SKIP_NOTES = frozenset({39})  # hand clap: no drum of the kit
-#: Notes whose class sounds unlike its other notes: templates of their own (side stick).
-_OWN_SOUND_NOTES = frozenset({37})
+#: Notes whose class sounds unlike its other notes: templates of their own (the side stick's
+#: click is a snare stroke, the ride's bell a ride stroke).
+_OWN_SOUND_NOTES = frozenset({37, 53})
 
 
 def soundfont_profile(
