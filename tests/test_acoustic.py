@@ -215,12 +215,16 @@ def test_profile_is_strict(tmp_path: Path) -> None:
     assert parse_channel_map("1=kick, 3=hihat") == {0: 0, 2: CLASSES.index("hihat_closed")}
 
 
-def test_shipped_profile_is_the_soundfonts(sf2: Path) -> None:
-    """kits/audio/general-midi.toml is what ``audio profile`` makes from TimGM6mb today."""
+@pytest.mark.parametrize(("name", "lookahead"), [("general-midi", 2), ("general-midi-fast", 1)])
+def test_shipped_profile_is_the_soundfonts(sf2: Path, name: str, lookahead: int) -> None:
+    """kits/audio/NAME.toml is what ``audio profile [--lookahead 1]`` makes from TimGM6mb
+    today."""
     from livedrummer.acoustic.learn import soundfont_profile
+    from livedrummer.acoustic.profile import DetectorSettings
 
-    made = soundfont_profile(sf2, SR)
-    shipped = load_profile(None)
+    made = soundfont_profile(sf2, SR, settings=DetectorSettings(lookahead=lookahead))
+    shipped = load_profile(name)
+    assert shipped.settings == made.settings
     np.testing.assert_allclose(made.templates, shipped.templates, atol=1e-4)
     np.testing.assert_allclose(made.levels, shipped.levels, rtol=1e-4)
 
