@@ -6,7 +6,11 @@ spectrum brightens as it is struck harder, so one average would fit neither end)
 the median rise of its loudest third, taken as a full-strength (velocity 127) hit. Onsets
 under :data:`WOBBLE` of the drum's loudest are left out (a ringing cymbal's decay). Hits are
 found by the same onset picking as the detector's, so a template is exactly the feature the
-detector will see; the picking settings used are the profile's own.
+detector will see; the picking settings used are the profile's own (``lookahead`` too: a
+profile that decides sooner reads its templates sooner). A way of striking a drum that sounds
+like none of its other strokes (a SoundFont's side stick, its ride bell) gets a template of
+its own, outside the loudness groups, and leaves the level alone; ``audio learn`` asks for the
+plain strokes only.
 """
 
 from __future__ import annotations

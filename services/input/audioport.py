@@ -18,6 +18,10 @@ of real time) is followed within 0.17 s instead of drifting. A hit's stamp is it
 that scale, minus the stream's reported input latency; it is published ``lookahead`` frames
 (5.3 ms) plus the attack's place in the onset window after the block that held it reached us.
 
+``input --audio --trace FILE`` keeps, per hit, the clock times of the callback that brought
+the block deciding it, of this thread taking that block, and of the detector giving the hit,
+and writes them as JSON when the source closes (``bench transcribe --live`` reads them).
+
 Problems: a device that does not exist, or refuses 48 kHz or the channel count, is a
 :class:`~livedrummer.errors.MidiInputError` naming it and the input devices that exist
 (``check`` before the show; the daemon reopens it every ``reconnect_s`` while absent).
