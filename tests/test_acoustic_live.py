@@ -99,6 +99,10 @@ def test_bad_audio_devices_are_one_line(jack_server: str) -> None:
     r = _input("--audio", "system", "--channels", "3=kick", "--no-journal")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
     assert "refuses 48000 Hz, 3 channel(s)" in r.stderr and "it has 2 inputs" in r.stderr
+    r = _input("--midi", "no-such-port", "--trace", "trace.json", "--no-journal")
+    assert r.returncode == 2 and r.stderr.strip().splitlines() == [
+        "livedrummer: error: --trace records the audio recogniser's hits: use it with --audio"
+    ]
 
 
 def test_a_device_at_another_rate_is_refused_in_one_line(tmp_path: Path) -> None:

@@ -119,6 +119,8 @@ def run(args: argparse.Namespace) -> int:
                           "--virtual")  # fmt: skip
     if args.thru_map is not None and args.thru is None:
         raise ConfigError("--thru-map re-maps what --thru forwards: add --thru PORT")
+    if args.trace is not None and args.audio is None:
+        raise ConfigError("--trace records the audio recogniser's hits: use it with --audio")
     if args.audio is not None:
         from livedrummer.acoustic.pieces import parse_channel_map
         from livedrummer.acoustic.profile import load_profile

@@ -61,6 +61,7 @@ SILENCE_DBFS = -70.0
 SILENCE_S = 10.0
 ANCHOR_BLOCKS = 64
 TRACE_BLOCKS = 256
+TRACE_HITS = 1_000_000  # a trace keeps the first million hits (24 MB), then stops
 
 
 def input_devices() -> list[str]:
@@ -207,6 +208,8 @@ class AudioSource(Source):
         this thread took that block from the queue, and when the detector gave the hit."""
         done = self.clock.now()
         s = self.profile.settings
+        if len(self._trace_rows) >= TRACE_HITS:
+            return
         for t in np.sort(hits["time_s"]).tolist():
             decided = round((t + s.offset_ms / 1000.0) * SAMPLE_RATE) + s.lookahead * HOP
             block = next((b for b in self._blocks if b[0] >= decided), self._blocks[-1])
@@ -239,4 +242,8 @@ class AudioSource(Source):
                 log.debug("closing %s: %s", self.name, exc)
         self.is_open = False
         if self._trace_path is not None:
-            self._trace_path.write_text(json.dumps({"hits": self._trace_rows}))
+            try:
+                self._trace_path.write_text(json.dumps({"hits": self._trace_rows}))
+            except OSError as exc:
+                log.error("%s: cannot write the trace: %s", self._trace_path,
+                          exc.strerror or exc)  # fmt: skip
