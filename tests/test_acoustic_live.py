@@ -53,7 +53,7 @@ def _same_hits(live: np.ndarray, offline: np.ndarray) -> float:
 def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, groove) -> None:  # type: ignore[no-untyped-def]
     _ex, mix, (stems, names) = groove
     profile = load_profile(None)
-    run = play_into_daemon(mix)
+    run = play_into_daemon(mix, trace=True)
     offline = detect(mix, SR, profile)
     assert len(offline) > 10
     assert "input:" in run.stderr
@@ -65,6 +65,12 @@ def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, g
     arrivals = np.sort(run.arrival_s)
     latency = arrivals - attacks
     assert (latency > 0).all() and np.median(latency) < 0.2, latency
+    # input --trace: each hit's path through the daemon, in order: audio callback, taken by
+    # the detector's thread, given by the detector; then sent and received on the bus
+    assert run.trace.shape == (len(offline), 3), run.stderr
+    path = np.column_stack([run.trace, run.sent_s, run.arrival_s])
+    assert (np.diff(path, axis=1) >= 0).all(), path
+    assert (path[:, 0] < arrivals).all() and (path[:, 0] > attacks).all()
     # one microphone per drum, two of them on the daemon's two JACK inputs
     two = stems[:, :2]
     spec = f"1={names[0]},2={names[1]}"
@@ -93,6 +99,10 @@ def test_bad_audio_devices_are_one_line(jack_server: str) -> None:
     r = _input("--audio", "system", "--channels", "3=kick", "--no-journal")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
     assert "refuses 48000 Hz, 3 channel(s)" in r.stderr and "it has 2 inputs" in r.stderr
+    r = _input("--midi", "no-such-port", "--trace", "trace.json", "--no-journal")
+    assert r.returncode == 2 and r.stderr.strip().splitlines() == [
+        "livedrummer: error: --trace records the audio recogniser's hits: use it with --audio"
+    ]
 
 
 def test_a_device_at_another_rate_is_refused_in_one_line(tmp_path: Path) -> None:

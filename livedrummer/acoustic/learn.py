@@ -6,12 +6,16 @@ spectrum brightens as it is struck harder, so one average would fit neither end)
 the median rise of its loudest third, taken as a full-strength (velocity 127) hit. Onsets
 under :data:`WOBBLE` of the drum's loudest are left out (a ringing cymbal's decay). Hits are
 found by the same onset picking as the detector's, so a template is exactly the feature the
-detector will see; the picking settings used are the profile's own.
+detector will see; the picking settings used are the profile's own (``lookahead`` too: a
+profile that decides sooner reads its templates sooner). A way of striking a drum that sounds
+like none of its other strokes (a SoundFont's side stick, its ride bell) gets a template of
+its own, outside the loudness groups, and leaves the level alone; ``audio learn`` asks for the
+plain strokes only.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -45,8 +49,14 @@ def build_profile(
     rises: Mapping[int, np.ndarray],
     settings: DetectorSettings | None = None,
     min_hits: int = 3,
+    other_sounds: Mapping[int, Sequence[np.ndarray]] | None = None,
 ) -> AudioProfile:
-    """A profile from each class's hit rises (class code → (hits, N_BANDS))."""
+    """A profile from each class's hit rises (class code → (hits, N_BANDS)).
+
+    ``other_sounds``: more ways a class sounds (class code → rises of each, e.g. a snare's
+    side stick), one template each (their mean shape), the class's level untouched: a side
+    stick is a snare stroke whose click is nothing like the head's sound, so the head's
+    loudness groups cannot hold it."""
     templates: list[np.ndarray] = []
     owners: list[int] = []
     levels = np.zeros(len(CLASSES))
@@ -63,6 +73,12 @@ def build_profile(
             owners.append(code)
         loud = sums[order[-max(1, len(order) // 3) :]]
         levels[code] = float(np.median(loud))
+        for other in (other_sounds or {}).get(code, ()):
+            other = other[other.sum(axis=1) > 0]
+            if len(other):
+                shape = (other / other.sum(axis=1, keepdims=True)).mean(axis=0)
+                templates.append(shape / shape.sum())
+                owners.append(code)
     return AudioProfile(name, np.array(templates), np.array(owners, np.int64), levels,
                         settings or DetectorSettings())  # fmt: skip
 
@@ -70,12 +86,18 @@ def build_profile(
 #: Velocities each note of a SoundFont is struck at to make its profile (loud to soft).
 SOUNDFONT_VELOCITIES = (127, 112, 96, 80, 64, 48)
 SOUNDFONT_SPACING_S = 0.6
-_SKIP_NOTES = frozenset({37, 39})  # side stick and hand clap: not a snare's head sound
+_SKIP_NOTES = frozenset({39})  # hand clap: no drum of the kit
+#: Notes whose class sounds unlike its other notes: templates of their own (the side stick's
+#: click is a snare stroke, the ride's bell a ride stroke).
+_OWN_SOUND_NOTES = frozenset({37, 53})
 
 
-def soundfont_profile(sf2: object, sr: int, name: str = "general-midi") -> AudioProfile:
+def soundfont_profile(
+    sf2: object, sr: int, name: str = "general-midi", settings: DetectorSettings | None = None
+) -> AudioProfile:
     """A profile from isolated hits of every General MIDI drum note of a SoundFont (each
-    class's notes, at :data:`SOUNDFONT_VELOCITIES`), rendered by FluidSynth."""
+    class's notes, at :data:`SOUNDFONT_VELOCITIES`), rendered by FluidSynth; its hits picked
+    and its templates read with ``settings`` (e.g. another ``lookahead``), which it keeps."""
     from pathlib import Path
 
     from livedrummer.acoustic.pieces import class_of
@@ -85,6 +107,7 @@ def soundfont_profile(sf2: object, sr: int, name: str = "general-midi") -> Audio
 
     gm = load_note_map("general-midi")
     rises: dict[int, list[np.ndarray]] = {}
+    own: dict[int, list[np.ndarray]] = {}
     for note, spec in sorted(gm.notes.items()):
         code = class_of(spec.instrument, spec.zone, spec.hihat)
         if code < 0 or note in _SKIP_NOTES:
@@ -96,9 +119,13 @@ def soundfont_profile(sf2: object, sr: int, name: str = "general-midi") -> Audio
         hits["zone"], hits["hihat"] = spec.zone.code, spec.hihat.code
         duration = float(hits["time_s"][-1]) + SOUNDFONT_SPACING_S
         audio = render_soundfont(hits, duration, Path(str(sf2)), sr).mean(axis=1)
-        found = hit_rises(audio, sr)
-        rises.setdefault(code, []).extend(found)
-    return build_profile(name, {c: np.array(r) for c, r in rises.items()})
+        found = hit_rises(audio, sr, settings)
+        if note in _OWN_SOUND_NOTES:
+            own.setdefault(code, []).append(found)
+        else:
+            rises.setdefault(code, []).extend(found)
+    return build_profile(name, {c: np.array(r) for c, r in rises.items()}, settings,
+                         other_sounds=own)  # fmt: skip
 
 
 class HitCollector:

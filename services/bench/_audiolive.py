@@ -32,6 +32,10 @@ class LiveRun:
     block_starts: np.ndarray  # player's blocks: first sample
     block_times: np.ndarray  # and monotonic time of their callback
     stderr: str
+    sent_s: np.ndarray  # monotonic time the daemon sent each onset (the message's header)
+    #: per onset (``trace=True``): the daemon's callback, hand-off and detector times
+    #: (``input --trace``), else empty
+    trace: np.ndarray
 
     def attack_times(self, times_s: np.ndarray, sr: int = 48_000) -> np.ndarray:
         """Monotonic time of each sample time ``times_s`` of the played audio."""
@@ -39,6 +43,11 @@ class LiveRun:
         k = np.searchsorted(self.block_starts, idx, side="right") - 1
         k = np.clip(k, 0, len(self.block_starts) - 1)
         return np.asarray(self.block_times[k] + (idx - self.block_starts[k]) / sr)
+
+    def block_time(self, samples: np.ndarray) -> np.ndarray:
+        """Monotonic time of the player's callback for the block holding each sample index."""
+        k = np.searchsorted(self.block_starts, np.asarray(samples), side="right") - 1
+        return np.asarray(self.block_times[np.clip(k, 0, len(self.block_starts) - 1)])
 
     def file_times(self, stamps_s: np.ndarray, sr: int = 48_000) -> np.ndarray:
         """The inverse: the time in the played audio of each monotonic time ``stamps_s``."""
@@ -54,7 +63,9 @@ def _ports() -> list[str]:
     )
 
 
-def play_into_daemon(audio: np.ndarray, extra: list[str] | None = None) -> LiveRun:
+def play_into_daemon(
+    audio: np.ndarray, extra: list[str] | None = None, trace: bool = False
+) -> LiveRun:
     import zmq
 
     from livedrummer import protocol as p
@@ -64,13 +75,16 @@ def play_into_daemon(audio: np.ndarray, extra: list[str] | None = None) -> LiveR
     any_port = "tcp://127.0.0.1:*"
     cmd = [sys.executable, "-m", "services", "input", "--audio", "system", "--no-journal",
            "--pub", any_port, "--control", any_port, *(extra or [])]  # fmt: skip
-    daemon = subprocess.Popen(cmd, cwd=WORKDIR, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              text=True)  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     sub = ctx.socket(zmq.SUB)
     player = None
     err = ""
     with tempfile.TemporaryDirectory() as tmp:
+        trace_file = Path(tmp) / "trace.json"
+        if trace:
+            cmd += ["--trace", str(trace_file)]
+        daemon = subprocess.Popen(cmd, cwd=WORKDIR, stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, text=True)  # fmt: skip
         try:
             assert daemon.stdout is not None
             line = daemon.stdout.readline()
@@ -88,6 +102,7 @@ def play_into_daemon(audio: np.ndarray, extra: list[str] | None = None) -> LiveR
             player.stdin.flush()
             rows: list[np.ndarray] = []
             arrivals: list[float] = []
+            sent: list[float] = []
             deadline = time.monotonic() + len(audio) / 48_000 + 20
             blocks: list[list[float]] | None = None
             while time.monotonic() < deadline:
@@ -96,6 +111,7 @@ def play_into_daemon(audio: np.ndarray, extra: list[str] | None = None) -> LiveR
                     now = time.monotonic()
                     rows.append(msg.rows)
                     arrivals += [now] * len(msg.rows)
+                    sent += [msg.send_time_s] * len(msg.rows)
                 if blocks is None and player.poll() is not None:
                     blocks = json.loads(stamps.read_text())["blocks"]
                     deadline = min(deadline, time.monotonic() + 0.5)
@@ -112,11 +128,13 @@ def play_into_daemon(audio: np.ndarray, extra: list[str] | None = None) -> LiveR
                 err = daemon.communicate()[1]
             sub.close(0)
             ctx.term()
+        traced = json.loads(trace_file.read_text())["hits"] if trace_file.exists() else []
     from livedrummer.timeline.events import ONSET_DTYPE
 
     onsets = np.concatenate(rows) if rows else np.zeros(0, ONSET_DTYPE)
     b = np.array(blocks, float).reshape(-1, 2)
-    return LiveRun(onsets, np.array(arrivals), b[:, 0].astype(np.int64), b[:, 1], err)
+    return LiveRun(onsets, np.array(arrivals), b[:, 0].astype(np.int64), b[:, 1], err,
+                   np.array(sent), np.array(traced, float).reshape(-1, 3))  # fmt: skip
 
 
 def _start_player(audio: np.ndarray, inputs: list[str], tmp: Path) -> tuple[Any, Path]:

@@ -10,7 +10,11 @@ factor (seconds of computing per second of audio) and the online detector's CPU 
 256-sample blocks (process time per second of audio, as a share of one core), medians over
 the excerpts. ``--live`` instead plays the mixes into ``input --audio`` through a private ``jackd -d
 dummy`` (:mod:`._audiolive`) and prints attack → onset-on-the-bus latency (the attack placed
-by the player's JACK cycle; median and 99th percentile over every hit) and live accuracy.
+by the player's JACK cycle; median and 99th percentile over every hit), where that time goes
+(:data:`STAGES`: the lookahead until the block that decides the hit is played, JACK and
+PortAudio to the daemon's callback, the hand-off to the detector's thread, the detector's
+work, publishing, ZeroMQ to the subscriber; from ``input --trace`` and the message's send
+time) and live accuracy. ``--audio-profile`` is used by the daemon too.
 """
 
 from __future__ import annotations
@@ -19,10 +23,16 @@ import argparse
 import csv
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ._paths import DEFAULT_CORPUS, corpus
+
+if TYPE_CHECKING:
+    from livedrummer.acoustic.profile import DetectorSettings
+
+    from ._audiolive import LiveRun
 
 GROUPS_MIX = {
     "kick": ("kick",), "snare": ("snare",), "hihat": ("hihat_closed", "hihat_open"),
@@ -118,6 +128,7 @@ def live(args: argparse.Namespace) -> int:
     root = corpus(args.corpus)
     profile = load_profile(args.audio_profile)
     latencies: list[float] = []
+    stages: list[np.ndarray] = []
     tot: dict[str, Counts] = {}
     files = pick_files(root, args.split, args.files)
     with dummy_jack("bench-transcribe") as name:
@@ -125,12 +136,15 @@ def live(args: argparse.Namespace) -> int:
         for i, path in enumerate(files):
             ex = excerpt(path, 5.0, args.seconds)
             mix = render_mix(ex, seed=i)
-            run = play_into_daemon(mix)
+            extra = [] if args.audio_profile is None else ["--audio-profile", args.audio_profile]
+            run = play_into_daemon(mix, extra, trace=True)
             offline = np.sort(detect(mix, SR, profile)["time_s"])
             if len(run.onsets) != len(offline):
                 print(f"  {path.name}: {len(run.onsets)} live hits, {len(offline)} offline")
                 continue
             latencies += (np.sort(run.arrival_s) - run.attack_times(offline)).tolist()
+            if len(run.trace) == len(offline):
+                stages.append(_stages(run, offline, profile.settings))
             # live stamps back on the file's time line through the player's JACK cycles
             on = run.onsets
             ref = (ex.onsets["time_s"], ex.classes, ex.onsets["velocity"])
@@ -144,6 +158,39 @@ def live(args: argparse.Namespace) -> int:
         p50, p99 = np.percentile(lat, 50), np.percentile(lat, 99)
         print(f"  attack -> onset on the bus: p50 {p50:.1f} ms, p99 {p99:.1f} ms, "
               f"max {lat.max():.1f} ms ({len(lat)} hits)")  # fmt: skip
+    if stages:
+        print("  where the time goes (ms, p50 / p99 over the hits):")
+        table = np.concatenate(stages) * 1000
+        for name, col in zip(STAGES, table.T, strict=True):
+            print(f"    {name:<46} {np.percentile(col, 50):5.1f} / {np.percentile(col, 99):5.1f}")
+        ours = table[:, 1:].sum(axis=1)  # from the deciding block's cycle on
+        print(f"    {'deciding block played -> subscriber has it':<46} "
+              f"{np.percentile(ours, 50):5.1f} / {np.percentile(ours, 99):5.1f}")  # fmt: skip
     for k, c in tot.items():
         print(f"    {k:<10} F {c.f:.3f}  P {c.precision:.3f}  R {c.recall:.3f}  n {c.tp + c.fn}")
     return 0
+
+
+STAGES = (
+    "attack -> its deciding block played (lookahead)",
+    "played -> daemon's audio callback (JACK, PA)",
+    "callback -> detector thread takes it (hand-off)",
+    "taken -> detector gives the hit (Python work)",
+    "hit -> sent on the bus (publish)",
+    "sent -> subscriber has it (ZeroMQ, wake-up)",
+)
+
+
+def _stages(run: LiveRun, offline: np.ndarray, s: DetectorSettings) -> np.ndarray:
+    """Per hit (rows), the seconds each of :data:`STAGES` took: the attack (the offline twin's
+    stamp, placed by the player's cycles), the player's callback for the block holding the
+    sample that decides the hit (``lookahead`` frames after the onset frame), then the
+    daemon's own times (``input --trace``), the message's send time and its arrival."""
+    from livedrummer.acoustic.spectrum import HOP
+
+    from ._drumaudio import SR
+
+    decided = np.round((offline + s.offset_ms / 1000) * SR).astype(np.int64) + s.lookahead * HOP
+    marks = [run.attack_times(offline), run.block_time(decided - 1), *run.trace.T, run.sent_s,
+             run.arrival_s]  # fmt: skip
+    return np.diff(np.array(marks), axis=0).T

@@ -60,6 +60,10 @@ def register(sub: Subparsers) -> None:
                    help="open the source after N subscriptions (1 per SUB topic)")  # fmt: skip
     p.add_argument("--exit-at-end", action="store_true", help="--file: exit when played")
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
+    p.add_argument("--trace", type=Path, metavar="FILE",
+                   help="--audio: on exit, write each hit's times through the daemon (audio "
+                   "callback, hand-off, detector) to FILE as JSON, for bench transcribe --live "
+                   "(default: none)")  # fmt: skip
     p.add_argument("--realtime", type=int, default=0, metavar="PRIO",
                    help="SCHED_FIFO priority 1..60 when permitted (default 0: off)")  # fmt: skip
     p.add_argument(
@@ -115,6 +119,8 @@ def run(args: argparse.Namespace) -> int:
                           "--virtual")  # fmt: skip
     if args.thru_map is not None and args.thru is None:
         raise ConfigError("--thru-map re-maps what --thru forwards: add --thru PORT")
+    if args.trace is not None and args.audio is None:
+        raise ConfigError("--trace records the audio recogniser's hits: use it with --audio")
     if args.audio is not None:
         from livedrummer.acoustic.pieces import parse_channel_map
         from livedrummer.acoustic.profile import load_profile
@@ -123,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
 
         mapping = parse_channel_map(args.channels) if args.channels else None
         source = AudioSource(args.audio, clock, load_profile(args.audio_profile), mapping,
-                             args.performer)  # fmt: skip
+                             args.performer, trace=args.trace)  # fmt: skip
         note_map = load_note_map("general-midi")  # what its onsets' notes mean
     elif args.file is not None:
         from ..input.fileplayer import FileSource

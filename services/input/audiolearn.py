@@ -20,7 +20,7 @@ import numpy as np
 
 from livedrummer.acoustic.learn import HitCollector, LearnError, build_profile
 from livedrummer.acoustic.pieces import CLASSES
-from livedrummer.acoustic.profile import AudioProfile
+from livedrummer.acoustic.profile import AudioProfile, DetectorSettings
 
 from .audioport import BLOCK, SAMPLE_RATE, AudioSource, find_device
 
@@ -35,6 +35,7 @@ def learn_kit(
     channels: Mapping[int, int] | None = None,
     timeout_s: float = 60.0,
     say: Callable[[str], None] = print,
+    settings: DetectorSettings | None = None,
 ) -> AudioProfile:
     import sounddevice as sd
 
@@ -55,7 +56,7 @@ def learn_kit(
                         blocksize=BLOCK, dtype="float32", callback=callback):  # fmt: skip
         for cls in drums:
             say(f"hit the {CLASSES[cls].replace('_', ' ')} about {hits} times")
-            collector = HitCollector(SAMPLE_RATE)
+            collector = HitCollector(SAMPLE_RATE, settings)
             found: list[np.ndarray] = []
             quiet = 0.0
             deadline = time.monotonic() + timeout_s
@@ -75,7 +76,7 @@ def learn_kit(
                 quiet = 0.0 if new else quiet + len(data) / SAMPLE_RATE
             rises[cls] = np.array(found)
             say(f"  {CLASSES[cls]}: {len(found)} hits")
-    return build_profile(name, rises)
+    return build_profile(name, rises, settings)
 
 
 def _placeholder() -> AudioProfile:

@@ -18,6 +18,10 @@ of real time) is followed within 0.17 s instead of drifting. A hit's stamp is it
 that scale, minus the stream's reported input latency; it is published ``lookahead`` frames
 (5.3 ms) plus the attack's place in the onset window after the block that held it reached us.
 
+``input --audio --trace FILE`` keeps, per hit, the clock times of the callback that brought
+the block deciding it, of this thread taking that block, and of the detector giving the hit,
+and writes them as JSON when the source closes (``bench transcribe --live`` reads them).
+
 Problems: a device that does not exist, or refuses 48 kHz or the channel count, is a
 :class:`~livedrummer.errors.MidiInputError` naming it and the input devices that exist
 (``check`` before the show; the daemon reopens it every ``reconnect_s`` while absent).
@@ -27,16 +31,19 @@ each; the daemon keeps running.
 
 from __future__ import annotations
 
+import json
 import logging
 import queue
 from collections import deque
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from livedrummer.acoustic.detector import OnlineDetector
 from livedrummer.acoustic.profile import AudioProfile
+from livedrummer.acoustic.spectrum import HOP
 from livedrummer.acoustic.transcribe import hits_to_onsets
 from livedrummer.errors import MidiInputError
 from livedrummer.timeline.clock import Clock
@@ -53,6 +60,8 @@ CLIP_LEVEL = 0.999
 SILENCE_DBFS = -70.0
 SILENCE_S = 10.0
 ANCHOR_BLOCKS = 64
+TRACE_BLOCKS = 256
+TRACE_HITS = 1_000_000  # a trace keeps the first million hits (24 MB), then stops
 
 
 def input_devices() -> list[str]:
@@ -90,6 +99,7 @@ class AudioSource(Source):
         channels: Mapping[int, int] | None = None,
         performer: int = 0,
         problems: Problems | None = None,
+        trace: Path | None = None,
     ) -> None:
         super().__init__(f"audio {device}", clock, problems)
         self.device = device
@@ -108,6 +118,10 @@ class AudioSource(Source):
         self._latency_s = 0.0
         self._quiet_s = 0.0
         self._dropped = 0
+        #: ``trace``: per hit, the clock times of its path through us (see :meth:`_trace`)
+        self._trace_path = trace
+        self._trace_rows: list[tuple[float, float, float]] = []
+        self._blocks: deque[tuple[int, float, float]] = deque(maxlen=TRACE_BLOCKS)
 
     def check(self) -> None:
         import sounddevice as sd
@@ -175,6 +189,8 @@ class AudioSource(Source):
         self._delivered += len(data)
         if not len(hits):
             return []
+        if self._trace_path is not None:
+            self._trace(hits)
         rows = hits_to_onsets(hits, self.performer)
         rows["time_s"] += min(self._anchors) - self._latency_s
         return [Onset.from_record(r) for r in rows]
@@ -183,7 +199,21 @@ class AudioSource(Source):
         stamp, data = item
         self._received += len(data)
         self._anchors.append(stamp - self._received / SAMPLE_RATE)
+        if self._trace_path is not None:
+            self._blocks.append((self._received, stamp, self.clock.now()))
         return data
+
+    def _trace(self, hits: np.ndarray) -> None:
+        """Per hit (in published order): when the callback got the block that decided it, when
+        this thread took that block from the queue, and when the detector gave the hit."""
+        done = self.clock.now()
+        s = self.profile.settings
+        if len(self._trace_rows) >= TRACE_HITS:
+            return
+        for t in np.sort(hits["time_s"]).tolist():
+            decided = round((t + s.offset_ms / 1000.0) * SAMPLE_RATE) + s.lookahead * HOP
+            block = next((b for b in self._blocks if b[0] >= decided), self._blocks[-1])
+            self._trace_rows.append((block[1], block[2], done))
 
     def _watch(self, data: np.ndarray) -> None:
         peak = float(np.max(np.abs(data))) if data.size else 0.0
@@ -211,3 +241,9 @@ class AudioSource(Source):
             except sd.PortAudioError as exc:  # a vanished device may fail to close
                 log.debug("closing %s: %s", self.name, exc)
         self.is_open = False
+        if self._trace_path is not None:
+            try:
+                self._trace_path.write_text(json.dumps({"hits": self._trace_rows}))
+            except OSError as exc:
+                log.error("%s: cannot write the trace: %s", self._trace_path,
+                          exc.strerror or exc)  # fmt: skip
