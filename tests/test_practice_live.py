@@ -113,7 +113,7 @@ def test_live_pass_equals_score_of_its_take(jack_server: str, groove_dir: Path,
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
     proc = subprocess.Popen(
         [sys.executable, "-m", "services", "practice", str(ref), "--virtual", "pads", "--api",
-         "jack", "--map", "roland-td", "--bars", "2:3", "--count-in", "1", "--no-sound",
+         "jack", "--map", "roland-td", "--bars", "2:3", "--count-in", "1", "--no-sound", "--no-window",
          "--json", "--take", str(take), "--seconds", "40", "--passes", "1"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
     )  # fmt: skip
@@ -172,7 +172,7 @@ def test_ramp_and_quiet_count_drill(jack_server: str, groove_dir: Path, tmp_path
     proc = subprocess.run(
         [sys.executable, "-m", "services", "practice", str(groove_dir / FUNK), "--virtual", "p",
          "--api", "jack", "--map", "roland-td", "--bars", "2:3", "--bpm", "240", "--ramp", "20",
-         "--ramp-target", "260", "--quiet-count", "1:1", "--no-sound", "--json"],
+         "--ramp-target", "260", "--quiet-count", "1:1", "--no-sound", "--json", "--no-window"],
         capture_output=True, text=True, timeout=60, env=env,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr

@@ -85,6 +85,9 @@ def add_live_options(p: argparse.ArgumentParser) -> None:
     add_db_option(p)
     p.add_argument("--seconds", type=float, metavar="S",
                    help="stop after S seconds (default: when the passes are done)")  # fmt: skip
+    from .practice_show import add_show_options
+
+    add_show_options(p)
 
 
 #: A pass is judged this long after the last hit it can own, so a hit stamped just before
@@ -134,6 +137,7 @@ def run_live(args: argparse.Namespace) -> int:
 
     from .common import kit_source, read_performance
     from .practice import judge_settings, pass_setup, summary_lines
+    from .practice_show import Show, check_show, show_mode
 
     window_ms, pieces, level = judge_settings(args)
     ref, _ = read_performance(args, args.reference)
@@ -162,7 +166,19 @@ def run_live(args: argparse.Namespace) -> int:
     window_s = window_ms / 1e3
     note_map = load_note_map(args.take_map)
     clock = MonotonicClock()
-    source = kit_source(args, clock, MessageDecoder(note_map))
+    mode = show_mode(args)
+    check_show(args, mode)
+    source: Any = kit_source(args, clock, MessageDecoder(note_map))  # checked: one line if absent
+    show = None
+    if mode == "none":
+        why = "--no-window" if args.no_window else "no screen ($DISPLAY)"
+        print(f"practice: terminal readout only ({why})", file=sys.stderr, flush=True)
+    else:
+        shown = "in a window" if mode == "window" else f"off screen into {args.frames_dir}/"
+        print(f"practice: the drummers {shown} (teacher {args.teacher})", file=sys.stderr,
+              flush=True)  # fmt: skip
+        show = Show(args, mode)
+        source = show.bus
     input_s = Calibration.load().input_ms / 1e3
     player = None
     if not args.no_sound:
@@ -191,6 +207,12 @@ def run_live(args: argparse.Namespace) -> int:
         judged = np.ones(codes.size, bool) if pieces is None else np.isin(codes, list(pieces))
         readout = LiveReadout(notes["time_s"][judged], codes[judged], window_ms, level)
         ps = Pass(number, start_s, sc, base_bpm * sc, notes, pass_length_s(seg, sc), readout)
+        if show is not None:
+            show.readout.send({"plan": {
+                "pass": number, "start_s": start_s, "scale": sc, "bpm": ps.bpm,
+                "bars": [seg.first_bar, seg.last_bar], "seg_start_s": seg.start_s,
+                "seg_end_s": seg.end_s, "window_ms": window_ms, "level_ms": level.window_ms,
+                "teacher": args.teacher}})  # fmt: skip
         if args.json:
             emit({"pass": number, "start_s": start_s, "bpm": round(ps.bpm, 3), "scale": sc,
                   "bars": [seg.first_bar, seg.last_bar], "length_s": ps.length_s,
@@ -232,6 +254,8 @@ def run_live(args: argparse.Namespace) -> int:
         _keep(args, p, result, hits)
         if args.report is not None:
             reports.append((p, result, matching))
+        if show is not None:
+            show.readout.send({"summary": {"pass": p.number, "lines": summary_lines(result)}})
         if args.json:
             emit({"pass_result": p.number, **result})
         else:
@@ -241,11 +265,13 @@ def run_live(args: argparse.Namespace) -> int:
                 print(f"  {text}", flush=True)
         return result
 
-    source.open()
     stray = 0
     stopped = ""
-    started = clock.now()
     try:
+        if show is not None:
+            show.start()  # ready: the drummer is drawn (the teacher waits for the first plan)
+        source.open()
+        started = clock.now()
         first = clock.now() + 0.5 + args.count_in * bar_s(scale)
         planned.append(plan(1, first, scale, args.count_in))
         if ramp is None:
@@ -256,6 +282,9 @@ def run_live(args: argparse.Namespace) -> int:
             now = clock.now()
             if args.seconds is not None and now - started >= args.seconds:
                 stopped = "--seconds"
+                break
+            if show is not None and not show.tick(now):
+                stopped = "window closed"
                 break
             bounds = pass_bounds([p.start_s for p in planned], [p.length_s for p in planned],
                                  first_note, last_note, [p.scale for p in planned],
@@ -276,6 +305,11 @@ def run_live(args: argparse.Namespace) -> int:
                 if pieces is not None and code not in pieces:
                     continue  # not judged (--pieces): kept for the wrong-piece step only
                 line = owner.readout.process(rec[0], code)
+                if show is not None:
+                    show.readout.send({"hit": {
+                        "pass": owner.number, "time_s": line.time_s, "piece": PIECES[line.piece],
+                        "offset_ms": line.offset_ms, "on_time": line.on_time,
+                        "streak": line.streak, "accuracy_pct": line.accuracy_pct}})  # fmt: skip
                 if args.json:
                     emit({"hit": {"pass": owner.number, "time_s": round(line.time_s, 6),
                                   "piece": PIECES[line.piece], "offset_ms": line.offset_ms,
@@ -302,6 +336,8 @@ def run_live(args: argparse.Namespace) -> int:
         if player is not None:
             player.close()
         source.close()
+        if show is not None:
+            show.close()
     stats = source.decode_stats()
     if stats is not None and stats.unknown_notes:  # a keyboard's keys outside the drum map
         listed = ", ".join(f"note {k} x{v}" for k, v in sorted(stats.unknown_notes.items()))
