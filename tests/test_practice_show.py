@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -164,6 +165,56 @@ def test_ghost_is_blended_over_the_player(gl_ok: None, groove: object) -> None:
     assert tint_fraction(both.astype(np.uint8)) > 0.01
 
 
+def test_ahead_teacher_is_an_inset_ahead_of_the_show(gl_ok: None, groove: object) -> None:
+    """``ahead``: the teacher's whole scene in a bordered inset at the top right, at the show
+    time plus its lead; the rest of the player's frame untouched."""
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.render.body_scene import BodyScene
+    from services.display.practice_view import INSET, MARGIN, PracticeView
+    from services.display.surface import HeadlessSurface
+
+    kit = load_kit("rock5")
+    teacher = BodyScene.perform(groove, kit, load_note_map("roland-td"))  # type: ignore[arg-type]
+    ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    view = PracticeView(ctx, "tcp://127.0.0.1:9", kit, "ahead", teacher, ahead_s=0.75)
+    w, h = 480, 270
+    surface = HeadlessSurface(kit, (w, h), "stage")
+    try:
+        view.clock.add(PassTime(start_s=10.0, scale=0.5, seg_start_s=1.0, seg_end_s=9.0))
+        surface.draw(teacher.frame_at(2.0), 0.0)
+        player = surface.renderer.read_rgb()
+        view.draw(surface, 12.0)
+        both = surface.renderer.read_rgb()
+    finally:
+        surface.close()
+        view.close()
+        ctx.destroy(0)
+    assert view.last_reference_s == pytest.approx(1.0 + (12.0 + 0.75 - 10.0) * 0.5)
+    iw, ih = int(w * INSET) // 2 * 2, int(h * INSET) // 2 * 2
+    left, top = w - iw - MARGIN, MARGIN
+    border = both[top, left : left + iw]
+    assert (np.abs(border.astype(int) - GHOST_TINT).max(axis=1) <= 2).all()
+    inset = np.zeros((h, w), bool)
+    inset[top : top + ih, left : left + iw] = True
+    inset[h - 80 :, : w * 3 // 4] = True  # the readout, bottom left
+    assert np.array_equal(both[~inset], player[~inset])
+    assert np.abs(both[inset].astype(int) - player[inset]).mean() > 5
+
+
+def test_bad_teacher_is_one_line_and_exit_2(tmp_path: Path, groove_dir: Path) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "services", "practice", str(groove_dir / FUNK), "--virtual",
+         "pads", "--teacher", "ahead:soon", "--no-sound"],
+        capture_output=True, text=True, timeout=60,
+        env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path)},
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines()[-1] == (
+        "livedrummer: error: --teacher 'ahead:soon': 'soon' is not a number of seconds"
+    )
+
+
 rtmidi = pytest.importorskip("rtmidi")
 
 
@@ -309,3 +360,53 @@ def test_practice_headless_shows_player_ghost_and_readout(
     a = read_png(frames / f"frame_{quiet[-1]['frame']:06d}.png")[h // 2 :, : w * 3 // 4]
     b = read_png(frames / f"frame_{busy[0]['frame']:06d}.png")[h // 2 :, : w * 3 // 4]
     assert np.count_nonzero(np.any(a != b, axis=2)) > 200
+
+
+GRAB = """import os, sys, av, numpy as np
+c = av.open(os.environ["DISPLAY"], format="x11grab", options={"video_size": sys.argv[2]})
+np.save(sys.argv[1], next(iter(c.decode(video=0))).to_ndarray(format="rgb24"))
+"""
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
+                    reason="xvfb-run or xdotool not installed")  # fmt: skip
+def test_practice_opens_a_window_where_there_is_a_screen(
+    jack_server: str, groove_dir: Path, tmp_path: Path
+) -> None:
+    """Under Xvfb, with no display option, the rig opens a window: the ghost and the readout
+    are on the X server's screen during the pass, and Q in the window ends the session."""
+    w, h = 640, 360
+    num = 100 + os.getpid() % 800
+    grab, shot = tmp_path / "grab.py", tmp_path / "shot.npy"
+    grab.write_text(GRAB)
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env.update(LIVEDRUMMER_HOME=str(tmp_path / "home"), LP_NUM_THREADS="1")
+    proc = subprocess.Popen(
+        ["xvfb-run", "-n", str(num), "-s", f"-screen 0 {w}x{h}x24 -ac", sys.executable, "-m",
+         "services", "practice", str(groove_dir / FUNK), "--virtual", "pads", "--api", "jack",
+         "--map", "roland-td", "--bars", "2:3", "--no-sound", "--json", "--no-save",
+         "--seconds", "60", "--size", f"{w}x{h}", "--fps", "10",
+         "--port-base", str(20000 + (os.getpid() + 7) % 20000)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    x = {**env, "DISPLAY": f":{num}"}
+    try:
+        assert proc.stdout is not None
+        plan = json.loads(proc.stdout.readline())
+        while time.monotonic() < plan["start_s"] + 0.5:
+            time.sleep(0.01)
+        subprocess.run([sys.executable, str(grab), str(shot), f"{w}x{h}"], env=x, check=True,
+                       timeout=30)  # fmt: skip
+        subprocess.run("xdotool search --sync --name '^livedrummer' key q", shell=True, env=x,
+                       check=True, timeout=30)  # fmt: skip
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, stderr[-1500:]
+    assert "practice: the drummers in a window (teacher ghost)" in stderr
+    assert json.loads(stdout.splitlines()[-1])["stopped"] == "window closed"
+    rgb = np.load(shot)
+    assert tint_fraction(rgb) > 0.01  # the ghost
+    panel = rgb[h - 50 : h - 8, 8:200].astype(int)  # the readout: its text, bottom left
+    assert np.count_nonzero(panel.min(axis=2) > 200) > 100
