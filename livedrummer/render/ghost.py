@@ -25,11 +25,13 @@ def ghost_image(rgba: np.ndarray, tint: tuple[int, int, int] = GHOST_TINT,
     """The overlay of a body render ``rgba`` (see the module docstring)."""
     if rgba.ndim != 3 or rgba.shape[2] != 4 or rgba.dtype != np.uint8:
         raise ValueError(f"expected (H, W, 4) uint8, got {rgba.shape} {rgba.dtype}")
-    rgb = rgba[..., :3].astype(np.float32) / 255.0
-    light = 0.45 + 0.55 * np.clip(rgb.max(axis=2, keepdims=True) * 1.6, 0.0, 1.0)
-    out = np.empty_like(rgba)
-    out[..., :3] = np.clip(light * np.asarray(tint, np.float32), 0, 255).astype(np.uint8)
-    out[..., 3] = (rgba[..., 3].astype(np.float32) * alpha).astype(np.uint8)
+    out = np.zeros_like(rgba)
+    on = rgba[..., 3] > 0  # the body covers a tenth of the frame: only its pixels are worked
+    body = rgba[on]
+    brightest = body[:, :3].max(axis=1).astype(np.float32) * (1.6 / 255.0)
+    light = 0.45 + 0.55 * np.minimum(brightest, 1.0)
+    out[on, :3] = np.clip(light[:, None] * np.asarray(tint, np.float32), 0, 255).astype(np.uint8)
+    out[on, 3] = (body[:, 3].astype(np.float32) * alpha).astype(np.uint8)
     return out
 
 

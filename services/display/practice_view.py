@@ -26,9 +26,10 @@ when a message changed it. Each frame's teacher time is kept in :attr:`last_refe
 display writes it to ``frames.jsonl`` so tests and benches can check the teacher without
 pixels).
 
-Cost: one more scene render per frame (the ghost's body alone, or the inset's small frame) and
-its read-back; on llvmpipe about as much as the player's frame again. Limits: the teacher is not
-depth-tested against the player (a ghost is seen through); one teacher.
+Cost: one more scene render per frame (the ghost's body alone, or the inset's small frame; no
+shadow pass in either) and its read-back; ``livedrummer bench practice_view`` measures it (on
+llvmpipe the ghost nearly doubles a 640x360 frame). Limits: the teacher is not depth-tested
+against the player (a ghost is seen through); one teacher.
 """
 
 from __future__ import annotations
@@ -154,7 +155,7 @@ class PracticeView:
             ghost = self.mode == "ghost"
             self._renderer = Renderer(
                 main.ctx, body_only(mesh) if ghost else mesh, BODY_SKELETON, size, samples=0,
-                avatar=self.avatar, shadows=not ghost,
+                avatar=self.avatar, shadows=False,
                 background=Background(kind="transparent") if ghost else None)  # fmt: skip
         r = self._renderer
         r.draw(self.teacher.frame_at(ref), view)
