@@ -110,6 +110,13 @@ def test_view_counts_bad_messages_and_keeps_reading() -> None:
         assert view.messages >= 2 and view.bad.total >= 3
         assert view.panel.lines()[1] == "KICK  NO NOTE OF IT HERE"
         assert view.clock.reference_s(2.0) == pytest.approx(1.0)
+        again = {**plan, "pass": 2, "start_s": 5.0}  # a plan sent again: the teacher only
+        before = view.panel.lines()
+        for _ in range(20):
+            pub.send(json.dumps({"plan_again": again}).encode())
+            time.sleep(0.02)
+            view.poll()
+        assert len(view.clock.passes) == 2 and view.panel.lines() == before
     finally:
         view.close()
         pub.close(0)
@@ -353,13 +360,22 @@ def test_practice_headless_shows_player_ghost_and_readout(
                                 near["teacher_s"] + dt, (w, h)) for dt in (0.0, 0.1)]  # fmt: skip
     assert strays[0] <= 2 < strays[1], strays
 
-    # the readout: the panel (bottom left) changes after the first hit
+    # the readout (bottom left): its text (drawn opaque, brighter than anything of the
+    # scene under its panel) changes after the first hit, and the frames end on the pass's
+    # summary (the plan, every hit, then the summary), its panel taller than the hits'
+    def text_rows(frame: dict[str, object]) -> np.ndarray:
+        rgb = read_png(frames / f"frame_{frame['frame']:06d}.png")[:, 8 : w * 7 // 8]
+        return np.flatnonzero((rgb.min(axis=2) >= 230).any(axis=1))
+
     quiet = [f for f in log if f["readout"] == 1]  # the plan applied, no hit yet
-    busy = [f for f in log if f["readout"] >= 4]
-    assert quiet and busy
-    a = read_png(frames / f"frame_{quiet[-1]['frame']:06d}.png")[h // 2 :, : w * 3 // 4]
-    b = read_png(frames / f"frame_{busy[0]['frame']:06d}.png")[h // 2 :, : w * 3 // 4]
-    assert np.count_nonzero(np.any(a != b, axis=2)) > 200
+    busy = [f for f in log if 4 <= f["readout"] <= 1 + len(hits)]
+    summary = [f for f in log if f["readout"] == 2 + len(hits)]
+    assert quiet and busy and len(summary) >= 5 and summary[-1] == log[-1]
+    a, b, c = (read_png(frames / f"frame_{f['frame']:06d}.png")[h * 2 // 3 :, 8 : w * 7 // 8]
+               for f in (quiet[-1], busy[-1], summary[-1]))  # fmt: skip
+    text = [x.min(axis=2) >= 230 for x in (a, b, c)]
+    assert np.count_nonzero(text[0] != text[1]) > 100
+    assert text_rows(summary[-1]).min() < text_rows(busy[-1]).min() - 20
 
 
 GRAB = """import os, sys, av, numpy as np

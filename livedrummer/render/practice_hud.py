@@ -13,8 +13,8 @@ own readout (top left) and the strips (bottom). What it shows:
   place on it: its line says so);
 * the newest hit in words: piece, offset in ms, on time / early / late, streak, running
   accuracy (the provisional figures of :mod:`livedrummer.practice.live`);
-* after a pass, its summary lines (the judged result, as the terminal prints it) until the
-  next pass's first hit.
+* after a pass, its summary (the judged result's first :data:`SUMMARY_LINES` lines as the
+  terminal prints them: totals, timing, accuracy and score) until the next pass's first hit.
 
 The image changes only when a message changes the panel (``version``), so a display repaints
 and uploads it then and reuses it between. Pure numpy and the 5x7 font; upper-case ASCII.
@@ -39,6 +39,7 @@ CENTRE_RGBA = (230, 230, 230, 255)
 ON_TIME_RGBA = (70, 230, 90, 255)
 OFF_TIME_RGBA = (255, 170, 40, 255)
 HISTORY = 8
+SUMMARY_LINES = 3  # totals, timing, accuracy and score; the per-piece lines stay in the terminal
 PAD = 6
 METER_CELLS = 100  # the meter is this many scale-pixels wide
 
@@ -88,7 +89,7 @@ class PracticePanel:
             self.hits = self.hits[-HISTORY:]
         elif "summary" in msg:
             s = msg["summary"]
-            self.summary = [str(x) for x in s["lines"]]
+            self.summary = [str(x) for x in s["lines"]][:SUMMARY_LINES]
             self.pass_line = f"PASS {int(s['pass'])} DONE"
         else:
             raise KeyError("expected plan, hit or summary")

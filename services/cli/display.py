@@ -55,7 +55,8 @@ if TYPE_CHECKING:
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "display", run)
-    p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
+    p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove; "
+                   "--live --practice: the reference the teacher plays)")  # fmt: skip
     add_kit_option(p)
     p.add_argument("--map", help="note map name or .toml path (default auto: the bundled map "
                    "that knows the most of the file's notes; roland-td for the demo)")  # fmt: skip

@@ -25,6 +25,11 @@ Drills: ``--pieces`` (time check of selected pieces), ``--quiet-count ON:OFF`` (
 out for OFF bars after ON bars), ``--ramp BPM`` with ``--ramp-target``/``--ramp-min-accuracy``
 (auto up/down: a count-in bar at the new tempo between passes).
 
+The drummers (:mod:`.practice_show`): with a screen, or ``--headless``, the rig runs an input
+daemon, a synth and a live display as ``up`` does and reads its hits from the daemon's stream
+(the same driver stamps); the display draws the player's drummer, the teacher (``--teacher``)
+and this readout, which the rig sends it. ``--no-window``, or no screen, is the terminal alone.
+
 Scripting: ``--no-sound`` shows the clicks as nothing (no audio device needed); ``--json``
 prints one JSON line per planned pass (its notes and clicks on the shared clock, so a scripted
 player can follow), per hit, per pass result (the ``practice score --json`` object) and a last
@@ -36,7 +41,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -93,6 +100,9 @@ def add_live_options(p: argparse.ArgumentParser) -> None:
 #: A pass is judged this long after the last hit it can own, so a hit stamped just before
 #: that moment but read just after it is still the pass's.
 SETTLE_S = 0.05
+#: Headless, the drummers are drawn this long after the last pass, so the frames and the
+#: recording end on its summary (a window keeps it until it is closed).
+SUMMARY_HOLD_S = 3.0
 
 
 def numbered(path: Path, k: int) -> Path:
@@ -330,6 +340,16 @@ def run_live(args: argparse.Namespace) -> int:
             if len(finished) == len(planned) and (ramp is None or len(planned) >= passes_max
                                                   or planned[-1].result is not None):  # fmt: skip
                 break
+        if show is not None and not stopped:  # the last pass's summary stays on screen
+            hold = SUMMARY_HOLD_S if show.mode == "headless" else math.inf
+            until = clock.now() + hold
+            if args.seconds is not None:
+                until = min(until, started + args.seconds)
+            if until == math.inf:
+                print("practice: done; the summary stays in the window until you close it (Q)",
+                      file=sys.stderr, flush=True)  # fmt: skip
+            while clock.now() < until and show.tick(clock.now()):
+                time.sleep(0.05)
     except KeyboardInterrupt:
         stopped = "interrupted"
     finally:

@@ -23,8 +23,8 @@ frame was drawn from (``surface.view``):
 
 Then the readout (:mod:`livedrummer.render.practice_hud`) is blended bottom left, repainted only
 when a message changed it. Each frame's teacher time is kept in :attr:`last_reference_s` (the
-display writes it to ``frames.jsonl`` so tests and benches can check the teacher without
-pixels).
+display writes it to ``frames.jsonl``, with the readout's version, so tests and benches can
+check the teacher and the readout without pixels).
 
 Cost: one more scene render per frame (the ghost's body alone, or the inset's small frame; no
 shadow pass in either) and its read-back; ``livedrummer bench practice_view`` measures it (on
@@ -133,9 +133,10 @@ class PracticeView:
         key = (self.panel.version, 2 if fh >= 480 else 1)  # the font's size follows the frame's
         if self._image is None or self._image[0] != key:
             self._image = (key, panel_image(self.panel, key[1]))
-        image = self._image[1]
+        image = self._image[1]  # cropped to the frame when a long summary does not fit
+        image = np.ascontiguousarray(image[: max(0, fh - 2 * MARGIN), : max(0, fw - 2 * MARGIN)])
         h, w = image.shape[:2]
-        if w + MARGIN <= fw and h + MARGIN <= fh:
+        if w > 0 and h > 0:
             surface.renderer.draw_overlay(image, (MARGIN, fh - h - MARGIN, w, h), target)
 
     def _draw_teacher(self, surface: Any, show_s: float, target: Any) -> None:
