@@ -29,7 +29,8 @@ check the teacher and the readout without pixels).
 Cost: one more scene render per frame (the ghost's body alone, or the inset's small frame; no
 shadow pass in either) and its read-back; ``livedrummer bench practice_view`` measures it (on
 llvmpipe the ghost nearly doubles a 640x360 frame). Limits: the teacher is not depth-tested
-against the player (a ghost is seen through); one teacher.
+against the player (a ghost is seen through); one teacher; resizing the window builds the
+teacher's renderer anew (the old one's GL objects stay until the window closes).
 """
 
 from __future__ import annotations
