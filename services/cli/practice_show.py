@@ -47,7 +47,7 @@ def add_show_options(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--teacher", default="ghost", metavar="MODE",
                    help="the reference's drummer: ghost (translucent, in the player's drummer, "
-                   "where the sticks should be now), ahead[:SECONDS] (beside the player, "
+                   "where the sticks should be now), ahead[:SECONDS] (an inset beside it, "
                    "SECONDS ahead; default 0.5) or off (default ghost)")  # fmt: skip
     add_kit_option(p)
     add_avatar_option(p)
