@@ -15,7 +15,8 @@ Each hit gets a provisional line at once (:mod:`livedrummer.practice.live`: earl
 streak, running accuracy); when a pass is over (its end plus the window) all its hits are judged
 with :func:`~livedrummer.practice.match.match_take` against the pass's notes
 (:mod:`livedrummer.practice.plan`), doubled notes merged first (one note twice within 1 ms, as
-every MIDI file is read, so the take file holds what was judged), and its summary printed,
+every MIDI file is read, and the hits' times put on the take file's tick grid, so the take
+file holds what was judged), and its summary printed,
 stored in the practice database (``--no-save`` not to), written as a take (``--take
 FILE.mid``; pass k>1 as FILE-passK.mid) and as a report (``--report FILE.html``, likewise).
 ``practice score REF FILE.mid`` with the same ``--bars/--tempo/--bpm`` judges the take file
@@ -32,8 +33,9 @@ and this readout, which the rig sends it. ``--no-window``, or no screen, is the 
 
 Scripting: ``--no-sound`` shows the clicks as nothing (no audio device needed); ``--json``
 prints one JSON line per planned pass (its notes and clicks on the shared clock, so a scripted
-player can follow), per hit, per pass result (the ``practice score --json`` object) and a last
-``done`` line.
+player can follow), per hit, per hit no pass owns (``stray``: in the count-in, or after its
+pass was judged; the terminal counts them at the end), per pass result (the ``practice score
+--json`` object) and a last ``done`` line.
 """
 
 from __future__ import annotations
@@ -97,8 +99,11 @@ def add_live_options(p: argparse.ArgumentParser) -> None:
     add_show_options(p)
 
 
-#: A pass is judged this long after the last hit it can own, so a hit stamped just before
-#: that moment but read just after it is still the pass's.
+#: A pass is judged once a read that began this long after the last hit it can own is done,
+#: so a hit stamped just before that moment but queued just after it (the driver's stamp and
+#: its queueing are not one instant) is still the pass's. The moment is taken before the read,
+#: not after it: a rig starved of the CPU between a read and that check would otherwise close
+#: the pass on a hit still waiting in the queue, and count it outside every pass.
 SETTLE_S = 0.05
 #: Headless, the drummers are drawn this long after the last pass, so the frames and the
 #: recording end on its summary (a window keeps it until it is closed).
@@ -145,6 +150,7 @@ def run_live(args: argparse.Namespace) -> int:
     from livedrummer.timeline.clock import MonotonicClock
     from livedrummer.timeline.events import ONSET_DTYPE, Onset
 
+    from ..practice.take import on_take_grid
     from .common import kit_source, read_performance
     from .practice import judge_settings, pass_setup, summary_lines
     from .practice_show import Show, check_show, show_mode
@@ -247,7 +253,9 @@ def run_live(args: argparse.Namespace) -> int:
         """Judge pass ``p`` (only its notes due by ``due_s`` when it was cut short), print,
         keep and queue its report."""
         hits = np.array(p.hits, dtype=ONSET_DTYPE)
-        hits = merge_doubled_notes(hits[np.argsort(hits["time_s"], kind="stable")])
+        hits = hits[np.argsort(hits["time_s"], kind="stable")]
+        hits["time_s"] = on_take_grid(hits["time_s"])  # judged as its take file holds it
+        hits = merge_doubled_notes(hits)
         notes = p.notes if due_s is None else p.notes[p.notes["time_s"] <= due_s]
         matching = match_take(notes, hits, window_ms, pieces)
         if due_s is not None:  # a hit after the last note judged, left over: not counted
@@ -299,6 +307,10 @@ def run_live(args: argparse.Namespace) -> int:
             bounds = pass_bounds([p.start_s for p in planned], [p.length_s for p in planned],
                                  first_note, last_note, [p.scale for p in planned],
                                  window_s)  # fmt: skip
+            # Taken before the read: every hit stamped before ``cut`` is in the source's queue
+            # by then, so this read has it; a pass ends only on a ``cut`` past its close (see
+            # SETTLE_S), never on a clock read after a stall that let a hit in behind the read.
+            cut = clock.now()
             for event in source.read(0.002):
                 if not isinstance(event, Onset):
                     continue
@@ -307,6 +319,9 @@ def run_live(args: argparse.Namespace) -> int:
                               if lo <= t < hi and p.result is None), None)  # fmt: skip
                 if owner is None:
                     stray += 1
+                    if args.json:  # no hit goes unreported: outside every open pass's span
+                        emit({"stray": {"time_s": round(t - planned[0].start_s, 6),
+                                        "note": event.note}})  # fmt: skip
                     continue
                 rec = list(event.to_record())
                 rec[0] = t - owner.start_s
@@ -328,7 +343,7 @@ def run_live(args: argparse.Namespace) -> int:
                 else:
                     print(f"  {line.text()}", flush=True)
             for p, (_, hi) in zip(list(planned), bounds, strict=True):
-                if p.result is not None or clock.now() < hi + SETTLE_S:
+                if p.result is not None or cut < hi + SETTLE_S:
                     continue
                 result = finish(p, None)
                 if ramp is not None and p.number < passes_max:
