@@ -219,6 +219,7 @@ def run_live(args: argparse.Namespace) -> int:
         acc = np.concatenate([cacc, accents])
         if player is not None:
             player.schedule(times, acc)
+        clicked.append((times, acc))
         codes = piece_codes(notes)
         judged = np.ones(codes.size, bool) if pieces is None else np.isin(codes, list(pieces))
         readout = LiveReadout(notes["time_s"][judged], codes[judged], window_ms, level)
@@ -247,6 +248,8 @@ def run_live(args: argparse.Namespace) -> int:
 
     planned: list[Pass] = []
     finished: list[Pass] = []
+    heard: list[tuple[Any, ...]] = []  # every hit as stamped (shared clock): --video's track
+    clicked: list[tuple[Any, Any]] = []  # every click planned (shared clock, accents): likewise
     reports: list[tuple[Pass, dict[str, Any], Any]] = []
 
     def finish(p: Pass, due_s: float | None) -> dict[str, Any]:
@@ -314,6 +317,7 @@ def run_live(args: argparse.Namespace) -> int:
             for event in source.read(0.002):
                 if not isinstance(event, Onset):
                     continue
+                heard.append(event.to_record())
                 t = event.time_s + input_s
                 owner = next((p for p, (lo, hi) in zip(planned, bounds, strict=True)
                               if lo <= t < hi and p.result is None), None)  # fmt: skip
@@ -382,6 +386,11 @@ def run_live(args: argparse.Namespace) -> int:
     for p in planned:  # a pass cut short: judged on the notes due before the stop
         if p.result is None and p.start_s < end and p.hits:
             finish(p, end - p.start_s - window_s)
+    if show is not None and args.video is not None:
+        from .practice_show import add_drum_track
+
+        wrote = add_drum_track(args, np.array(heard, dtype=ONSET_DTYPE), clicked)
+        print(wrote, file=sys.stderr if args.json else sys.stdout, flush=True)
     for p, result, matching in reports:  # after the session: a report takes seconds to draw
         from .practice_out import write_take_report
 

@@ -17,8 +17,12 @@ screen and none of these, the rig is terminal-only and says so in one line.
 Endpoints: TCP ports ``--port-base`` .. +3 on loopback (the input's stream and control, the
 synth's poses and control); the readout's port is the system's pick.
 
-Limits: the video has no drum track (the click and the kit are not journalled); the display's
-frames follow the monotonic clock headless and the audio clock in a window, as ``up``'s do.
+The recording (``--video``) gets a drum track when the session is over: the player's hits in
+the kit's sounds and the click, at their time + D (:data:`SHOW_DELAY_MS`, the synth's delay)
+on the video's time (:mod:`services.practice.recording`).
+
+Limits: the display's frames follow the monotonic clock headless and the audio clock in a
+window, as ``up``'s do.
 """
 
 from __future__ import annotations
@@ -33,6 +37,9 @@ if TYPE_CHECKING:
     from ..supervisor import Supervisor
 
 SHOW_SUBSCRIBERS = 2  # the synth and the rig subscribe to the input daemon's stream
+#: D: the synth shows a hit this long after its stamp (``up``'s default); the recording's drum
+#: track sounds it then.
+SHOW_DELAY_MS = 30.0
 
 
 def add_show_options(p: argparse.ArgumentParser) -> None:
@@ -119,7 +126,8 @@ def specs(args: argparse.Namespace, mode: str, readout: str) -> list[Any]:
                   "--control", ep[1], "--wait-subscribers", str(SHOW_SUBSCRIBERS),
                   "--no-journal"]  # fmt: skip
     synth_argv = [*me, "synth", "--sub", ep[0], "--pub", ep[2], "--control", ep[3],
-                  "--kit", args.kit, "--map", args.take_map, *avatar_argv(args)]  # fmt: skip
+                  "--kit", args.kit, "--map", args.take_map, "--delay-ms", str(SHOW_DELAY_MS),
+                  *avatar_argv(args)]  # fmt: skip
     display_argv = [*me, "display", "--live", "--sub", ep[2], "--kit", args.kit,
                     "--fps", str(args.fps), "--size", frame_size(args, mode),
                     *avatar_argv(args), "--practice", readout, "--teacher", args.teacher,
@@ -137,6 +145,30 @@ def specs(args: argparse.Namespace, mode: str, readout: str) -> list[Any]:
         ServiceSpec("synth", synth_argv, stdout_to_stderr=True),
         ServiceSpec("display", display_argv, ends_rig=mode == "window", stdout_to_stderr=True),
     ]
+
+
+def add_drum_track(args: argparse.Namespace, hits: Any, clicks: list[tuple[Any, Any]]) -> str:
+    """Mux the drum track into ``args.video`` (see the module docstring); a line saying so."""
+    import numpy as np
+
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.midi.notemap import load_note_map
+
+    from ..display.record import Timing, mux_audio
+    from ..practice.recording import practice_track
+
+    timing = Timing.load(args.video)
+    times = np.concatenate([t for t, _ in clicks] or [np.zeros(0)])
+    accents = np.concatenate([a for _, a in clicks] or [np.zeros(0, bool)])
+    track = practice_track(hits, times, accents, timing, delay_s=SHOW_DELAY_MS / 1000.0,
+                           kit=load_kit(args.kit), note_map=load_note_map(args.take_map),
+                           click_sound=args.click_sound, click_level=args.click_level)  # fmt: skip
+    mux_audio(args.video, track)
+    duration = timing.frames / timing.fps
+    shown = hits["time_s"].astype(np.float64) + SHOW_DELAY_MS / 1000.0 - timing.show0_s
+    heard = int(np.count_nonzero((shown >= 0.0) & (shown < duration)))
+    return (f"practice: wrote {args.video} ({duration:.1f} s, {heard} hits and the click in "
+            f"its drum track)")  # fmt: skip
 
 
 class Show:
