@@ -105,6 +105,10 @@ def add_live_options(p: argparse.ArgumentParser) -> None:
 #: not after it: a rig starved of the CPU between a read and that check would otherwise close
 #: the pass on a hit still waiting in the queue, and count it outside every pass.
 SETTLE_S = 0.05
+#: The same with the drummers shown, where the hits come through the input daemon (one more
+#: process to be scheduled and a socket between the stamp and the rig): a loaded machine
+#: delays that hop by tens of ms. A hit later still is a ``stray`` line, not lost silently.
+BUS_SETTLE_S = 0.25
 #: Headless, the drummers are drawn this long after the last pass, so the frames and the
 #: recording end on its summary (a window keeps it until it is closed).
 SUMMARY_HOLD_S = 3.0
@@ -286,6 +290,7 @@ def run_live(args: argparse.Namespace) -> int:
                 print(f"  {text}", flush=True)
         return result
 
+    settle_s = SETTLE_S if show is None else BUS_SETTLE_S
     stray = 0
     stopped = ""
     try:
@@ -347,7 +352,7 @@ def run_live(args: argparse.Namespace) -> int:
                 else:
                     print(f"  {line.text()}", flush=True)
             for p, (_, hi) in zip(list(planned), bounds, strict=True):
-                if p.result is not None or cut < hi + SETTLE_S:
+                if p.result is not None or cut < hi + settle_s:
                     continue
                 result = finish(p, None)
                 if ramp is not None and p.number < passes_max:
