@@ -35,7 +35,9 @@ Scripting: ``--no-sound`` shows the clicks as nothing (no audio device needed); 
 prints one JSON line per planned pass (its notes and clicks on the shared clock, so a scripted
 player can follow), per hit, per hit no pass owns (``stray``: in the count-in, or after its
 pass was judged; the terminal counts them at the end), per pass result (the ``practice score
---json`` object) and a last ``done`` line.
+--json`` object) and a last ``done`` line (with ``stray_hits`` and ``doubled_hits``: hits the
+kit's decoder dropped as the same note and velocity on one driver stamp, which only a burst
+delivered in one JACK cycle makes; on stderr too).
 """
 
 from __future__ import annotations
@@ -387,6 +389,10 @@ def run_live(args: argparse.Namespace) -> int:
         listed = ", ".join(f"note {k} x{v}" for k, v in sorted(stats.unknown_notes.items()))
         print(f"practice: hits the map {note_map.name} does not know (not judged): {listed}",
               file=sys.stderr)  # fmt: skip
+    doubled = 0 if stats is None else stats.duplicates_removed
+    if doubled:  # the decoder's "double events": the same note and velocity on one stamp
+        print(f"practice: {doubled} hits dropped as doubled (the same note and velocity at the "
+              f"same driver time as the one before; not judged)", file=sys.stderr)  # fmt: skip
     end = clock.now()
     for p in planned:  # a pass cut short: judged on the notes due before the stop
         if p.result is None and p.start_s < end and p.hits:
@@ -405,7 +411,7 @@ def run_live(args: argparse.Namespace) -> int:
             print(f"report: {where}")
     if args.json:
         emit({"done": True, "passes": len(finished), "stray_hits": stray,
-              "stopped": stopped or None})  # fmt: skip
+              "doubled_hits": doubled, "stopped": stopped or None})  # fmt: skip
     else:
         why = f" ({stopped})" if stopped else ""
         print(f"practice: {len(finished)} passes{why}; {stray} hits outside any pass")
