@@ -32,6 +32,7 @@ import os
 import selectors
 import signal
 import subprocess
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -69,6 +70,7 @@ class ServiceSpec:
     ready_timeout_s: float = 30.0
     restart: bool = True
     ends_rig: bool = False  # exit status 0 means the user is done (a window closed): no restart
+    stdout_to_stderr: bool = False  # keep the launcher's stdout its own (JSON lines)
 
 
 @dataclass
@@ -221,7 +223,8 @@ class Supervisor:
     def _spawn(self, spec: ServiceSpec, died_at: float | None = None) -> None:
         read_fd, write_fd = os.pipe()
         env = {**os.environ, **spec.env, NOTIFY_FD_ENV: str(write_fd)}
-        proc = subprocess.Popen(list(spec.argv), env=env, pass_fds=(write_fd,))
+        out = sys.stderr.fileno() if spec.stdout_to_stderr else None
+        proc = subprocess.Popen(list(spec.argv), env=env, pass_fds=(write_fd,), stdout=out)
         os.close(write_fd)
         os.set_blocking(read_fd, False)
         self._selector.register(read_fd, selectors.EVENT_READ, spec.name)

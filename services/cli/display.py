@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from livedrummer.render.camera import CAMERA_NAMES
 
@@ -55,7 +55,8 @@ if TYPE_CHECKING:
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "display", run)
-    p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
+    p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove; "
+                   "--live --practice: the reference the teacher plays)")  # fmt: skip
     add_kit_option(p)
     p.add_argument("--map", help="note map name or .toml path (default auto: the bundled map "
                    "that knows the most of the file's notes; roland-td for the demo; --live "
@@ -117,6 +118,11 @@ def register(sub: Subparsers) -> None:
                       "synths' pose endpoints, comma-separated, in the file's order "
                       "(default: one drummer)")  # fmt: skip
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
+    live.add_argument("--practice", metavar="ENDPOINT",
+                      help="draw a practice rig's readout from this endpoint, and its teacher "
+                      "playing FILE (livedrummer practice starts this; default: none)")  # fmt: skip
+    live.add_argument("--teacher", default="off", metavar="MODE",
+                      help="--practice: ghost, ahead[:SECONDS] or off (default off)")  # fmt: skip
     live.add_argument("--sound", action="store_true",
                       help="sound each onset the synth forwards at its show time (onset + D), "
                       "on --audio-device: the built-in kit, --soundfont or --sfz")  # fmt: skip
@@ -263,13 +269,16 @@ def run_live(args: argparse.Namespace) -> int:
         cues=cues_of(args), background=background, overlays=overlays,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    kit = load_kit(args.kit)
+    if args.practice is not None:
+        config.extra = practice_view(args, ctx, kit, avatar)
     if args.synth_control is not None:  # one line when the synth plays another avatar
         from ..display.avatar_check import check_synth_avatar
 
         check_synth_avatar(ctx, args.synth_control, avatar, security_from_args(args))
     if args.seconds is not None and not args.seconds > 0:  # counted from the first pose drawn
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
-    display = LiveDisplay(load_kit(args.kit), config, clock, ctx)
+    display = LiveDisplay(kit, config, clock, ctx)
     sound = None
     if args.sound:
         from ..display.live_sound import LiveSound, SoundConfig
@@ -304,3 +313,24 @@ def run_live(args: argparse.Namespace) -> int:
     if sound is not None and sound.stats is not None:
         print(sound.stats.line(), file=sys.stderr)
     return code
+
+
+def practice_view(args: argparse.Namespace, ctx: Any, kit: Any, avatar: Any) -> Any:
+    """``--practice``: the readout, and the teacher playing FILE animated offline (the file
+    path ``render`` takes), for :mod:`services.display.practice_view`."""
+    from livedrummer.errors import ConfigError
+    from livedrummer.practice.teacher import parse_teacher
+
+    from ..display.practice_view import PracticeView
+
+    try:
+        mode, ahead_s = parse_teacher(args.teacher)
+    except ValueError as exc:
+        raise ConfigError(f"--teacher {exc}") from None
+    scene = None
+    if mode != "off":
+        if args.file is None:
+            raise ConfigError("--teacher: give the reference FILE the teacher plays")
+        performance, note_map = read_performance(args, Path(args.file), quiet=True)
+        scene = body_scene(args, performance, kit, note_map, avatar)
+    return PracticeView(ctx, args.practice, kit, mode, scene, ahead_s, avatar)  # type: ignore[arg-type]

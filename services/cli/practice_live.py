@@ -15,7 +15,8 @@ Each hit gets a provisional line at once (:mod:`livedrummer.practice.live`: earl
 streak, running accuracy); when a pass is over (its end plus the window) all its hits are judged
 with :func:`~livedrummer.practice.match.match_take` against the pass's notes
 (:mod:`livedrummer.practice.plan`), doubled notes merged first (one note twice within 1 ms, as
-every MIDI file is read, so the take file holds what was judged), and its summary printed,
+every MIDI file is read, and the hits' times put on the take file's tick grid, so the take
+file holds what was judged), and its summary printed,
 stored in the practice database (``--no-save`` not to), written as a take (``--take
 FILE.mid``; pass k>1 as FILE-passK.mid) and as a report (``--report FILE.html``, likewise).
 ``practice score REF FILE.mid`` with the same ``--bars/--tempo/--bpm`` judges the take file
@@ -25,10 +26,18 @@ Drills: ``--pieces`` (time check of selected pieces), ``--quiet-count ON:OFF`` (
 out for OFF bars after ON bars), ``--ramp BPM`` with ``--ramp-target``/``--ramp-min-accuracy``
 (auto up/down: a count-in bar at the new tempo between passes).
 
+The drummers (:mod:`.practice_show`): with a screen, or ``--headless``, the rig runs an input
+daemon, a synth and a live display as ``up`` does and reads its hits from the daemon's stream
+(the same driver stamps); the display draws the player's drummer, the teacher (``--teacher``)
+and this readout, which the rig sends it. ``--no-window``, or no screen, is the terminal alone.
+
 Scripting: ``--no-sound`` shows the clicks as nothing (no audio device needed); ``--json``
 prints one JSON line per planned pass (its notes and clicks on the shared clock, so a scripted
-player can follow), per hit, per pass result (the ``practice score --json`` object) and a last
-``done`` line.
+player can follow), per hit, per hit no pass owns (``stray``: in the count-in, or after its
+pass was judged; the terminal counts them at the end), per pass result (the ``practice score
+--json`` object) and a last ``done`` line (with ``stray_hits`` and ``doubled_hits``: hits the
+kit's decoder dropped as the same note and velocity on one driver stamp, which only a burst
+delivered in one JACK cycle makes; on stderr too).
 """
 
 from __future__ import annotations
@@ -36,7 +45,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -85,11 +96,24 @@ def add_live_options(p: argparse.ArgumentParser) -> None:
     add_db_option(p)
     p.add_argument("--seconds", type=float, metavar="S",
                    help="stop after S seconds (default: when the passes are done)")  # fmt: skip
+    from .practice_show import add_show_options
+
+    add_show_options(p)
 
 
-#: A pass is judged this long after the last hit it can own, so a hit stamped just before
-#: that moment but read just after it is still the pass's.
+#: A pass is judged once a read that began this long after the last hit it can own is done,
+#: so a hit stamped just before that moment but queued just after it (the driver's stamp and
+#: its queueing are not one instant) is still the pass's. The moment is taken before the read,
+#: not after it: a rig starved of the CPU between a read and that check would otherwise close
+#: the pass on a hit still waiting in the queue, and count it outside every pass.
 SETTLE_S = 0.05
+#: The same with the drummers shown, where the hits come through the input daemon (one more
+#: process to be scheduled and a socket between the stamp and the rig): a loaded machine
+#: delays that hop by tens of ms. A hit later still is a ``stray`` line, not lost silently.
+BUS_SETTLE_S = 0.25
+#: Headless, the drummers are drawn this long after the last pass, so the frames and the
+#: recording end on its summary (a window keeps it until it is closed).
+SUMMARY_HOLD_S = 3.0
 
 
 def numbered(path: Path, k: int) -> Path:
@@ -132,8 +156,10 @@ def run_live(args: argparse.Namespace) -> int:
     from livedrummer.timeline.clock import MonotonicClock
     from livedrummer.timeline.events import ONSET_DTYPE, Onset
 
+    from ..practice.take import on_take_grid
     from .common import kit_source, read_performance
     from .practice import judge_settings, pass_setup, summary_lines
+    from .practice_show import Show, check_show, show_mode
 
     window_ms, pieces, level = judge_settings(args)
     ref, _ = read_performance(args, args.reference)
@@ -162,7 +188,19 @@ def run_live(args: argparse.Namespace) -> int:
     window_s = window_ms / 1e3
     note_map = load_note_map(args.take_map)
     clock = MonotonicClock()
-    source = kit_source(args, clock, MessageDecoder(note_map))
+    mode = show_mode(args)
+    check_show(args, mode)
+    source: Any = kit_source(args, clock, MessageDecoder(note_map))  # checked: one line if absent
+    show = None
+    if mode == "none":
+        why = "--no-window" if args.no_window else "no screen ($DISPLAY)"
+        print(f"practice: terminal readout only ({why})", file=sys.stderr, flush=True)
+    else:
+        shown = "in a window" if mode == "window" else f"off screen into {args.frames_dir}/"
+        print(f"practice: the drummers {shown} (teacher {args.teacher})", file=sys.stderr,
+              flush=True)  # fmt: skip
+        show = Show(args, mode)
+        source = show.bus
     input_s = Calibration.load().input_ms / 1e3
     player = None
     if not args.no_sound:
@@ -187,10 +225,17 @@ def run_live(args: argparse.Namespace) -> int:
         acc = np.concatenate([cacc, accents])
         if player is not None:
             player.schedule(times, acc)
+        clicked.append((times, acc))
         codes = piece_codes(notes)
         judged = np.ones(codes.size, bool) if pieces is None else np.isin(codes, list(pieces))
         readout = LiveReadout(notes["time_s"][judged], codes[judged], window_ms, level)
         ps = Pass(number, start_s, sc, base_bpm * sc, notes, pass_length_s(seg, sc), readout)
+        if show is not None:
+            show.readout.send({"plan": {
+                "pass": number, "start_s": start_s, "scale": sc, "bpm": ps.bpm,
+                "bars": [seg.first_bar, seg.last_bar], "seg_start_s": seg.start_s,
+                "seg_end_s": seg.end_s, "window_ms": window_ms, "level_ms": level.window_ms,
+                "teacher": args.teacher}})  # fmt: skip
         if args.json:
             emit({"pass": number, "start_s": start_s, "bpm": round(ps.bpm, 3), "scale": sc,
                   "bars": [seg.first_bar, seg.last_bar], "length_s": ps.length_s,
@@ -209,13 +254,17 @@ def run_live(args: argparse.Namespace) -> int:
 
     planned: list[Pass] = []
     finished: list[Pass] = []
+    heard: list[tuple[Any, ...]] = []  # every hit as stamped (shared clock): --video's track
+    clicked: list[tuple[Any, Any]] = []  # every click planned (shared clock, accents): likewise
     reports: list[tuple[Pass, dict[str, Any], Any]] = []
 
     def finish(p: Pass, due_s: float | None) -> dict[str, Any]:
         """Judge pass ``p`` (only its notes due by ``due_s`` when it was cut short), print,
         keep and queue its report."""
         hits = np.array(p.hits, dtype=ONSET_DTYPE)
-        hits = merge_doubled_notes(hits[np.argsort(hits["time_s"], kind="stable")])
+        hits = hits[np.argsort(hits["time_s"], kind="stable")]
+        hits["time_s"] = on_take_grid(hits["time_s"])  # judged as its take file holds it
+        hits = merge_doubled_notes(hits)
         notes = p.notes if due_s is None else p.notes[p.notes["time_s"] <= due_s]
         matching = match_take(notes, hits, window_ms, pieces)
         if due_s is not None:  # a hit after the last note judged, left over: not counted
@@ -232,6 +281,8 @@ def run_live(args: argparse.Namespace) -> int:
         _keep(args, p, result, hits)
         if args.report is not None:
             reports.append((p, result, matching))
+        if show is not None:
+            show.readout.send({"summary": {"pass": p.number, "lines": summary_lines(result)}})
         if args.json:
             emit({"pass_result": p.number, **result})
         else:
@@ -241,11 +292,14 @@ def run_live(args: argparse.Namespace) -> int:
                 print(f"  {text}", flush=True)
         return result
 
-    source.open()
+    settle_s = SETTLE_S if show is None else BUS_SETTLE_S
     stray = 0
     stopped = ""
-    started = clock.now()
     try:
+        if show is not None:
+            show.start()  # ready: the drummer is drawn (the teacher waits for the first plan)
+        source.open()
+        started = clock.now()
         first = clock.now() + 0.5 + args.count_in * bar_s(scale)
         planned.append(plan(1, first, scale, args.count_in))
         if ramp is None:
@@ -257,17 +311,28 @@ def run_live(args: argparse.Namespace) -> int:
             if args.seconds is not None and now - started >= args.seconds:
                 stopped = "--seconds"
                 break
+            if show is not None and not show.tick(now):
+                stopped = "window closed"
+                break
             bounds = pass_bounds([p.start_s for p in planned], [p.length_s for p in planned],
                                  first_note, last_note, [p.scale for p in planned],
                                  window_s)  # fmt: skip
+            # Taken before the read: every hit stamped before ``cut`` is in the source's queue
+            # by then, so this read has it; a pass ends only on a ``cut`` past its close (see
+            # SETTLE_S), never on a clock read after a stall that let a hit in behind the read.
+            cut = clock.now()
             for event in source.read(0.002):
                 if not isinstance(event, Onset):
                     continue
+                heard.append(event.to_record())
                 t = event.time_s + input_s
                 owner = next((p for p, (lo, hi) in zip(planned, bounds, strict=True)
                               if lo <= t < hi and p.result is None), None)  # fmt: skip
                 if owner is None:
                     stray += 1
+                    if args.json:  # no hit goes unreported: outside every open pass's span
+                        emit({"stray": {"time_s": round(t - planned[0].start_s, 6),
+                                        "note": event.note}})  # fmt: skip
                     continue
                 rec = list(event.to_record())
                 rec[0] = t - owner.start_s
@@ -276,6 +341,11 @@ def run_live(args: argparse.Namespace) -> int:
                 if pieces is not None and code not in pieces:
                     continue  # not judged (--pieces): kept for the wrong-piece step only
                 line = owner.readout.process(rec[0], code)
+                if show is not None:
+                    show.readout.send({"hit": {
+                        "pass": owner.number, "time_s": line.time_s, "piece": PIECES[line.piece],
+                        "offset_ms": line.offset_ms, "on_time": line.on_time,
+                        "streak": line.streak, "accuracy_pct": line.accuracy_pct}})  # fmt: skip
                 if args.json:
                     emit({"hit": {"pass": owner.number, "time_s": round(line.time_s, 6),
                                   "piece": PIECES[line.piece], "offset_ms": line.offset_ms,
@@ -284,7 +354,7 @@ def run_live(args: argparse.Namespace) -> int:
                 else:
                     print(f"  {line.text()}", flush=True)
             for p, (_, hi) in zip(list(planned), bounds, strict=True):
-                if p.result is not None or clock.now() < hi + SETTLE_S:
+                if p.result is not None or cut < hi + settle_s:
                     continue
                 result = finish(p, None)
                 if ramp is not None and p.number < passes_max:
@@ -296,21 +366,42 @@ def run_live(args: argparse.Namespace) -> int:
             if len(finished) == len(planned) and (ramp is None or len(planned) >= passes_max
                                                   or planned[-1].result is not None):  # fmt: skip
                 break
+        if show is not None and not stopped:  # the last pass's summary stays on screen
+            hold = SUMMARY_HOLD_S if show.mode == "headless" else math.inf
+            until = clock.now() + hold
+            if args.seconds is not None:
+                until = min(until, started + args.seconds)
+            if until == math.inf:
+                print("practice: done; the summary stays in the window until you close it (Q)",
+                      file=sys.stderr, flush=True)  # fmt: skip
+            while clock.now() < until and show.tick(clock.now()):
+                time.sleep(0.05)
     except KeyboardInterrupt:
         stopped = "interrupted"
     finally:
         if player is not None:
             player.close()
         source.close()
+        if show is not None:
+            show.close()
     stats = source.decode_stats()
     if stats is not None and stats.unknown_notes:  # a keyboard's keys outside the drum map
         listed = ", ".join(f"note {k} x{v}" for k, v in sorted(stats.unknown_notes.items()))
         print(f"practice: hits the map {note_map.name} does not know (not judged): {listed}",
               file=sys.stderr)  # fmt: skip
+    doubled = 0 if stats is None else stats.duplicates_removed
+    if doubled:  # the decoder's "double events": the same note and velocity on one stamp
+        print(f"practice: {doubled} hits dropped as doubled (the same note and velocity at the "
+              f"same driver time as the one before; not judged)", file=sys.stderr)  # fmt: skip
     end = clock.now()
     for p in planned:  # a pass cut short: judged on the notes due before the stop
         if p.result is None and p.start_s < end and p.hits:
             finish(p, end - p.start_s - window_s)
+    if show is not None and args.video is not None:
+        from .practice_show import add_drum_track
+
+        wrote = add_drum_track(args, np.array(heard, dtype=ONSET_DTYPE), clicked)
+        print(wrote, file=sys.stderr if args.json else sys.stdout, flush=True)
     for p, result, matching in reports:  # after the session: a report takes seconds to draw
         from .practice_out import write_take_report
 
@@ -320,7 +411,7 @@ def run_live(args: argparse.Namespace) -> int:
             print(f"report: {where}")
     if args.json:
         emit({"done": True, "passes": len(finished), "stray_hits": stray,
-              "stopped": stopped or None})  # fmt: skip
+              "doubled_hits": doubled, "stopped": stopped or None})  # fmt: skip
     else:
         why = f" ({stopped})" if stopped else ""
         print(f"practice: {len(finished)} passes{why}; {stray} hits outside any pass")

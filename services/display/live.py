@@ -135,6 +135,19 @@ class FrameClock(Protocol):
         ...
 
 
+class FrameExtra(Protocol):
+    """Drawn over each frame after the player (the practice rig's teacher and readout,
+    :mod:`services.display.practice_view`); not in a deferred recording."""
+
+    def draw(self, surface: Any, show_s: float) -> None: ...
+
+    def record(self) -> dict[str, Any]:
+        """What to add to the frame's line in frames.jsonl."""
+        ...
+
+    def close(self) -> None: ...
+
+
 class MonotonicFrameClock:
     """The shared monotonic clock with a fixed latency (headless, CI)."""
 
@@ -203,6 +216,7 @@ class LiveConfig:
     osc_allow: tuple[str, ...] = ()
     cues: dict[str, Any] = field(default_factory=dict)  # livedrummer.live.cues, by name
     overlays: frozenset[str] = frozenset()  # strips drawn from the start: "score", "joints"
+    extra: FrameExtra | None = None  # drawn over each frame (the practice rig's view)
 
 
 @dataclass
@@ -384,6 +398,9 @@ class LiveDisplay(Service):
                     surface.draw(None, now)
                 if surface is not None and not deferred:
                     draw_strips(surface, self.strips, show)
+                    if cfg.extra is not None:
+                        cfg.extra.draw(surface, show)
+                        record.update(cfg.extra.record())
                 if (
                     recorder is not None
                     and surface is not None
@@ -431,6 +448,8 @@ class LiveDisplay(Service):
                                 "this machine drew fewer frames than --fps asked",
                                 recorder.repeated, recorder.frames,
                                 100 * recorder.repeated / recorder.frames)  # fmt: skip
+            if cfg.extra is not None:
+                cfg.extra.close()
             if surface is not None:
                 surface.close()
             self.shutdown()

@@ -32,7 +32,7 @@ from livedrummer.live.stage import Stage
 from livedrummer.midi.keypads import KEYPADS, keypad_hit
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON
-from livedrummer.render.camera import CameraMove, kit_cameras
+from livedrummer.render.camera import Camera, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.scene import SceneFrame
 
@@ -66,10 +66,13 @@ class HeadlessSurface:
         self._camera = pick_camera(kit, camera)
         self.stage: Stage | None = None  # show control: camera and blackout (showctl)
         self.overlays: frozenset[str] = frozenset()  # the strips drawn (score, joints)
+        self.view: Camera | None = None  # the camera of the last frame drawn
+        self.target: Any = None  # what the frame is drawn into (the renderer's own)
 
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
         stage = self.stage
-        self.renderer.draw(frame, self._camera if stage is None else stage.view(now_s))
+        self.view = self._camera if stage is None else stage.view(now_s)
+        self.renderer.draw(frame, self.view)
         if stage is not None:
             darken(self.renderer, stage.darkness(now_s))
 
@@ -110,6 +113,8 @@ class WindowSurface:
         self._show_readout, self._show_help = True, False
         self.overlays = frozenset(options.overlays)  # the strips drawn; O and G toggle them
         self.keys = KeySender(options.keys_port) if options.keys_port else None
+        self.view: Camera | None = None  # the camera of the last frame drawn
+        self.target: Any = ctx.screen  # what the frame is drawn into
 
         def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
             name = key_name(glfw, key, mods)
@@ -134,6 +139,7 @@ class WindowSurface:
             view = self._move.at(now_s)
         else:
             view = stage.view(now_s)
+        self.view = view
         self.renderer.draw(frame, view, target=self._ctx.screen)
         if stage is not None:
             darken(self.renderer, stage.darkness(now_s), self._ctx.screen)

@@ -30,6 +30,17 @@ LEAD_S = 1.0
 _MARKER = "livedrummer take: reference starts at "
 
 
+def on_take_grid(times_s: np.ndarray, lead_s: float = LEAD_S) -> np.ndarray:
+    """``times_s`` (the reference's clock) as the take file holds them: on its tick grid.
+
+    The live rig judges its hits on this grid (0.26 ms; far finer than any kit's timing), so
+    ``practice score`` of the file, which can only see the ticks, grades each hit in the same
+    window as the pass did, even one within a tick of a grade's edge."""
+    ticks_per_s = TAKE_TPB * TAKE_BPM / 60.0
+    out: np.ndarray = np.round((np.asarray(times_s, np.float64) + lead_s) * ticks_per_s)
+    return out / ticks_per_s - lead_s
+
+
 def take_to_midi(onsets: np.ndarray, lead_s: float = LEAD_S) -> mido.MidiFile:
     """``onsets`` (ONSET_DTYPE, times on the reference's clock) as a one-track SMF."""
     ticks_per_s = TAKE_TPB * TAKE_BPM / 60.0
