@@ -114,6 +114,27 @@ def test_a_choked_crash_stops_sounding_in_the_video(write_midi, tmp_path: Path) 
     assert after < 0.02 * before, (before, after)  # ... and is silent after it
 
 
+def test_a_closing_hi_hat_stops_the_open_one_ringing_in_the_video(
+    write_midi, tmp_path: Path
+) -> None:  # type: ignore[no-untyped-def]
+    """The pedal (CC4) open, an open hi-hat at 0.25 s, the pedal closed at 0.75 s: the track
+    stops ringing there, as the live sound does (the same cuts, livedrummer.audio.cuts)."""
+    msgs: list[mido.Message] = [mido.MetaMessage("set_tempo", tempo=500_000, time=0),
+        mido.Message("control_change", channel=9, control=4, value=0, time=0),
+        mido.Message("note_on", channel=9, note=46, velocity=120, time=240),
+        mido.Message("note_off", channel=9, note=46, velocity=0, time=30),
+        mido.Message("control_change", channel=9, control=4, value=127, time=450),
+        mido.Message("control_change", channel=9, control=4, value=127, time=240)]  # fmt: skip
+    out = tmp_path / "out.mp4"
+    code = main(["render", str(write_midi(msgs, name="hat.mid")), "-o", str(out), "--size",
+                 "96x54", "--fps", "10", "--tail", "1.0", "--camera", "front"])  # fmt: skip
+    assert code == 0
+    _frames, _video_s, audio, rate, _size = read_back(out)
+    before, after = crash_rms_around_the_grab(audio, rate)  # the same instants
+    assert before > 0.005  # the open hat rings up to the closing ...
+    assert after < 0.05 * before, (before, after)  # ... and is silent after it
+
+
 def test_frames_folder_gets_pngs(groove: Path, tmp_path: Path) -> None:
     frames = tmp_path / "frames"
     code = main(["render", str(groove), "--frames-dir", str(frames), "--size", "96x54",

@@ -7,6 +7,11 @@ passes the :class:`~livedrummer.sticking.result.Sticking` that
 score), which is exactly what ``livedrummer sticking`` prints; without one, that function's
 default (``optimal`` on the performance's grid) is used. The animation plays the limbs of that
 sticking unchanged, so :attr:`Performed.sticking` is the limb of every note as animated.
+
+Two cut lists per kit piece come with it: :attr:`Performed.chokes`, the grabs the body plays
+(a cymbal stops swinging), and :attr:`Performed.sound_chokes`, what stops a ringing sound (the
+grabs and the hi-hat pedal closing, :func:`~livedrummer.audio.cuts.sound_chokes`): every
+offline track (render, export, the file window) mixes with the second, as the live sound cuts.
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from livedrummer.audio.cuts import sound_chokes
 from livedrummer.body.animation import Animation, animate, hihat_openness
 from livedrummer.body.expression import Expression
 from livedrummer.body.rig import Rig
@@ -31,7 +37,8 @@ from livedrummer.timeline.performance import Performance
 class Performed:
     sticking: Sticking
     animation: Animation
-    chokes: list[np.ndarray]
+    chokes: list[np.ndarray]  # grabs, per kit piece: where the picture's cymbal stops
+    sound_chokes: list[np.ndarray]  # grabs and the pedal closing: where the sound stops
 
 
 def perform(
@@ -52,4 +59,5 @@ def perform(
     cc_open = np.array([note_map.openness(v) for v in range(128)])
     openness = hihat_openness(performance.onsets, performance.controls, cc_open=cc_open)
     anim = animate(rig, st, performance.grid.beat_s, openness, expression, strokes, secondary)
-    return Performed(st, anim, choke_times(performance.controls, note_map, anim))
+    return Performed(st, anim, choke_times(performance.controls, note_map, anim),
+                     sound_chokes(performance.controls, note_map, rig.kit))  # fmt: skip

@@ -232,14 +232,15 @@ def window_track(
     sr: int = SAMPLE_RATE,
 ) -> np.ndarray:
     """The drum track of the window's transport (the performance and 1 s after), with the
-    cymbal chokes the body plays: the built-in kit, or ``soundfont``'s."""
+    cymbal grabs and hi-hat closings cutting the sound (``sound_chokes``): the built-in kit,
+    or ``soundfont``'s."""
     duration = performance.duration_s + 1.0
     if soundfont is not None:
         from livedrummer.audio.kitfile import render_kit_file
 
         return render_kit_file(performance.onsets, duration, soundfont, sr, body.kit,
-                                body.performed.chokes)  # fmt: skip
-    return mix_onsets(performance.onsets, duration, body.kit, sr, body.performed.chokes)
+                                body.performed.sound_chokes)  # fmt: skip
+    return mix_onsets(performance.onsets, duration, body.kit, sr, body.performed.sound_chokes)
 
 
 def open_player(track: np.ndarray, sr: int, device: str | None) -> TrackPlayer | None:

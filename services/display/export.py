@@ -3,9 +3,10 @@
 One function, :func:`export`, does the whole job: it makes the EGL context and the renderer,
 mixes the drum track (:func:`livedrummer.audio.mix.mix_onsets`, or with ``soundfont``
 :func:`livedrummer.audio.soundfont.render_soundfont`) to exactly the video's length, with the
-cymbal chokes the body plays (``body.performed.chokes``: a grab stops the sound where it stops
-the cymbal), then renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or
-the PNG writer. The video gets each frame as I420, converted to YUV on the GPU, where the
+cuts of :attr:`~livedrummer.body.perform.Performed.sound_chokes` (a grab stops the sound where
+it stops the cymbal, the pedal closing stops the ringing hi-hat, as the live sound does),
+then renders frame ``i`` at ``t = i / fps`` and hands it to the encoder thread or the PNG
+writer. The video gets each frame as I420, converted to YUV on the GPU, where the
 width is a multiple of 8 (other widths: RGBA, converted on the encoder thread); the PNGs get
 RGB (RGBA with a transparent background, whose video keeps its alpha: see
 :mod:`.video`). The drummer and the kit's motion come from a
@@ -135,10 +136,10 @@ def export(
         mixed_s = (lead + length) / settings.sample_rate
         if soundfont is not None:  # before the writer: a bad file leaves no empty video
             audio = render_kit_file(performance.onsets, mixed_s, soundfont, settings.sample_rate,
-                                     kit, body.performed.chokes, track)  # fmt: skip
+                                     kit, body.performed.sound_chokes, track)  # fmt: skip
         else:
             audio = mix_onsets(performance.onsets, mixed_s, kit, settings.sample_rate,
-                               body.performed.chokes, track)  # fmt: skip
+                               body.performed.sound_chokes, track)  # fmt: skip
         check_video_target(out, settings)
         writer = VideoWriter(partial_path(out), settings)
         writer.write_audio(audio[lead:])

@@ -118,7 +118,7 @@ def _track(drummers: Sequence[StageDrummer], seconds: float, sr: int) -> np.ndar
     for d in drummers:
         own = spooled_track(n)
         mix_onsets(d.performance.onsets, seconds, d.body.kit, sr,
-                   d.body.performed.chokes, own)  # fmt: skip
+                   d.body.performed.sound_chokes, own)  # fmt: skip
         total += own
     fit_headroom(total)
     return total
