@@ -14,9 +14,11 @@ The teacher is the reference animated offline (``teacher``: a
 the reference second the clock gives for the frame's show time, from the camera the player's
 frame was drawn from (``surface.view``):
 
-* ``ghost``: the body alone (no kit, transparent background) in an off-screen renderer of the
-  frame's size, recoloured translucent by :func:`~livedrummer.render.ghost.ghost_image` and
-  blended over the player's frame: where the player's sticks should be now;
+* ``ghost``: the body alone (transparent background; the kit drawn into depth only first, so
+  the ghost is hidden where a drum or a stand is in front of it, as the player's body is) in
+  an off-screen renderer of the frame's size, recoloured translucent by
+  :func:`~livedrummer.render.ghost.ghost_image` and blended over the player's frame: where the
+  player's sticks should be now;
 * ``ahead``: the whole scene (kit and teacher) in a third-size inset at the top right, ahead by
   the clock's ``ahead_s``, with a label; the player sees what comes next beside their own
   drummer.
@@ -26,16 +28,16 @@ when a message changed it. Each frame's teacher time is kept in :attr:`last_refe
 display writes it to ``frames.jsonl``, with the readout's version, so tests and benches can
 check the teacher and the readout without pixels).
 
-Cost: one more scene render per frame (the ghost's body alone, or the inset's small frame; no
-shadow pass in either) and its read-back; ``livedrummer bench practice_view`` measures it (on
-llvmpipe the ghost nearly doubles a 640x360 frame). Limits: the teacher is not depth-tested
-against the player (a ghost is seen through); one teacher; resizing the window builds the
-teacher's renderer anew (the old one's GL objects stay until the window closes).
+Cost: one more scene render per frame (the ghost's body alone over the kit's depth, or the
+inset's small frame; no shadow pass in either) and its read-back; ``livedrummer bench
+practice_view`` measures it (on llvmpipe the ghost nearly doubles a 640x360 frame). Limits:
+the teacher is depth-tested against the kit but not against the player (a ghost is seen
+through); one teacher; resizing the window builds the teacher's renderer anew (the old one's
+GL objects stay until the window closes).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import logging
 from typing import Any, Literal
@@ -62,14 +64,6 @@ TeacherMode = Literal["ghost", "ahead", "off"]
 #: The ahead inset's share of the frame's width and height.
 INSET = 1 / 3
 MARGIN = 8
-
-
-def body_only(kit_mesh: Any) -> Any:
-    """``kit_mesh`` with no instances (no kit, no floor): a renderer of it draws a body alone."""
-    keep = np.zeros(len(kit_mesh.mesh), bool)
-    return dataclasses.replace(
-        kit_mesh, **{f.name: getattr(kit_mesh, f.name)[keep]
-                     for f in dataclasses.fields(kit_mesh) if f.name != "pieces"})  # fmt: skip
 
 
 class PracticeView:
@@ -156,9 +150,9 @@ class PracticeView:
             mesh = build_kit_mesh(self.kit)
             ghost = self.mode == "ghost"
             self._renderer = Renderer(
-                main.ctx, body_only(mesh) if ghost else mesh, BODY_SKELETON, size, samples=0,
-                avatar=self.avatar, shadows=False,
-                background=Background(kind="transparent") if ghost else None)  # fmt: skip
+                main.ctx, mesh, BODY_SKELETON, size, samples=0, avatar=self.avatar,
+                shadows=False, background=Background(kind="transparent") if ghost else None,
+                kit_occludes_only=ghost)  # fmt: skip
         r = self._renderer
         r.draw(self.teacher.frame_at(ref), view)
         rgba = r.read_rgba_top()

@@ -85,8 +85,12 @@ class Renderer:
         shadows: bool = True,
         background: Background | None = None,
         fxaa: bool = False,
+        kit_occludes_only: bool = False,
     ) -> None:
         self.ctx = ctx
+        # the kit drawn into depth only, before the body: the body alone is seen, hidden where
+        # the kit is in front of it (a practice teacher's ghost, :mod:`.practice_view`)
+        self.kit_occludes_only = kit_occludes_only
         self.background = background if background is not None else Background()
         self._background_pass: tuple[Any, Any] | None = None
         self.kit_mesh = kit_mesh
@@ -292,6 +296,8 @@ class Renderer:
             fbo.use()
             self.ctx.viewport = (0, 0, w, h)
         self._shadow_map.use(location=SHADOW_UNIT)
+        if self.kit_occludes_only:
+            self._kit_depth_pass(fbo, vp)
         # Nearest and largest first, the floor last: hidden fragments fail the depth test
         # before they are shaded (llvmpipe tests depth early for these shaders).
         if self._draw_body:
@@ -301,6 +307,8 @@ class Renderer:
             if self._ball_count:
                 self._ball_vao.render(instances=self._ball_count)
         for name, (vao, _buf, idx) in zip(self._kit_groups, self._kit_vaos, strict=True):
+            if self.kit_occludes_only:
+                break
             if name == "floor":  # its rim fades into whatever background is behind it
                 self.ctx.enable(moderngl.BLEND)
                 self.ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
@@ -329,6 +337,18 @@ class Renderer:
         self.ctx.disable(moderngl.DEPTH_TEST)
         tex.use(location=0)
         vao.render(moderngl.TRIANGLES, vertices=3)
+
+    def _kit_depth_pass(self, fbo: Any, vp: np.ndarray) -> None:
+        """The kit (not the floor) into ``fbo``'s depth from the camera, no colour written."""
+        self.programs["depth_mesh"]["u_view_proj"].write(vp.T.tobytes())
+        fbo.color_mask = (False, False, False, False)
+        fbo.use()  # moderngl applies a framebuffer's colour mask when it is bound
+        try:
+            for vao, idx in self._kit_depth:
+                vao.render(instances=len(idx))
+        finally:
+            fbo.color_mask = (True, True, True, True)
+            fbo.use()
 
     def _shadow_pass(self, light_vp: np.ndarray) -> None:
         """Draw every caster depth-only from the key light into the shadow map."""
