@@ -101,20 +101,30 @@ def toggle_fullscreen(glfw: Any, window: Any, options: WindowOptions) -> None:
 
 
 class Readout:
-    """The HUD texture of a window: repainted only when its lines change."""
+    """The HUD texture of a window: repainted only when its lines or the frame's size change.
+
+    The text is drawn at twice the font's size where it fits, else at its size (a 640x360
+    window), else cropped to the frame's right and bottom edges (a thumbnail)."""
 
     def __init__(self) -> None:
         self.lines: list[str] | None = None
+        self.size: tuple[int, int] | None = None
         self.image: Any = None
 
     def draw(self, renderer: Renderer, lines: list[str], target: Any) -> None:
         from livedrummer.render.hud import hud_image
 
-        if lines != self.lines:
-            self.lines, self.image = lines, hud_image(lines)
-        h, w = self.image.shape[:2]
         fb_w, fb_h = renderer.size
-        if w + HUD_AT[0] <= fb_w and h + HUD_AT[1] <= fb_h:  # a tiny window shows none
+        if lines != self.lines or renderer.size != self.size:
+            self.lines, self.size = lines, renderer.size
+            for scale in (2, 1):
+                self.image = hud_image(lines, scale)
+                h, w = self.image.shape[:2]
+                if w + HUD_AT[0] <= fb_w and h + HUD_AT[1] <= fb_h:
+                    break
+            self.image = self.image[: max(0, fb_h - HUD_AT[1]), : max(0, fb_w - HUD_AT[0])]
+        h, w = self.image.shape[:2]
+        if w > 0 and h > 0:
             renderer.draw_overlay(self.image, (*HUD_AT, w, h), target)
 
 
