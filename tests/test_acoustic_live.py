@@ -81,6 +81,26 @@ def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, g
     assert set(run.onsets["note"].tolist()) <= {36, 38}
 
 
+def test_the_live_bench_at_real_time_priority(jack_server: str, groove) -> None:  # type: ignore[no-untyped-def]
+    """``bench transcribe --live --realtime PRIO``: the daemon runs at SCHED_FIFO where that is
+    granted (where it is refused, a warning line: the test does not depend on the privilege),
+    hears the same hits, and the bench's own thread is back at the normal policy afterwards."""
+    import os
+
+    _ex, mix, _stems = groove
+    run = play_into_daemon(mix, realtime=10)
+    offline = detect(mix, SR, load_profile(None))
+    assert len(run.onsets) == len(offline) > 10, run.stderr
+    assert _same_hits(run.onsets, offline) >= 0.95
+    if "no real-time scheduling" not in run.stderr:  # granted (a warning line where refused)
+        assert run.daemon_policy == os.SCHED_FIFO, run.stderr
+    assert os.sched_getscheduler(0) == os.SCHED_OTHER
+    bad = subprocess.run([sys.executable, "-m", "services", "bench", "transcribe", "--live",
+                          "--realtime", "61"], cwd=REPO, capture_output=True, text=True,
+                         timeout=60)  # fmt: skip
+    assert bad.returncode == 2 and "--realtime 61: expected 1..60" in bad.stderr
+
+
 def _input(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "services", "input", *args], cwd=REPO,
                           capture_output=True, text=True, timeout=60)  # fmt: skip

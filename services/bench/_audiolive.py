@@ -12,6 +12,7 @@ ZeroMQ out). Runs under ``JACK_DEFAULT_SERVER`` (e.g. :func:`._jack.dummy_jack`)
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -36,6 +37,9 @@ class LiveRun:
     #: per onset (``trace=True``): the daemon's callback, hand-off and detector times
     #: (``input --trace``), else empty
     trace: np.ndarray
+    #: the daemon's scheduling policy while it listened (``os.SCHED_FIFO`` when ``realtime``
+    #: was asked for and granted)
+    daemon_policy: int = os.SCHED_OTHER
 
     def attack_times(self, times_s: np.ndarray, sr: int = 48_000) -> np.ndarray:
         """Monotonic time of each sample time ``times_s`` of the played audio."""
@@ -64,8 +68,13 @@ def _ports() -> list[str]:
 
 
 def play_into_daemon(
-    audio: np.ndarray, extra: list[str] | None = None, trace: bool = False
+    audio: np.ndarray, extra: list[str] | None = None, trace: bool = False, realtime: int = 0
 ) -> LiveRun:
+    """Play ``audio`` into a fresh ``input --audio`` (``extra``: more of its options) and
+    collect what it publishes. ``realtime``: a ``SCHED_FIFO`` priority for the daemon
+    (``input --realtime``) and for this side's subscriber (the thread that polls and stamps
+    arrivals, and ZeroMQ's I/O thread), as a stage rig would run both; 0: the normal policy.
+    The player keeps the normal policy either way (its callbacks are JACK's)."""
     import zmq
 
     from livedrummer import protocol as p
@@ -75,7 +84,12 @@ def play_into_daemon(
     any_port = "tcp://127.0.0.1:*"
     cmd = [sys.executable, "-m", "services", "input", "--audio", "system", "--no-journal",
            "--pub", any_port, "--control", any_port, *(extra or [])]  # fmt: skip
+    if realtime:
+        cmd += ["--realtime", str(realtime)]
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
+    if realtime:  # ZeroMQ's I/O thread starts with the first socket, at this priority
+        ctx.set(zmq.THREAD_SCHED_POLICY, os.SCHED_FIFO)
+        ctx.set(zmq.THREAD_PRIORITY, realtime)
     sub = ctx.socket(zmq.SUB)
     player = None
     err = ""
@@ -97,6 +111,11 @@ def play_into_daemon(
             mine = _wait_ports(before, "in_", channels)
             player, stamps = _start_player(audio, mine, Path(tmp))
             time.sleep(0.3)  # the subscription settles (nothing is played yet)
+            policy = os.sched_getscheduler(daemon.pid)
+            if realtime:  # this thread only: the daemon and the player are already started
+                from ..realtime import request_realtime
+
+                request_realtime(realtime, "bench subscriber")
             assert player.stdin is not None
             player.stdin.write("go\n")
             player.stdin.flush()
@@ -118,6 +137,8 @@ def play_into_daemon(
             if blocks is None:
                 raise RuntimeError("the player did not finish")
         finally:
+            if realtime:
+                os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
             if player is not None and player.poll() is None:
                 player.kill()
             daemon.terminate()
@@ -134,7 +155,7 @@ def play_into_daemon(
     onsets = np.concatenate(rows) if rows else np.zeros(0, ONSET_DTYPE)
     b = np.array(blocks, float).reshape(-1, 2)
     return LiveRun(onsets, np.array(arrivals), b[:, 0].astype(np.int64), b[:, 1], err,
-                   np.array(sent), np.array(traced, float).reshape(-1, 3))  # fmt: skip
+                   np.array(sent), np.array(traced, float).reshape(-1, 3), policy)  # fmt: skip
 
 
 def _start_player(audio: np.ndarray, inputs: list[str], tmp: Path) -> tuple[Any, Path]:

@@ -14,7 +14,11 @@ by the player's JACK cycle; median and 99th percentile over every hit), where th
 (:data:`STAGES`: the lookahead until the block that decides the hit is played, JACK and
 PortAudio to the daemon's callback, the hand-off to the detector's thread, the detector's
 work, publishing, ZeroMQ to the subscriber; from ``input --trace`` and the message's send
-time) and live accuracy. ``--audio-profile`` is used by the daemon too.
+time) and live accuracy. ``--audio-profile`` is used by the daemon too; ``--realtime PRIO``
+runs the daemon with ``input --realtime PRIO`` and the bench's subscriber thread and ZeroMQ
+I/O thread at ``SCHED_FIFO`` ``PRIO`` (the player keeps the normal policy);
+``--jackd-realtime`` runs the dummy server with ``-R`` (its clients' audio threads, the
+player's and the daemon's callbacks, then run at JACK's real-time priority too).
 """
 
 from __future__ import annotations
@@ -67,7 +71,15 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--live", action="store_true",
                     help="play the excerpts into input --audio through a JACK dummy server and "
                     "measure attack -> onset-on-the-bus latency")  # fmt: skip
+    ap.add_argument("--realtime", type=int, default=0, metavar="PRIO",
+                    help="--live: run the daemon with input --realtime PRIO and the bench's "
+                    "subscriber at SCHED_FIFO PRIO too (1..60; default 0: off)")  # fmt: skip
+    ap.add_argument("--jackd-realtime", action="store_true",
+                    help="--live: run the dummy JACK server with -R (real-time scheduling, "
+                    "as a stage rig runs jackd)")  # fmt: skip
     args = ap.parse_args(argv)
+    if not 0 <= args.realtime <= 60:
+        ap.error(f"--realtime {args.realtime}: expected 1..60 (0: off)")
     if args.live:
         return live(args)
     root = corpus(args.corpus)
@@ -131,13 +143,15 @@ def live(args: argparse.Namespace) -> int:
     stages: list[np.ndarray] = []
     tot: dict[str, Counts] = {}
     files = pick_files(root, args.split, args.files)
-    with dummy_jack("bench-transcribe") as name:
+    with dummy_jack("bench-transcribe", realtime=args.jackd_realtime) as name:
         os.environ.update(jack_env(name))
         for i, path in enumerate(files):
             ex = excerpt(path, 5.0, args.seconds)
             mix = render_mix(ex, seed=i)
             extra = [] if args.audio_profile is None else ["--audio-profile", args.audio_profile]
-            run = play_into_daemon(mix, extra, trace=True)
+            run = play_into_daemon(mix, extra, trace=True, realtime=args.realtime)
+            if args.realtime and run.daemon_policy != os.SCHED_FIFO:
+                print(f"  {path.name}: the daemon did not get SCHED_FIFO: {run.stderr.strip()}")
             offline = np.sort(detect(mix, SR, profile)["time_s"])
             if len(run.onsets) != len(offline):
                 print(f"  {path.name}: {len(run.onsets)} live hits, {len(offline)} offline")
@@ -152,8 +166,11 @@ def live(args: argparse.Namespace) -> int:
             for k, v in got.items():
                 tot[k] = tot.get(k, Counts(0, 0, 0)) + v
     lat = np.array(latencies) * 1000
+    rt = f", SCHED_FIFO {args.realtime}" if args.realtime else ""
+    rt += ", jackd -R" if args.jackd_realtime else ""
     print(f"bench transcribe --live: {len(files)} excerpts of {args.seconds:g} s ({args.split}), "
-          "input --audio through jackd -d dummy (128 frames, 48 kHz)")  # fmt: skip
+          f"input --audio through jackd -d dummy (128 frames, 48 kHz){rt}, "
+          f"load average {os.getloadavg()[0]:.1f}")  # fmt: skip
     if len(lat):
         p50, p99 = np.percentile(lat, 50), np.percentile(lat, 99)
         print(f"  attack -> onset on the bus: p50 {p50:.1f} ms, p99 {p99:.1f} ms, "
