@@ -52,6 +52,12 @@ channel saw is taken away (``leak``: the loudest crosstalk the profile allows, i
 hi-hat's high bands survive a kick heard through its microphone; the kick's own leak does
 not), unless what is left is a soft hit of the channel's own drum (:data:`OWN_LEVEL`). A
 hi-hat's or cymbal's channel picks its onsets from its bands above :data:`MIC_HIGH_HZ` only.
+A ride's channel (:data:`RING_CLASSES`) is picked at :data:`RING_FLOOR` of the floor (a soft
+stroke on a still-ringing ride rises little) and an onset there is kept only when the channel's
+level above :data:`MIC_HIGH_HZ` (the mean log band) in the ``lookahead`` frames after it tops
+its mean over the :data:`RING_BEFORE` frames before it by :data:`RING_JUMP`: a stroke lifts the
+ring it lands on, the ring's own wobble 100-200 ms after a stroke rises and falls back. Both
+read only frames the decision already waits for, so the latency and the twins are unchanged.
 Velocity as above, from the channel's rise.
 
 Limits: the lookahead is ``lookahead`` frames (5.3 ms) plus the attack's position in the
@@ -132,6 +138,14 @@ OWN_LEVEL = 0.02
 MIC_HIGH_HZ = 3500.0
 MIC_HIGH_SCALE = 0.2
 MIC_SCALE = 1.0
+#: A ringing cymbal's microphone (RING_CLASSES): onsets from RING_FLOOR of the floor, kept only
+#: when the level above MIC_HIGH_HZ (the mean log band) in the ``lookahead`` frames after the
+#: onset tops its mean over the RING_BEFORE frames up to two before it by RING_JUMP: a stroke,
+#: however soft, lifts the ring it lands on; the ring's own wobble rises and falls back.
+RING_CLASSES = frozenset(CLASSES.index(c) for c in ("ride",))
+RING_FLOOR = 0.5
+RING_JUMP = 0.05
+RING_BEFORE = 7
 BATCH = 2048  # frames per FFT batch (bounds memory for a long file)
 _EPS = 1e-9
 
@@ -221,12 +235,15 @@ class _Channel:
             [np.zeros(N_BANDS)] * (BEFORE + lookahead + 1), maxlen=BEFORE + lookahead + 1
         )
         self.logs: deque[np.ndarray] = deque([np.zeros(FLUX_BANDS)] * MU, maxlen=MU)
+        keep = RING_BEFORE + BEFORE + lookahead
+        #: the mean log band above main_from of the last frames (a ringing cymbal's level)
+        self.level: deque[float] = deque([0.0] * keep, maxlen=keep)
 
     def frames(
         self, signal: np.ndarray, ends: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Onset function, high-band onset function and band spectra of the frames ending at
-        ``ends``."""
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Onset function, high-band onset function, band spectra and level (the mean log band
+        from ``main_from``) of the frames ending at ``ends``."""
         logs = log_flux_spectra(frames_at(signal, ends, FLUX_SIZE), self.sr)
         before = np.concatenate([np.array(self.logs), logs])[: len(logs)]
         m = self.main_from
@@ -236,10 +253,12 @@ class _Channel:
         high = scale * superflux(logs[:, k:], before[:, k:]) if self.high is not None else flux
         for row in logs[-MU:]:
             self.logs.append(row)
-        return flux, high, bands(frames_at(signal, ends, CLASS_SIZE), self.sr)
+        level = logs[:, m:].mean(axis=1)
+        return flux, high, bands(frames_at(signal, ends, CLASS_SIZE), self.sr), level
 
-    def push(self, flux: float, high: float, band: np.ndarray) -> None:
+    def push(self, flux: float, high: float, band: np.ndarray, level: float) -> None:
         self.main.values.append(flux)
+        self.level.append(level)
         if self.high is not None:
             self.high.values.append(high)
         self.bands.append(band)
@@ -249,6 +268,14 @@ class _Channel:
         :data:`BEFORE` frames before it."""
         out: np.ndarray = np.maximum(self.bands[-1] - self.bands[0], 0.0)
         return out
+
+    def lifted(self, jump: float) -> bool:
+        """Whether the level after the frame being decided tops its level before by ``jump``
+        (the frame being decided is ``lookahead`` frames before the newest)."""
+        v = list(self.level)
+        after = v[len(v) - max(1, self.main.lookahead) :]
+        before = v[:RING_BEFORE]
+        return float(np.mean(after)) - float(np.mean(before)) >= jump
 
 
 class OnlineDetector:
@@ -317,8 +344,8 @@ class OnlineDetector:
             for i in range(len(ends)):
                 self._frame += 1
                 for c, ch in enumerate(self._chans):
-                    flux, high, band = per_chan[c]
-                    ch.push(float(flux[i]), float(high[i]), band[i])
+                    flux, high, band, level = per_chan[c]
+                    ch.push(float(flux[i]), float(high[i]), band[i], float(level[i]))
                 out.extend(self._decide())
         self.frames_seen = self._frame + 1
         self._pending = (self._pending + data.shape[0]) % HOP
@@ -334,14 +361,18 @@ class OnlineDetector:
             return self._decide_mix(p, time_s)
         all_rises = [ch.rise() for ch in self._chans]
         for c, ch in enumerate(self._chans):
-            if not ch.main.is_onset(p, self._scale[c] * s.delta, self._scale[c] * s.floor):
+            cls = self.channel_class[c]
+            ring = cls in RING_CLASSES
+            floor = self._scale[c] * s.floor * (RING_FLOOR if ring else 1.0)
+            if not ch.main.is_onset(p, self._scale[c] * s.delta, floor):
                 continue
+            if ring and not ch.lifted(RING_JUMP):
+                continue  # the ring's wobble: no lasting rise of its level
             rise = all_rises[c]
             level = float(rise.sum())
             others = [all_rises[d] for d in range(len(all_rises)) if d != c]
             leaked = s.leak * np.max(others, axis=0) if others else np.zeros_like(rise)
             own = float(np.maximum(rise - leaked, 0.0).sum())
-            cls = self.channel_class[c]
             loud_own = own >= OWN_LEVEL * self.profile.levels[cls] > 0
             if level < s.min_level or (own < OWN_SHARE * level and not loud_own):
                 continue  # crosstalk: most of this rise is another channel's, heard through
