@@ -4,6 +4,7 @@ its offline twin (polled as a service would)."""
 from __future__ import annotations
 
 import itertools
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -204,3 +205,37 @@ def test_precision_counts_the_extra_beats_that_accuracy_forgives() -> None:
     assert beat_precision(np.zeros(0), reference, 2.0) == 0.0
     late = np.concatenate([reference, [25.0, 30.0]])  # past the reference's end: not counted
     assert beat_precision(late, reference, 2.0) == 1.0
+
+
+def pushed(bpm: float, bars: int) -> tuple[np.ndarray, np.ndarray]:
+    """Hi-hat eighths, snare on 2 and 4, the kick on 1 and pushed onto the "and"s of 2 and 3
+    (two of its three strokes off the beat); the beats played."""
+    beat = 60.0 / bpm
+    rng = np.random.default_rng(3)
+    rows = []
+    for b in range(bars):
+        t0 = 1.0 + 4 * b * beat
+        rows += [(t0 + s * beat / 2, 2, 70) for s in range(8)]
+        rows += [(t0 + x * beat, 0, 110) for x in (0.0, 1.5, 2.5)]
+        rows += [(t0 + x * beat, 1, 110) for x in (1.0, 3.0)]
+    on = np.zeros(len(rows), ONSET_DTYPE)
+    on["time_s"] = [t + rng.normal(0, 0.006) for t, _, _ in rows]
+    on["instrument"] = [i for _, i, _ in rows]
+    on["velocity"] = [v for _, _, v in rows]
+    on.sort(order="time_s")
+    return on, 1.0 + beat * np.arange(bars * 4)
+
+
+@pytest.mark.parametrize("bpm", [96.0, 127.0])
+def test_a_snare_backbeat_holds_the_beat_against_a_kick_on_the_ands(bpm: float) -> None:
+    from livedrummer.live.beat import BeatParams
+
+    on, beats = pushed(bpm, 12)
+    args = (on["time_s"].astype(np.float64), onset_weights(on), float(beats[-1]) + 0.3)
+    down = downbeat_weights(on)
+    det = track_beats(*args, downbeats=down)
+    assert beat_accuracy(det, beats, float(beats[16])) >= 0.95
+    assert beat_precision(det, beats, float(beats[16])) >= 0.95
+    # without the backbeat rule the kicks hold the grid on the "and"
+    kicks_only = track_beats(*args, BeatParams(backbeat=math.inf), downbeats=down)
+    assert beat_accuracy(kicks_only, beats, float(beats[16])) <= 0.1

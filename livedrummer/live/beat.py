@@ -21,7 +21,11 @@ kick and the snare fall):
   onset (evidence squared, kicks and crashes ``1 + kick_boost`` times more, recent ones more:
   ``recency_s``) counts for a grid under a Gaussian of its distance to the grid's nearest
   beat and, ``offbeat`` times, against it near the grid's off-beats, so a syncopated kick or
-  an off-beat hi-hat does not pull the grid onto the "and". A small shift is followed
+  an off-beat hi-hat does not pull the grid onto the "and". Where the kick is pushed onto the
+  "and"s against a snare backbeat, the kicks win that score: the best grid then moves half a
+  beat when the snares on its beats outweigh those on its rival's by ``backbeat`` of all
+  their weight and its beats keep ``backbeat_kick`` of the kick's (2 and 4 with a kick on
+  1, not a dembow's or merengue's off-beat snares). A small shift is followed
   (smoothed); a large one only once it has won by ``switch`` for ``switch_beats`` beats. A
   correction never repeats or skips the beat at hand (:meth:`BeatTracker._keep_heard`):
   every beat is given once, so a service polling the tracker sees no jump.
@@ -88,6 +92,8 @@ class BeatParams:
     switch_beats: float = 1.0  # ... for this many beats in a row (phase)
     smooth: float = 0.3  # share of a new period or phase estimate taken at each update
     kick_boost: float = 2.0  # phase: a kick (or crash) weighs (1 + this) times more
+    backbeat: float = 0.5  # phase: the snare's margin (share of its weight) for the half-shift
+    backbeat_kick: float = 0.1  # ... whose beats must keep this share of the kick's weight
     downbeat_decay_s: float = 8.0  # downbeat evidence this old counts 1/e as much
     beats_per_bar: int = 4
     max_onsets: int = 256  # the newest onsets kept (a flood must not make each update O(n^2))
@@ -157,7 +163,7 @@ class BeatTracker:
         fresh = self.period_s is None
         before = None if fresh else self._nearest(time_s)
         self._update_period(t, w)
-        self._update_phase(t, w * np.sqrt(lead), time_s, fresh)
+        self._update_phase(t, w * np.sqrt(lead), time_s, fresh, db)
         if before is not None:
             self._keep_heard(before, time_s)
         if downbeat != 0.0:
@@ -196,10 +202,13 @@ class BeatTracker:
         else:
             self._challenger = best
 
-    def _update_phase(self, t: np.ndarray, w: np.ndarray, now: float, fresh: bool) -> None:
+    def _update_phase(
+        self, t: np.ndarray, w: np.ndarray, now: float, fresh: bool, db: np.ndarray
+    ) -> None:
         """Score beat grids shifted from the current one by a fraction of a period: onsets on
         a grid's beats count for it, onsets half a period off against it (so a syncopated kick
-        or an off-beat hi-hat does not pull the grid onto the off-beats)."""
+        or an off-beat hi-hat does not pull the grid onto the off-beats); a regular snare
+        backbeat may then move the best grid by half a beat (:meth:`_backbeat`)."""
         p = self.params
         period = self.period_s
         if period is None:
@@ -213,6 +222,9 @@ class BeatTracker:
         )
         score = g @ r
         j = int(np.argmax(score))
+        flip = self._backbeat(diff, j, db, np.exp(-(now - t) / p.recency_s))
+        if flip:
+            j = (j + _PHASES // 2) % _PHASES
         shift = float(self._offsets[j])
         if fresh:
             self.phase_s += shift * period
@@ -221,7 +233,7 @@ class BeatTracker:
             self._phase_challenger = None
         else:
             here = float(score[0])  # offsets[0] is the current grid
-            wins = score[j] > p.switch * here if here > 0 else score[j] > here
+            wins = flip or (score[j] > p.switch * here if here > 0 else score[j] > here)
             rival = self._phase_challenger
             if wins and rival is not None and abs((shift - rival[0] + 0.5) % 1.0 - 0.5) < 0.1:
                 if now - rival[1] >= p.switch_beats * period:  # it has won for a while
@@ -232,6 +244,26 @@ class BeatTracker:
         n = math.floor((now - self.phase_s) / period)
         self.phase_s += n * period
         self._beat_index = 0 if fresh else self._beat_index + n
+
+    def _backbeat(self, diff: np.ndarray, j: int, db: np.ndarray, recency: np.ndarray) -> bool:
+        """Whether the grid half a beat from grid ``j`` is the beat: the snares (velocity
+        squared, recent ones more) on its beats outweigh those on ``j``'s by ``backbeat`` of
+        all their weight (a regular backbeat on 2 and 4, where a kick pushed onto the "and"s
+        had pulled the grid there), and its beats keep ``backbeat_kick`` of the kick's weight
+        (a kick on 1: not a dembow or a merengue, whose snares fall off their beat)."""
+        p = self.params
+        snare = np.maximum(-db, 0.0) ** 2 * recency
+        kick = np.maximum(db, 0.0) ** 2 * recency
+        total = float(np.sum(snare))
+        if total <= 0.0:
+            return False
+        k = (j + _PHASES // 2) % _PHASES
+        near = np.exp(-0.5 * (diff[[j, k]] / p.phase_sigma) ** 2)
+        on = near @ snare
+        return bool(
+            on[1] - on[0] > p.backbeat * total
+            and near[1] @ kick >= p.backbeat_kick * float(np.sum(kick))
+        )
 
     def _nearest(self, t: float) -> float:
         assert self.period_s is not None
