@@ -71,11 +71,13 @@ def gl_ok() -> None:
         _unavailable(str(exc))
 
 
-def _jack(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, sync: bool) -> Iterator[str]:
+def _jack(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, sync: bool, realtime: bool
+) -> Iterator[str]:
     log_path = tmp_path / "jackd.log"
     with log_path.open("w") as log:
         try:
-            with dummy_jack("ldtest", log=log, sync=sync, realtime=not sync) as name:
+            with dummy_jack("ldtest", log=log, sync=sync, realtime=realtime) as name:
                 for key, value in jack_env(name).items():
                     monkeypatch.setenv(key, value)
                 yield name
@@ -89,15 +91,24 @@ def jack_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str
 
     The server gets a unique name, exported to the test through JACK_DEFAULT_SERVER.
     """
-    yield from _jack(monkeypatch, tmp_path, sync=True)
+    yield from _jack(monkeypatch, tmp_path, sync=True, realtime=False)
 
 
 @pytest.fixture
 def jack_default_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str]:
     """The same in JACK's default mode (asynchronous, realtime asked for), as a rig left at
-    jackd's defaults runs it: the input daemon must lose nothing there either (it runs no
-    Python in JACK's thread, see services.input.midiport)."""
-    yield from _jack(monkeypatch, tmp_path, sync=False)
+    jackd's defaults runs it: the sound tests run there."""
+    yield from _jack(monkeypatch, tmp_path, sync=False, realtime=True)
+
+
+@pytest.fixture
+def jack_rig_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str]:
+    """The same as the README's JACK settings for a rig ask: realtime and synchronous (``-R
+    -S``). The tests that count every note through JACK run here: in the asynchronous mode a
+    cycle a client's JACK thread misses (a stalled virtual machine misses some even at
+    realtime priority) loses that cycle's MIDI, by JACK's design (``livedrummer bench
+    jack_modes`` measures it); with ``-S`` the server waits for the late client."""
+    yield from _jack(monkeypatch, tmp_path, sync=True, realtime=True)
 
 
 @pytest.fixture(scope="session")

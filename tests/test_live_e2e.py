@@ -69,7 +69,7 @@ def stop(proc: subprocess.Popen[str]) -> int:
 
 
 def test_a_groove_played_on_a_jack_port_reaches_the_display(
-    jack_default_server: str, gl_ok: None, tmp_path: Path
+    jack_rig_server: str, gl_ok: None, tmp_path: Path
 ) -> None:
     kit_port = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
     kit_port.open_virtual_port("pads")

@@ -32,13 +32,13 @@ def test_a_roland_kit_is_re_mapped_to_general_midi_drums() -> None:
 
 
 def test_thru_forwards_each_hit_remapped_and_its_latency_is_measured(
-    jack_default_server: str, tmp_path: Path
+    jack_rig_server: str, tmp_path: Path
 ) -> None:
     from services.bench._jack import jack_env
     from services.bench.input_load import Reference, build_reference
 
     exe = build_reference(tmp_path)
-    env = {**os.environ, **jack_env(jack_default_server), "LIVEDRUMMER_HOME": str(tmp_path)}
+    env = {**os.environ, **jack_env(jack_rig_server), "LIVEDRUMMER_HOME": str(tmp_path)}
     kit = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
     kit.open_virtual_port("pads")
     daemon = subprocess.Popen(
@@ -86,7 +86,7 @@ def test_thru_forwards_each_hit_remapped_and_its_latency_is_measured(
 
 @pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
 def test_display_sends_a_files_notes_with_the_frames_that_show_them(
-    jack_default_server: str, tmp_path: Path
+    jack_rig_server: str, tmp_path: Path
 ) -> None:
     from test_window_sound import HITS, hits_file, picture_times
 
@@ -95,7 +95,7 @@ def test_display_sends_a_files_notes_with_the_frames_that_show_them(
 
     exe = build_reference(tmp_path)
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    env.update(jack_env(jack_default_server))
+    env.update(jack_env(jack_rig_server))
     midi, log = hits_file(tmp_path / "hits.mid"), tmp_path / "frames.jsonl"
     cmd = (f"{sys.executable} -m services display {midi} --map general-midi --size 320x180 "
            f"--aa 0 --seconds 5.5 --no-sound --midi-out ldsampler --frame-log {log}")  # fmt: skip

@@ -17,8 +17,11 @@ delta times, see :mod:`services.input.midiport`). *Lost* = notes the reference r
 the daemon did not publish; *off server* = notes the kit sent that the reference never saw
 (lost before any client: the sender or the server). ``--code DIR`` runs the daemon
 from another checkout of the repository (an older commit), so two designs are compared in
-one run under the same load. Prints p50/p99/max in ms over all runs of a row; no
-assertions.
+one run under the same load. ``--stalls`` stops the daemon's process for 1-20 ms every 5-30
+ms while the kit plays (its JACK thread then misses cycles, as on a virtual machine whose core
+is taken away, realtime priority or not): in the asynchronous mode the server does not wait
+for it and the MIDI of a cycle it missed is lost; with ``-S`` it waits. Prints p50/p99/max in
+ms over all runs of a row; no assertions.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ import argparse
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -100,8 +104,19 @@ class Reference:
         self._thread.join(5)
 
 
+def stall(proc: subprocess.Popen[str], while_alive: threading.Thread, seed: int) -> None:
+    """Stop ``proc`` for 1-20 ms every 5-30 ms while ``while_alive`` runs: what a virtual
+    machine that takes its core away does to the daemon's JACK thread, realtime or not."""
+    rng = np.random.default_rng(1000 + seed)
+    while while_alive.is_alive() and proc.poll() is None:
+        proc.send_signal(signal.SIGSTOP)
+        time.sleep(float(rng.uniform(0.001, 0.020)))
+        proc.send_signal(signal.SIGCONT)
+        time.sleep(float(rng.uniform(0.005, 0.030)))
+
+
 def one_run(mode: str, n_hogs: int, seconds: float, rate: float, code: Path | None,
-            exe: Path, seed: int) -> dict[str, Any]:  # fmt: skip
+            exe: Path, seed: int, stalls: bool = False) -> dict[str, Any]:  # fmt: skip
     import rtmidi
 
     clock = MonotonicClock()
@@ -158,6 +173,9 @@ def one_run(mode: str, n_hogs: int, seconds: float, rate: float, code: Path | No
                 time.sleep(0.5)  # let the hogs spin up
                 player = threading.Thread(target=play)
                 player.start()
+                if stalls:
+                    threading.Thread(target=stall, args=(daemon, player, seed),
+                                     daemon=True).start()  # fmt: skip
                 end = clock.now() + float(gaps.sum()) + 3.0
                 while clock.now() < end and (player.is_alive() or len(got) < len(sent)):
                     if sub.poll(100):
@@ -192,6 +210,9 @@ def main(argv: list[str]) -> int:
                         help=f"JACK modes, of {', '.join(MODES)} (default sync,async)")  # fmt: skip
     parser.add_argument("--hogs", default="0,1x,2x",
                         help="hogs per row: a count or Nx cores (default 0,1x,2x)")  # fmt: skip
+    parser.add_argument("--stalls", action="store_true",
+                        help="stop the daemon for 1-20 ms every 5-30 ms while the kit plays "
+                        "(a virtual machine taking its core away)")  # fmt: skip
     parser.add_argument("--code", type=Path, default=None,
                         help="checkout whose input daemon runs (default this one)")  # fmt: skip
     args = parser.parse_args(argv)
@@ -200,9 +221,12 @@ def main(argv: list[str]) -> int:
     try:
         with tempfile.TemporaryDirectory() as tmp:
             exe = build_reference(Path(tmp))
-            print(f"input stamps vs a C reference client on the same JACK server; "
-                  f"{args.runs} x {args.seconds:g} s at ~{args.rate:g} notes/s; {cores} cores; "
-                  f"daemon from {args.code or 'this code'}")  # fmt: skip
+            print(
+                f"input stamps vs a C reference client on the same JACK server; "
+                f"{args.runs} x {args.seconds:g} s at ~{args.rate:g} notes/s; {cores} cores; "
+                f"daemon from {args.code or 'this code'}"
+                f"{'; the daemon stalled 1-20 ms every 5-30 ms' if args.stalls else ''}"
+            )
             print(
                 "ms, p50 / p99 / max; JACK modes: sync = -S -R, async = JACK's default "
                 "(-R, no -S); -nort: --no-realtime"
@@ -213,8 +237,8 @@ def main(argv: list[str]) -> int:
             )
             for mode in args.modes.split(","):
                 for n_hogs in levels:
-                    rows = [one_run(mode, n_hogs, args.seconds, args.rate, args.code, exe, seed)
-                            for seed in range(args.runs)]  # fmt: skip
+                    rows = [one_run(mode, n_hogs, args.seconds, args.rate, args.code, exe, seed,
+                                    args.stalls) for seed in range(args.runs)]  # fmt: skip
                     err = np.concatenate([r["err"] for r in rows])
                     print(f"{mode:>10} {n_hogs:>4} {sum(r['sent'] for r in rows):>6} "
                           f"{sum(r['lost'] for r in rows):>5} "
