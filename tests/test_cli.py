@@ -60,6 +60,20 @@ def test_directory_and_bad_map_exit_2(tmp_path: Path) -> None:
     assert proc.returncode == 2 and "unknown note map 'nope'" in proc.stderr
 
 
+def test_bad_bench_lists_exit_2_naming_the_option() -> None:
+    """A mistyped ``--hogs`` or ``--modes`` list, before any server or hog starts."""
+    for args, line in [
+        (("--hogs", "1,two"), "argument --hogs: expected counts like 0,1x,2x"),
+        (("--hogs", "-1"), "argument --hogs: expected counts"),
+        (("--modes", "sync,asink"), "argument --modes: 'asink': expected"),
+    ]:
+        proc = run("bench", "input_load", *args)
+        assert proc.returncode == 2 and line in proc.stderr, proc.stderr
+        assert "Traceback" not in proc.stderr
+    proc = run("bench", "recovery", "--hogs", "x")
+    assert proc.returncode == 2 and "argument --hogs" in proc.stderr
+
+
 def test_kit_typo_exit_2(tmp_path: Path) -> None:
     kit = tmp_path / "kits"
     kit.mkdir()

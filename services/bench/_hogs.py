@@ -7,6 +7,7 @@ machine's cores.
 
 from __future__ import annotations
 
+import argparse
 import os
 import subprocess
 import sys
@@ -17,9 +18,16 @@ SPIN = "while True: pass"
 
 
 def hog_levels(spec: str) -> list[int]:
-    """Counts from "0,1x,2x": plain numbers, or N times the cores with a trailing x."""
+    """Counts from "0,1x,2x": plain numbers, or N times the cores with a trailing x (an
+    argparse ``type``: a bad list is the option's one-line error)."""
     cores = os.cpu_count() or 1
-    return [int(h[:-1]) * cores if h.endswith("x") else int(h) for h in spec.split(",")]
+    try:
+        levels = [int(h[:-1]) * cores if h.endswith("x") else int(h) for h in spec.split(",")]
+    except ValueError:
+        levels = [-1]
+    if min(levels) < 0:
+        raise argparse.ArgumentTypeError(f"expected counts like 0,1x,2x (got {spec!r})")
+    return levels
 
 
 @contextmanager

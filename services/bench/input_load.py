@@ -56,6 +56,14 @@ MODES = {"sync": (True, True), "async": (False, True), "sync-nort": (True, False
          "async-nort": (False, False)}  # fmt: skip
 
 
+def modes_list(spec: str) -> list[str]:
+    """``--modes``: names of :data:`MODES`, comma-separated (an argparse ``type``)."""
+    modes = spec.split(",")
+    if bad := [m for m in modes if m not in MODES]:
+        raise argparse.ArgumentTypeError(f"{bad[0]!r}: expected modes of {', '.join(MODES)}")
+    return modes
+
+
 def package_in(code: Path | None) -> str:
     """The package ``-m`` runs in ``code`` (a checkout, old or new), or this one for None."""
     if code is None:
@@ -206,9 +214,9 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--runs", type=int, default=10, help="runs per row (default 10)")
     parser.add_argument("--seconds", type=float, default=20.0, help="seconds a run (default 20)")
     parser.add_argument("--rate", type=float, default=20.0, help="notes/s, mean (default 20)")
-    parser.add_argument("--modes", default="sync,async",
+    parser.add_argument("--modes", type=modes_list, default="sync,async",
                         help=f"JACK modes, of {', '.join(MODES)} (default sync,async)")  # fmt: skip
-    parser.add_argument("--hogs", default="0,1x,2x",
+    parser.add_argument("--hogs", type=hog_levels, default="0,1x,2x",
                         help="hogs per row: a count or Nx cores (default 0,1x,2x)")  # fmt: skip
     parser.add_argument("--stalls", action="store_true",
                         help="stop the daemon for 1-20 ms every 5-30 ms while the kit plays "
@@ -217,7 +225,7 @@ def main(argv: list[str]) -> int:
                         help="checkout whose input daemon runs (default this one)")  # fmt: skip
     args = parser.parse_args(argv)
     cores = os.cpu_count() or 1
-    levels = hog_levels(args.hogs)
+    levels: list[int] = args.hogs
     try:
         with tempfile.TemporaryDirectory() as tmp:
             exe = build_reference(Path(tmp))
@@ -235,7 +243,7 @@ def main(argv: list[str]) -> int:
                 f"{'mode':>10} {'hogs':>4} {'sent':>6} {'lost':>5} {'off server':>10}  "
                 f"{'stamp - reference':>22}"
             )
-            for mode in args.modes.split(","):
+            for mode in args.modes:
                 for n_hogs in levels:
                     rows = [one_run(mode, n_hogs, args.seconds, args.rate, args.code, exe, seed,
                                     args.stalls) for seed in range(args.runs)]  # fmt: skip

@@ -250,11 +250,11 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench recovery", description=__doc__)
     parser.add_argument("--kills", type=int, default=3, help="kill rounds (default 3)")
     parser.add_argument("--replugs", type=int, default=5, help="replugs per device (default 5)")
-    parser.add_argument("--hogs", default="0,1x",
+    parser.add_argument("--hogs", type=hog_levels, default="0,1x",
                         help="kill rounds at rest and loaded: hog processes, a count or Nx "
                         "cores (default 0,1x)")  # fmt: skip
     args = parser.parse_args(argv)
-    levels = hog_levels(args.hogs)
+    levels: list[int] = args.hogs
     with tempfile.TemporaryDirectory() as tmp_text:
         tmp = Path(tmp_text)
         for n_hogs in levels:
