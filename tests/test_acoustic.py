@@ -170,6 +170,9 @@ def test_a_crash_on_a_snare_stroke_is_found_and_its_ring_is_no_stroke(held_out) 
     got = [(CLASSES[int(h["cls"])], round(float(h["time_s"]), 3)) for h in hits]
     assert [c for c, _t in got] == ["snare", "crash", "snare"], got
     assert abs(got[1][1] - 0.258) < 0.012, got
+    # the second look reads only frames the decision waits for: the online twin agrees
+    online, _ = _online(OnlineDetector(load_profile(None), SR, codes), stems, seed=6)
+    np.testing.assert_array_equal(online, hits)
 
 
 def test_one_mic_per_drum_accuracy_and_crosstalk(held_out) -> None:  # type: ignore[no-untyped-def]
