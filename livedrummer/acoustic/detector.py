@@ -17,8 +17,10 @@ within 32 ms of it, at least :data:`CLOSE_SHARE` of its value (a second drum, no
 one's decay). A mix: 15 and 10 ms windows, since a drummer's kick and hi-hat land 5-25 ms
 apart, and a drum is not reported twice within 32 ms; one microphone per drum: 6 ms (another
 drum's crosstalk just before must not hide the channel's own); one drum at a time (learning):
-30 ms. A rise out of digital silence (the reference frame all zeros) counts
-:data:`FROM_SILENCE` of its value: noise starting with a file or a player is no attack.
+30 ms. A rise out of digital silence (the reference frame's oldest hop all zeros: a stream's
+or a file's start) counts :data:`FROM_SILENCE` of its value: noise starting
+with a file or a player is no attack (half-silent reference frames too: noise starting in the
+middle of a frame still rises out of nothing two frames on).
 
 **A second onset function for the hi-hat** (a mix only). A drummer's hi-hat often lands 3-15 ms
 after a snare or kick stroke; the full-band function's picking windows and the louder drum's
@@ -50,20 +52,36 @@ channel saw: from channel ``c``'s rise, band by band, ``leak`` times the largest
 channel saw is taken away (``leak``: the loudest crosstalk the profile allows, in amplitude;
 0.15 by default), and the onset is dropped when less than :data:`OWN_SHARE` of it is left (a
 hi-hat's high bands survive a kick heard through its microphone; the kick's own leak does
-not), unless what is left is a soft hit of the channel's own drum (:data:`OWN_LEVEL`). A
-hi-hat's or cymbal's channel picks its onsets from its bands above :data:`MIC_HIGH_HZ` only.
-A ride's channel (:data:`RING_CLASSES`) is picked at :data:`RING_FLOOR` of the floor (a soft
-stroke on a still-ringing ride rises little) and an onset there is kept only when the channel's
-level above :data:`MIC_HIGH_HZ` (the mean log band) in the ``lookahead`` frames after it tops
-its mean over the :data:`RING_BEFORE` frames before it by :data:`RING_JUMP`: a stroke lifts the
-ring it lands on, the ring's own wobble 100-200 ms after a stroke rises and falls back. Both
-read only frames the decision already waits for, so the latency and the twins are unchanged.
-Velocity as above, from the channel's rise.
+not), unless what is left is a soft hit of the channel's own drum (:data:`OWN_LEVEL`).
+*A second look after crosstalk*: a drum struck 3-15 ms after a louder one on another channel
+(a crash on a snare's backbeat) is first heard on its microphone as that drum's crosstalk; the
+crosstalk's onset is dropped, and the channel's own attack, still inside the picking window of
+the crosstalk's larger peak, would be lost with it. So for :data:`RESCUE_S` after a dropped
+onset, a frame that tops the frames the decision waits for is the channel's own drum when
+crosstalk explains less than half its rise (:data:`RESCUE_SHARE`) and what is left is
+:data:`RESCUE_LEVEL` of the drum's full-strength level; its velocity is read from what is left.
+A hi-hat's or cymbal's channel picks its onsets from its bands above :data:`MIC_HIGH_HZ` only.
+*Ringing cymbals* (the crash and the ride, :data:`RING`): a stroke on a still-ringing cymbal
+rises little above the ring, and the ring itself wobbles (a SoundFont's crash bumps 150-300 ms
+after each stroke). So such a channel is picked at a share of the floor and delta
+(:class:`Ring`) and an onset there is kept only when the channel's level above
+:data:`MIC_HIGH_HZ` (the mean log band) in the ``lookahead`` frames after it tops its mean over
+the :data:`RING_BEFORE` frames before it by the piece's ``jump``: a stroke lifts the ring it
+lands on, the ring's wobble rises and falls back. The ride (often struck softly) is picked at
+half the floor and delta with a 0.06 jump; the crash (loud, with a wider wobble) at half the
+floor, the full delta and a 0.1 jump. Out of digital silence (a level of 0 in those frames)
+the cymbal is not ringing and the plain thresholds apply. All of this reads only frames the
+decision already waits for, so the latency and the twins are unchanged. Velocity as above,
+from the channel's rise.
 
 Limits: the lookahead is ``lookahead`` frames (5.3 ms) plus the attack's position in the
 256-sample window (up to 5.3 ms): decisions come 5.3-10.7 ms after the attack, times are
-corrected by ``offset_ms``; a drum hit while a louder one of the same spectrum rings is
-missed; three toms are told apart by pitch only as well as their templates differ.
+corrected by ``offset_ms``; a drum found by the second look after crosstalk is stamped and
+decided up to :data:`RESCUE_S` later than its attack; a drum hit while a louder one of the same
+spectrum rings is missed; three toms are told apart by pitch only as well as their templates
+differ. A soft ride stroke (velocity 30-40) on a ride still ringing from a louder one lifts its
+level by less than the jump and is missed; a crash touched at velocity 15 or less under the
+other drums' crosstalk is not heard at all.
 """
 
 from __future__ import annotations
@@ -71,6 +89,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -112,10 +131,12 @@ CLOSE_SHARE = 0.5
 #: (velocity 127 * sqrt(0.005) = 9); below it the onset is a ring's wobble, not a hit.
 QUIETEST = 0.005
 NMF_ITERATIONS = 60
-#: A rise out of digital silence (the SuperFlux reference frame all zeros: a stream's or a
-#: file's start, a player starting) counts at this share: the noise floor starting out of
-#: nothing is not an attack; a drum hit out of silence still is, unless very soft.
-FROM_SILENCE = 0.25
+#: A rise out of digital silence (the SuperFlux reference frame's oldest hop all zeros: a
+#: stream's or a file's start, a player starting) counts at this share: the noise floor
+#: starting out of nothing is not an attack (noise 50 dB down rises by up to 2.7 on a cymbal's
+#: channel: 0.4 at this share, under its floor of 0.6); a drum hit out of silence still is,
+#: unless very soft (a velocity-100 snare is found down to a share of 0.1).
+FROM_SILENCE = 0.15
 #: A mix's second onset function: the SuperFlux of the bands above HIGH_HZ (a hi-hat, a
 #: cymbal), picked with a short pre-max window, HIGH_GAP_S after the full-band onset at the
 #: least, at HIGH_DELTA and HIGH_FLOOR times the full-band thresholds; its onsets report only
@@ -130,7 +151,7 @@ HIGH_CLASSES = frozenset(CLASSES.index(c) for c in ("hihat_closed", "hihat_open"
 #: Multi-mic crosstalk: an onset is the channel's own drum when crosstalk does not explain
 #: OWN_SHARE of its rise, or when what is left is OWN_LEVEL of its drum's full-strength level
 #: at the least (velocity 18: a soft hi-hat struck with a loud snare is mostly snare).
-OWN_SHARE = 0.3
+OWN_SHARE = 0.4
 OWN_LEVEL = 0.02
 #: A cymbal's or hi-hat's microphone: its onset function is the SuperFlux of the bands above
 #: MIC_HIGH_HZ alone (the drums it hears through the air are lower), at MIC_HIGH_SCALE of the
@@ -138,14 +159,36 @@ OWN_LEVEL = 0.02
 MIC_HIGH_HZ = 3500.0
 MIC_HIGH_SCALE = 0.2
 MIC_SCALE = 1.0
-#: A ringing cymbal's microphone (RING_CLASSES): onsets from RING_FLOOR of the floor, kept only
-#: when the level above MIC_HIGH_HZ (the mean log band) in the ``lookahead`` frames after the
-#: onset tops its mean over the RING_BEFORE frames up to two before it by RING_JUMP: a stroke,
-#: however soft, lifts the ring it lands on; the ring's own wobble rises and falls back.
-RING_CLASSES = frozenset(CLASSES.index(c) for c in ("ride",))
-RING_FLOOR = 0.5
-RING_JUMP = 0.05
+#: A ringing cymbal's microphone (the classes of RING): an onset there is picked at the piece's
+#: ``floor`` and ``delta`` shares of the thresholds (a stroke on a still-ringing cymbal rises
+#: little above the ring) and kept only when the level above MIC_HIGH_HZ (the mean log band)
+#: in the ``lookahead`` frames after it tops its mean over the RING_BEFORE frames up to two
+#: before it by the piece's ``jump``: a stroke, however soft, lifts the ring it lands on; the
+#: ring's own wobble rises and falls back. The crash's wobble (a loud cymbal's) swings further
+#: than a soft ride stroke lifts, and a crash is seldom struck softly: a larger jump.
 RING_BEFORE = 7
+
+
+@dataclass(frozen=True)
+class Ring:
+    """How a ringing cymbal's channel picks its strokes (see :data:`RING`)."""
+
+    floor: float  # share of the onset floor
+    delta: float  # share of the onset delta above the moving mean
+    jump: float  # the level lift (mean log band) a stroke must give
+
+
+RING: dict[int, Ring] = {
+    CLASSES.index("ride"): Ring(floor=0.5, delta=0.5, jump=0.06),
+    CLASSES.index("crash"): Ring(floor=0.5, delta=1.0, jump=0.1),
+}
+#: A second look after crosstalk (one microphone per drum): when a channel's onset is dropped
+#: as another drum's crosstalk, for RESCUE_S after it the channel's own drum may still be
+#: found: a frame that tops the frames it waits for, where what is left after crosstalk is
+#: RESCUE_SHARE of the rise at least and RESCUE_LEVEL of the drum's full-strength level.
+RESCUE_S = 0.012
+RESCUE_SHARE = 0.5
+RESCUE_LEVEL = 0.05
 BATCH = 2048  # frames per FFT batch (bounds memory for a long file)
 _EPS = 1e-9
 
@@ -208,6 +251,11 @@ class _Peaks:
             return False
         return value >= float(np.mean(f[p - self.pre_avg : p + 1])) + delta
 
+    def tops_ahead(self) -> bool:
+        """Whether the frame being decided is not below the ``lookahead`` frames after it."""
+        f = list(self.values)
+        return f[-1 - self.lookahead] >= max(f[len(f) - self.lookahead :], default=0.0)
+
     def mark(self, frame: int) -> None:
         """Frame ``frame`` was taken as an onset."""
         self.last_onset = frame
@@ -238,6 +286,7 @@ class _Channel:
         keep = RING_BEFORE + BEFORE + lookahead
         #: the mean log band above main_from of the last frames (a ringing cymbal's level)
         self.level: deque[float] = deque([0.0] * keep, maxlen=keep)
+        self.crosstalk_at = -(10**9)
 
     def frames(
         self, signal: np.ndarray, ends: np.ndarray
@@ -247,7 +296,9 @@ class _Channel:
         logs = log_flux_spectra(frames_at(signal, ends, FLUX_SIZE), self.sr)
         before = np.concatenate([np.array(self.logs), logs])[: len(logs)]
         m = self.main_from
-        scale = np.where(before.max(axis=1) > 0, 1.0, FROM_SILENCE)
+        # the reference frame's oldest hop all zeros: a rise out of digital silence
+        oldest = ends[:, None] - MU * HOP - FLUX_SIZE + np.arange(HOP)[None, :]
+        scale = np.where(np.any(signal[oldest] != 0.0, axis=1), 1.0, FROM_SILENCE)
         flux = scale * superflux(logs[:, m:], before[:, m:])
         k = self.high_from
         high = scale * superflux(logs[:, k:], before[:, k:]) if self.high is not None else flux
@@ -276,6 +327,11 @@ class _Channel:
         after = v[len(v) - max(1, self.main.lookahead) :]
         before = v[:RING_BEFORE]
         return float(np.mean(after)) - float(np.mean(before)) >= jump
+
+    def ringing(self) -> bool:
+        """Whether no frame of the :data:`RING_BEFORE` before the frame being decided was
+        digital silence (a level of exactly 0: a stream's or a file's start)."""
+        return min(list(self.level)[:RING_BEFORE]) > 0.0
 
 
 class OnlineDetector:
@@ -360,24 +416,36 @@ class OnlineDetector:
         if self.channel_class is None:
             return self._decide_mix(p, time_s)
         all_rises = [ch.rise() for ch in self._chans]
+        rescue = math.ceil(RESCUE_S * self.sr / HOP)
         for c, ch in enumerate(self._chans):
             cls = self.channel_class[c]
-            ring = cls in RING_CLASSES
-            floor = self._scale[c] * s.floor * (RING_FLOOR if ring else 1.0)
-            if not ch.main.is_onset(p, self._scale[c] * s.delta, floor):
+            ring = RING.get(cls) if ch.ringing() else None
+            delta = self._scale[c] * s.delta * (ring.delta if ring else 1.0)
+            floor = self._scale[c] * s.floor * (ring.floor if ring else 1.0)
+            onset = ch.main.is_onset(p, delta, floor)
+            second = not onset and p - ch.crosstalk_at <= rescue and ch.main.tops_ahead()
+            if not onset and not second:
                 continue
-            if ring and not ch.lifted(RING_JUMP):
+            if ring and not ch.lifted(ring.jump):
                 continue  # the ring's wobble: no lasting rise of its level
             rise = all_rises[c]
             level = float(rise.sum())
             others = [all_rises[d] for d in range(len(all_rises)) if d != c]
             leaked = s.leak * np.max(others, axis=0) if others else np.zeros_like(rise)
             own = float(np.maximum(rise - leaked, 0.0).sum())
-            loud_own = own >= OWN_LEVEL * self.profile.levels[cls] > 0
-            if level < s.min_level or (own < OWN_SHARE * level and not loud_own):
-                continue  # crosstalk: most of this rise is another channel's, heard through
+            full = self.profile.levels[cls]
+            if level < s.min_level:
+                continue
+            if second:
+                if own < max(RESCUE_SHARE * level, RESCUE_LEVEL * full):
+                    continue  # still mostly the other drum's crosstalk
+                level = own  # the velocity of what is left
+            elif own < OWN_SHARE * level and not own >= OWN_LEVEL * full > 0:
+                ch.crosstalk_at = p  # crosstalk: most of this rise is another channel's
+                continue
             ch.main.mark(p)
-            hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, c))
+            ch.crosstalk_at = -(10**9)
+            hits.append((time_s, cls, velocity_of(level, full), level, c))
         return hits
 
     def _decide_mix(self, p: int, time_s: float) -> list[tuple[float, int, int, float, int]]:
