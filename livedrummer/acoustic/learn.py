@@ -9,13 +9,18 @@ found by the same onset picking as the detector's, so a template is exactly the 
 detector will see; the picking settings used are the profile's own (``lookahead`` too: a
 profile that decides sooner reads its templates sooner). A way of striking a drum that sounds
 like none of its other strokes (a SoundFont's side stick, its ride bell) gets a template of
-its own, outside the loudness groups, and leaves the level alone; ``audio learn`` asks for the
-plain strokes only.
+its own, outside the loudness groups, and leaves the level alone. :data:`OTHER_STROKES` names
+them once, for both: ``audio profile`` renders their General MIDI notes, ``audio learn`` asks
+the drummer for them (each ~8 hits, right after the plain strokes of their drum) with a
+prompt that says how to play them, and leaves out their onsets under :data:`WOBBLE` of their
+loudest as it does a drum's (:func:`real_hits`: a bell rings on as a bow does; ``audio
+profile`` keeps all of a note's onsets, as its shipped profiles were made).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -33,6 +38,51 @@ WOBBLE = 0.1
 
 class LearnError(LivedrummerError):
     """Too few hits were heard to learn a drum."""
+
+
+@dataclass(frozen=True)
+class OtherStroke:
+    """A way of striking a drum that sounds like none of its plain strokes."""
+
+    drum: str  #: the class it is a stroke of (:data:`~.pieces.CLASSES`)
+    note: int  #: its General MIDI note (what ``audio profile`` renders)
+    prompt: str  #: what ``audio learn`` asks the drummer to play
+
+
+#: The other strokes by the name ``audio learn --other-strokes`` takes (each asked for right
+#: after its drum's plain strokes).
+OTHER_STROKES = {
+    "side-stick": OtherStroke(
+        "snare", 37, "side stick: lay the stick on the snare and click the rim"
+    ),
+    "ride-bell": OtherStroke(
+        "ride",
+        53,
+        "ride bell: strike the bell (the ride's raised centre) with the stick's shoulder",
+    ),
+}
+
+
+def parse_other_strokes(spec: str, where: str = "--other-strokes") -> list[str]:
+    """``side-stick,ride-bell`` (or ``none``) → names of :data:`OTHER_STROKES`, in its order."""
+    names = [n.strip().lower() for n in spec.split(",") if n.strip()]
+    if names == ["none"]:
+        return []
+    if bad := [n for n in names if n not in OTHER_STROKES]:
+        raise LivedrummerError(
+            f"{where}: unknown stroke {bad[0]!r} (one of {', '.join(OTHER_STROKES)}, or none)"
+        )
+    return [n for n in OTHER_STROKES if n in names]
+
+
+def real_hits(rises: np.ndarray) -> np.ndarray:
+    """``rises`` (hits, N_BANDS) without the empty ones and those under :data:`WOBBLE` of the
+    loudest (a ringing drum's decay, not a hit)."""
+    sums = rises.sum(axis=1)
+    if not len(sums):
+        return rises
+    kept: np.ndarray = rises[(sums >= WOBBLE * sums.max()) & (sums > 0)]
+    return kept
 
 
 def hit_rises(audio: np.ndarray, sr: int, settings: DetectorSettings | None = None) -> np.ndarray:
@@ -61,9 +111,8 @@ def build_profile(
     owners: list[int] = []
     levels = np.zeros(len(CLASSES))
     for code, r in sorted(rises.items()):
+        r = real_hits(r)
         sums = r.sum(axis=1)
-        real = sums >= WOBBLE * sums.max() if len(sums) else sums > 0
-        r, sums = r[real & (sums > 0)], sums[real & (sums > 0)]
         if len(r) < min_hits:
             raise LearnError(f"{CLASSES[code]}: heard {len(r)} hits, need at least {min_hits}")
         order = np.argsort(sums)
@@ -89,7 +138,7 @@ SOUNDFONT_SPACING_S = 0.6
 _SKIP_NOTES = frozenset({39})  # hand clap: no drum of the kit
 #: Notes whose class sounds unlike its other notes: templates of their own (the side stick's
 #: click is a snare stroke, the ride's bell a ride stroke).
-_OWN_SOUND_NOTES = frozenset({37, 53})
+_OWN_SOUND_NOTES = frozenset(s.note for s in OTHER_STROKES.values())
 
 
 def soundfont_profile(

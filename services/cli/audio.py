@@ -1,7 +1,8 @@
 """``livedrummer audio learn|profile``: an audio profile for the percussion recogniser.
 
 ``learn`` listens to the player's own kit through an audio input, one drum at a time (each
-hit about eight times), and writes its templates and level calibration
+hit about eight times; after the snare its side stick, after the ride its bell, as
+``--other-strokes`` names them), and writes its templates and level calibration
 (:mod:`livedrummer.acoustic.profile`) for ``transcribe``/``input --audio --audio-profile``.
 ``profile`` makes the same from a General MIDI SoundFont's drum kit, with no microphone: it is
 how the bundled ``general-midi`` profile is made (``kits/audio/general-midi.toml``).
@@ -19,6 +20,9 @@ if TYPE_CHECKING:
     from livedrummer.acoustic.profile import DetectorSettings
 
 DEFAULT_DRUMS = "kick,snare,hihat,hihat_open,tom_high,tom_mid,tom_low,crash,ride"
+#: ``--other-strokes``: the names of :data:`livedrummer.acoustic.learn.OTHER_STROKES` (not
+#: imported here: ``--help`` loads no numpy).
+DEFAULT_OTHER_STROKES = "side-stick,ride-bell"
 
 
 def register(sub: Subparsers) -> None:
@@ -30,10 +34,15 @@ def register(sub: Subparsers) -> None:
     learn.add_argument("--drums", default=DEFAULT_DRUMS,
                        help=f"drums to learn, in order (default {DEFAULT_DRUMS})")  # fmt: skip
     learn.add_argument("--hits", type=int, default=8, help="hits per drum (default 8)")
+    learn.add_argument("--other-strokes", metavar="LIST", default=DEFAULT_OTHER_STROKES,
+                       help="strokes to learn right after their drum's plain ones, when it "
+                       "is learnt: side-stick (snare), ride-bell (ride), or none (default "
+                       f"{DEFAULT_OTHER_STROKES})")  # fmt: skip
     learn.add_argument("--channels", metavar="MAP", default=None,
                        help="one mic per drum, as for input --audio (default: a mix)")  # fmt: skip
     learn.add_argument("--timeout", type=float, default=60.0, metavar="S",
-                       help="seconds to wait for a drum's hits (default 60)")  # fmt: skip
+                       help="seconds to wait for a drum's hits; an other stroke not heard "
+                       "in time is skipped (default 60)")  # fmt: skip
     _lookahead_option(learn)
     learn.set_defaults(func=run_learn)
     prof = actions.add_parser("profile", help="make a profile from a SoundFont's drum kit")
@@ -74,12 +83,14 @@ def _write(path: Path, text: str) -> None:
 
 
 def run_learn(args: argparse.Namespace) -> int:
+    from livedrummer.acoustic.learn import parse_other_strokes
     from livedrummer.acoustic.pieces import parse_channel_map, parse_class
     from livedrummer.errors import LivedrummerError
 
     from ..input.audiolearn import learn_kit
 
     drums = [parse_class(d, "--drums") for d in args.drums.split(",") if d.strip()]
+    strokes = parse_other_strokes(args.other_strokes, "--other-strokes")
     mapping = parse_channel_map(args.channels) if args.channels else None
     if mapping is not None:
         missing = [d for d in drums if d not in mapping.values()]
@@ -92,7 +103,8 @@ def run_learn(args: argparse.Namespace) -> int:
         raise LivedrummerError(f"--hits: at least 3 (got {args.hits})")
     settings = _settings(args)
     profile = learn_kit(args.audio, drums, args.output.stem, args.hits, mapping, args.timeout,
-                        say=lambda line: print(line, flush=True), settings=settings)  # fmt: skip
+                        say=lambda line: print(line, flush=True), settings=settings,
+                        other_strokes=strokes)  # fmt: skip
     _write(args.output, profile.to_toml())
     print(f"{args.output}: {len(drums)} drums learnt; use --audio-profile {args.output}")
     return 0
