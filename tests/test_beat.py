@@ -170,6 +170,34 @@ def test_bars_start_on_the_kick_and_crash_and_count_up() -> None:
     assert not any(np.min(np.abs(bar_starts + 2 * 0.6 - t)) < 0.05 for t, _ in late)
 
 
+def test_a_corrected_downbeat_never_skips_a_bar_number() -> None:
+    """The demo groove (tracked at double tempo) as a live synth hears it: onsets stamped up to
+    2 ms late, bars asked for at 120 Hz from a random tick phase. With this seed the tracker
+    corrects its downbeat just after a bar start had passed, so the next start comes six beats
+    on; the beat count numbered it two bars on, and a cue at bar 6 fired a bar early."""
+    from services.cli.common import demo_groove
+
+    on = read_midi_file(demo_groove(), load_note_map("general-midi")).onsets
+    on = on[on["time_s"] < 20.0]
+    rng = np.random.default_rng(15)
+    on["time_s"] += rng.uniform(0, 0.002, on.size)
+    on = np.sort(on, order="time_s")
+    w, d = onset_weights(on), downbeat_weights(on)
+    tracker, i, start, starts = BeatTracker(), 0, -1e9, []
+    for now in np.arange(0.0, 20.0, 1 / 120) + rng.uniform(0, 1 / 120):
+        while i < on.size and on["time_s"][i] <= now:
+            tracker.process(float(on["time_s"][i]), float(w[i]), float(d[i]))
+            i += 1
+        starts += tracker.bars(max(start, now - 1.0), now + 0.2)
+        start = now + 0.2
+    numbers = [n for _, n in starts]
+    assert all(b - a in (0, 1) for a, b in itertools.pairwise(numbers)), starts
+    assert tracker.period_s is not None
+    # the twin without jitter: bars 4 and 6 eight of its beats apart
+    (t4,), (t6,) = ([t for t, n in starts if n == k][-1:] for k in (4, 6))
+    assert abs((t6 - t4) / tracker.period_s - 8.0) < 1.0, starts
+
+
 def test_bar_cues_fire_once_each_in_bar_order() -> None:
     cues = parse_cues({"cue": [{"name": "b", "bar": 5, "preset": "relaxed"},
                                {"name": "a", "bar": 2}, {"name": "x", "at_s": 3.0},

@@ -32,6 +32,8 @@ kick and the snare fall):
 * **Bars.** A kick or a crash near a beat is evidence (decaying over ``downbeat_decay_s``)
   for that beat starting a bar, a snare (the backbeat) against; the bar's first beat is the
   one with the most evidence plus half its middle beat's (``beats_per_bar``, 4 by default).
+  Bars are numbered as they are given, one more each (:meth:`BeatTracker.bars`): a corrected
+  downbeat stretches or moves a bar, it never skips a number a cue may wait for.
 
 :class:`BeatTracker` is the online object: :meth:`~BeatTracker.process` one onset at a
 time (its own arrival time is "now"), :meth:`~BeatTracker.beats` the predicted beats in a
@@ -137,6 +139,7 @@ class BeatTracker:
         self._bar_evidence = np.zeros(max(self.params.beats_per_bar, 1))
         self._bar_time = 0.0
         self.downbeat = 0  # beats whose index is this modulo beats_per_bar start a bar
+        self._last_bar: tuple[float, int] | None = None  # the latest bar start given, its number
         self.first_s: float | None = None
 
     @property
@@ -317,8 +320,13 @@ class BeatTracker:
 
     def bars(self, lo_s: float, hi_s: float) -> list[tuple[float, int]]:
         """The predicted bar starts in ``[lo_s, hi_s)``: (time, bar number). Bar 1 is the
-        first bar to start after the tracker's first estimate (its first downbeat); numbers
-        follow the beat count, so a corrected downbeat may skip or repeat one."""
+        first bar to start after the tracker's first estimate (its first downbeat). Numbers
+        count the bar starts given, not the beats: a corrected downbeat that moves a start by
+        under half a bar gives it again with its number, and one that makes a bar longer (up
+        to 7 beats in 4/4, where the correction came after the start it moved had passed)
+        gives the next start the next number; a number is skipped only when the span asked
+        for left out whole bars (a caller that stalled). So a cue at "bar 6" plays on the
+        sixth bar heard, whatever the tracker corrected in between."""
         if self.period_s is None or hi_s <= lo_s:
             return []
         n = self.params.beats_per_bar
@@ -328,8 +336,28 @@ class BeatTracker:
         for k in range(k0, k1):
             index = self._beat_index + k - self.downbeat
             if index >= 0 and index % n == 0:
-                out.append((self.phase_s + k * self.period_s, index // n + 1))
+                t = self.phase_s + k * self.period_s
+                out.append((t, self._bar_number(t, index // n + 1, n * self.period_s)))
         return out
+
+    def _bar_number(self, t: float, counted: int, bar_s: float) -> int:
+        """The number of the bar starting at ``t`` (see :meth:`bars`); ``counted``: its
+        number from the beat count, taken for the first bar given."""
+        if self._last_bar is None:
+            self._last_bar = (t, counted)
+            return counted
+        last_t, last_n = self._last_bar
+        gap = (t - last_t) / bar_s
+        if gap < -0.5:  # an earlier bar asked for again: numbered back from the latest
+            return max(1, last_n + round(gap))
+        if gap < 0.5:
+            number = last_n  # the same start, moved
+        elif gap < 1.875:
+            number = last_n + 1  # the next bar, however a correction stretched this one
+        else:
+            number = last_n + round(gap)
+        self._last_bar = (t, number)
+        return number
 
 
 def onset_weights(onsets: np.ndarray) -> np.ndarray:

@@ -21,15 +21,16 @@ and :func:`expression_at` folds the ones fired so far into the expression in for
 file renderer and the live services apply the same cue the same way: the synth takes its
 preset and parameters, the display its camera and blackout.
 
-Live, bars are counted by the beat tracker (:meth:`livedrummer.live.beat.BeatTracker.bars`:
-bar 1 is the first bar it hears start once it has a tempo, 4/4 assumed) and :class:`BarCues`
-fires each ``bar`` cue once, when its bar starts (or at the next bar start, should a corrected
-downbeat skip its number), with that bar's start time (the synth asks a moment ahead of the
-predicted start, so the cue is on time). The synth eases in its style from the bar, and sends
-its camera and blackout to every display (:func:`stage_cue_rows`, protocol kind STAGE_CUE)
-stamped with the bar's show time (its start + D); a display turns a row back into a cue
-(:func:`stage_cue_of`) and applies it with :func:`fire_stage` when a frame reaches that show
-time, the one function that applies a cue to a :class:`~livedrummer.live.stage.Stage`.
+Live, bars are counted by the beat tracker (:meth:`livedrummer.live.beat.BeatTracker.bars`: bar
+1 is the first bar it hears start once it has a tempo, 4/4 assumed) and :class:`BarCues` fires
+each ``bar`` cue once, when its bar starts (or at the next bar start, should a stalled caller
+have skipped its number; a corrected downbeat never does), with that bar's start time (the
+synth asks a moment ahead of the predicted start, so the cue is on time). The synth eases in
+its style from the bar, and sends its camera and blackout to every display
+(:func:`stage_cue_rows`, protocol kind STAGE_CUE) stamped with the bar's show time (its start +
+D); a display turns a row back into a cue (:func:`stage_cue_of`) and applies it with
+:func:`fire_stage` when a frame reaches that show time, the one function that applies a cue to
+a :class:`~livedrummer.live.stage.Stage`.
 
 Limits: bars are counted on a file's tempo map and meter (live: the tracker's, 4/4); a cue's
 preset is read when the list is loaded.
