@@ -234,15 +234,16 @@ def test_an_other_stroke_not_played_in_time_is_skipped_and_the_profile_still_mad
     snare = [(0.3 + 0.25 * i, 38, v) for i, v in enumerate([120, 100, 80, 110, 90, 70])]
     side = [(2.3 + 0.25 * i, 37, v) for i, v in enumerate([110, 90, 70, 100])]
     code = CLASSES.index("snare")
-    # (the timeout is on the wall clock: these blocks are all there at once and take ~0.1 s)
+    # (the timeout is on the wall clock: these blocks are all there at once and take ~0.1 s,
+    # a twentieth of it)
     for notes, templates, last in (
-        (snare, 3, "  side-stick: heard 0 of 6 hits in 1 s: skipped (the profile has no "
+        (snare, 3, "  side-stick: heard 0 of 6 hits in 2 s: skipped (the profile has no "
                    "side-stick template)"),
         (snare + side, 4, "  side-stick: 4 hits"),
     ):  # fmt: skip
         said: list[str] = []
         profile = learn_blocks(_blocks(_strokes(notes, 3.5)), [code], "mine", hits=6,
-                               timeout_s=1.0, say=said.append,
+                               timeout_s=2.0, say=said.append,
                                other_strokes=["side-stick", "ride-bell"])  # fmt: skip
         assert profile.template_class.tolist() == [code] * templates, said
         assert said[2].startswith("side stick: lay the stick on the snare"), said
