@@ -419,7 +419,9 @@ class OnlineDetector:
         rescue = math.ceil(RESCUE_S * self.sr / HOP)
         for c, ch in enumerate(self._chans):
             cls = self.channel_class[c]
-            ring = RING.get(cls) if ch.ringing() else None
+            ring = RING.get(cls)
+            if ring is not None and not ch.ringing():
+                ring = None  # out of digital silence: the plain thresholds
             delta = self._scale[c] * s.delta * (ring.delta if ring else 1.0)
             floor = self._scale[c] * s.floor * (ring.floor if ring else 1.0)
             onset = ch.main.is_onset(p, delta, floor)

@@ -24,8 +24,8 @@ def hog_levels(spec: str) -> list[int]:
     try:
         levels = [int(h[:-1]) * cores if h.endswith("x") else int(h) for h in spec.split(",")]
     except ValueError:
-        levels = [-1]
-    if min(levels) < 0:
+        levels = []
+    if not levels or min(levels) < 0:
         raise argparse.ArgumentTypeError(f"expected counts like 0,1x,2x (got {spec!r})")
     return levels
 
