@@ -82,6 +82,20 @@ def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, g
     assert set(run.onsets["note"].tolist()) <= {36, 38}
 
 
+def test_steady_noise_into_the_daemon_is_next_to_no_hits(jack_server: str) -> None:
+    """A hi-hat's and a ride's microphone hissing at -30 dBFS for 4 s, through JACK: the daemon
+    publishes the offline twin's hits, and they are few (before the level-lift checks the
+    twin heard 56 hits in 10 s of such noise on the hi-hat's channel alone)."""
+    from livedrummer.acoustic.pieces import CLASSES
+
+    noise = (0.03 * np.random.default_rng(9).standard_normal((4 * SR, 2))).astype(np.float32)
+    run = play_into_daemon(noise, ["--channels", "1=hihat,2=ride"])
+    cls = [CLASSES.index("hihat_closed"), CLASSES.index("ride")]
+    offline = detect(noise, SR, load_profile(None), cls)
+    assert len(offline) <= 4  # measured 2
+    assert len(run.onsets) == len(offline), run.stderr
+
+
 def test_the_live_bench_at_real_time_priority(jack_server: str, groove) -> None:  # type: ignore[no-untyped-def]
     """``bench transcribe --live --realtime PRIO``: the daemon runs at SCHED_FIFO where that is
     granted (where it is refused, a warning line: the test does not depend on the privilege),

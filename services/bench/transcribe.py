@@ -1,7 +1,8 @@
 """``livedrummer bench transcribe``: accuracy, speed and load of the percussion recogniser.
 
 Renders excerpts of Groove MIDI Dataset performances of one split (``--split test``, the
-files not used to tune; info.csv's split column) through a General MIDI SoundFont
+files not used to tune; info.csv's split column; by default every beat performance longer
+than 25 s, 65 in the test split, about a minute and a half) through a General MIDI SoundFont
 (:mod:`._drumaudio`: room, noise, one-mic stems with crosstalk), transcribes them as a mix and
 one microphone per drum, and prints onset F-measure against the MIDI per drum and overall,
 counted as :mod:`livedrummer.acoustic.score` says (±25 ms, ghost notes 30 dB down and pedal
@@ -44,11 +45,14 @@ GROUPS_MIX = {
 }  # fmt: skip
 
 
-def pick_files(root: Path, split: str, count: int, seed: int = 1) -> list[Path]:
-    """``count`` beat (not fill) performances of ``split`` longer than 25 s, seeded choice."""
+def pick_files(root: Path, split: str, count: int | None, seed: int = 1) -> list[Path]:
+    """``count`` beat (not fill) performances of ``split`` longer than 25 s, seeded choice
+    (``None``: all of them)."""
     with (root / "info.csv").open() as f:
         rows = [r for r in csv.DictReader(f) if r["split"] == split
                 and r["beat_type"] == "beat" and float(r["duration"]) > 25]  # fmt: skip
+    if count is None:
+        return [root / r["midi_filename"] for r in rows]
     rng = np.random.default_rng(seed)
     chosen = rng.choice(len(rows), min(count, len(rows)), replace=False)
     return [root / rows[i]["midi_filename"] for i in sorted(chosen.tolist())]
@@ -65,7 +69,9 @@ def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog="livedrummer bench transcribe")
     ap.add_argument("--corpus", type=Path, default=DEFAULT_CORPUS)
     ap.add_argument("--split", default="test", choices=("train", "validation", "test"))
-    ap.add_argument("--files", type=int, default=8, help="excerpts (default 8)")
+    ap.add_argument("--files", type=int, default=None,
+                    help="excerpts (default: every one of the split, 65 of the test split; "
+                    "--live: 4, played in real time)")  # fmt: skip
     ap.add_argument("--seconds", type=float, default=15.0, help="excerpt length (default 15)")
     ap.add_argument("--audio-profile", default=None)
     ap.add_argument("--live", action="store_true",
@@ -78,6 +84,8 @@ def main(argv: list[str]) -> int:
                     help="--live: run the dummy JACK server with -R (real-time scheduling, "
                     "as a stage rig runs jackd)")  # fmt: skip
     args = ap.parse_args(argv)
+    if args.files is not None and args.files < 1:
+        ap.error(f"--files {args.files}: expected 1 or more")
     if not 0 <= args.realtime <= 60:
         ap.error(f"--realtime {args.realtime}: expected 1..60 (0: off)")
     if args.live:
@@ -142,7 +150,7 @@ def live(args: argparse.Namespace) -> int:
     latencies: list[float] = []
     stages: list[np.ndarray] = []
     tot: dict[str, Counts] = {}
-    files = pick_files(root, args.split, args.files)
+    files = pick_files(root, args.split, 4 if args.files is None else args.files)
     with dummy_jack("bench-transcribe", realtime=args.jackd_realtime) as name:
         os.environ.update(jack_env(name))
         for i, path in enumerate(files):
