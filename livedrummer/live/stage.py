@@ -76,4 +76,4 @@ class Stage:
         if self.fade_s <= 0:
             return goal
         s = _smoothstep((now_s - self._fade_t0) / self.fade_s)
-        return self._fade_from + (goal - self._fade_from) * s
+        return goal if s >= 1.0 else self._fade_from + (goal - self._fade_from) * s

@@ -51,9 +51,9 @@ still drawn live.
 Show control. With ``config.osc_port`` or ``config.cues``, OSC camera, blackout and cue
 commands, and the synth's STAGE_CUE messages (a bar cue's camera and blackout, at its show
 time), are applied before each frame (:mod:`services.display.showctl`); frames.jsonl then also
-names each frame's camera and darkness (and ``cues``: the stage cues applied in it, with
-their show times and whether they arrived late), and a recording drawn after the show
-replays them.
+names each frame's camera and darkness (unrounded, 0..1; and ``cues``: the stage cues applied
+in it, with their show times and whether they arrived late), and a recording drawn after the
+show replays them.
 
 Strips. ``config.overlays`` (``display --live --overlay score,joints``; keys O and G in a
 window) draws SMED's score and joint-angle strips over each frame at its show time, from the
@@ -376,7 +376,8 @@ class LiveDisplay(Service):
                     if fired := self.show.apply(now, show):  # and stage cues due by its show
                         record["cues"] = fired
                     record["camera"] = self.show.stage.camera
-                    record["dark"] = round(self.show.stage.darkness(now), 3)
+                    # unrounded: the first frame of a fade is dark by as little as 1e-6
+                    record["dark"] = self.show.stage.darkness(now)
                 if got is not None:
                     pose_s, row = got
                     record["pose_s"] = pose_s
