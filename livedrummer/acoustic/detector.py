@@ -196,15 +196,15 @@ RING: dict[int, Ring] = {
     CLASSES.index("ride"): Ring(floor=0.5, delta=0.5, jump=0.06),
     CLASSES.index("crash"): Ring(floor=0.5, delta=1.0, jump=0.1),
 }
-#: A second look after crosstalk (one microphone per drum): when a channel's onset is dropped
-#: as another drum's crosstalk, for RESCUE_S after it the channel's own drum may still be
-#: found: a frame that tops the frames it waits for, where what is left after crosstalk is
-#: RESCUE_SHARE of the rise at least and RESCUE_LEVEL of the drum's full-strength level.
 #: Steady noise (see the module docstring): the level lift (mean log band) a hi-hat's
 #: microphone's onset and a mix's high-band onset must give; the lift (log10 of the 21 ms band
 #: spectrum's total) a ringing cymbal's onset must also give.
 HIGH_LIFT = 0.1
 RING_BAND_LIFT = 0.02
+#: A second look after crosstalk (one microphone per drum): when a channel's onset is dropped
+#: as another drum's crosstalk, for RESCUE_S after it the channel's own drum may still be
+#: found: a frame that tops the frames it waits for, where what is left after crosstalk is
+#: RESCUE_SHARE of the rise at least and RESCUE_LEVEL of the drum's full-strength level.
 RESCUE_S = 0.012
 RESCUE_SHARE = 0.5
 RESCUE_LEVEL = 0.05
