@@ -76,17 +76,17 @@ from the channel's rise.
 
 **Steady noise is no hit.** The onset function works on log magnitudes, so the frame-to-frame
 jitter of a steady noise (a preamp's hiss, a fan, a room) rises as much at -30 dBFS as at -50:
-white noise at -30 dBFS gave a mix 7 hits a second and a hi-hat's microphone 4, most of them
-from the high bands, whose few bins jitter most. A stroke lifts the level it lands on; jitter
-does not. So an onset on a hi-hat's microphone, and a mix's onset on its high-band function,
-is kept only when the mean log band of those bands in the ``lookahead`` frames after it tops
-its mean over the :data:`RING_BEFORE` frames before it by :data:`HIGH_LIFT` (the ringing
-cymbals' check, at a larger jump); and a ringing cymbal's onset also needs the 21 ms band
-spectrum's total to rise by :data:`RING_BAND_LIFT` (log10), which its wobble seldom does. Not
-checked on a kick's, snare's or tom's microphone nor a mix's full-band onsets: there every
-lift tried lost soft kicks under a snare's decay (a kick's energy is below the onset
-function's bands), and their noise hits are rare (a snare's microphone, white noise at
--30 dBFS: 0.7 a second; at -50 dBFS: 1 in 20 s).
+white noise at -30 dBFS gave a mix 7-8 hits a second and a hi-hat's microphone 4-6, most of
+them from the high bands, whose few bins jitter most. A stroke lifts the level it lands on;
+jitter does not. So an onset on a hi-hat's microphone, and a mix's onset on its high-band
+function, is kept only when the mean log band of those bands in the ``lookahead`` frames after
+it tops its mean over the :data:`RING_BEFORE` frames before it by :data:`HIGH_LIFT` (the
+ringing cymbals' check, at a larger jump); and a ringing cymbal's onset also needs the 21 ms
+band spectrum's total to rise by :data:`RING_BAND_LIFT` (log10), which its wobble seldom does.
+Not checked on a kick's, snare's or tom's microphone nor a mix's full-band onsets: there every
+lift tried lost soft kicks under a snare's decay (a kick's energy is below the onset function's
+bands), and their noise hits are rare (a snare's microphone, white noise at -30 dBFS: 0.7 a
+second; at -50 dBFS: 1 in 20 s).
 
 Limits: the lookahead is ``lookahead`` frames (5.3 ms) plus the attack's position in the
 256-sample window (up to 5.3 ms): decisions come 5.3-10.7 ms after the attack, times are
