@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test lint bench clean
+.PHONY: setup demo test test-narrow lint bench clean
 
 setup: $(STAMP)
 
@@ -25,6 +25,10 @@ test: $(STAMP)
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 	$(BIN)/pytest -q --durations=15
+
+# The same tests with numpy's SIMD dispatch and OpenBLAS's kernels narrowed (see .ci/narrowed).
+test-narrow: $(STAMP)
+	.ci/narrowed
 
 bench: $(STAMP)
 	$(BIN)/livedrummer bench ingest

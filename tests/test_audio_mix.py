@@ -126,6 +126,7 @@ def test_a_grab_stops_the_crash_after_a_short_fade_and_the_next_stroke_rings() -
     free = mix_onsets(on, 2.0, KIT)
     choked = mix_onsets(on, 2.0, KIT, chokes=grabs(crash1=[grab]))
     g, f, a = round(grab * sr), round(GRAB_FADE_S * sr), round(again * sr)
+    # bit-exact by design: up to the grab both mixes run the same code on the same samples
     np.testing.assert_array_equal(choked[:g], free[:g])  # untouched up to the grab
     assert rms(free[g + f : a]) > 0.02  # a crash rings for seconds ...
     assert not choked[g + f : a].any()  # ... and after the grab's fade it is silent

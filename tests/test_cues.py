@@ -82,6 +82,7 @@ def test_a_style_cue_eases_from_one_animation_to_the_other(rig: Rig, groove: Per
     times = np.arange(2.0, 4.5, 1 / 240)
     rot = cued.poses(times)["rotation"]
     before, after = times < 3.0, times >= 3.5
+    # bit-exact by design: before its cue the cued scene runs the plain scene's own code
     assert np.array_equal(rot[before], plain.poses(times[before])["rotation"])
     late = sample = BodyScene(rig.kit, energetic).poses(times[after])["rotation"]
     assert np.allclose(rot[after], sample, atol=1e-6) and late.size

@@ -86,6 +86,7 @@ def test_each_parameter_moves_the_drummer(
         and kind in {p.name.removeprefix("amplitude_") for p in PARAMS}
         and (kind not in played and kind != "gain")
     ):
+        # bit-exact by design: a piece's amplitude that no note plays never enters the sums
         assert change.max() == 0.0, f"{param.name}: moved poses though no {kind} is played"
     else:
         assert change.max() > 0.005, f"{param.name}: the drummer did not move ({change.max()})"

@@ -34,6 +34,7 @@ def frame(ctx: Any, **kw: Any) -> np.ndarray:
     r = Renderer(ctx, build_kit_mesh(KIT), BODY_SKELETON, SIZE, **kw)
     r.draw(None, kit_cameras(KIT)["front"])
     first = r.read_rgba_top().astype(np.float64)
+    # bit-exact by design: one frame read twice from the same framebuffer
     assert np.array_equal(r.read_rgba_top(), first)  # the pass runs once per frame
     return first
 

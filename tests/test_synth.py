@@ -317,6 +317,7 @@ def test_a_hit_during_a_re_animation_is_answered_and_kept(rig: Rig, groove: Perf
     # the batch came from curves built without the late hit: it still carries its contact
     j = np.flatnonzero(np.abs(batch.show_s - show) < 1e-9)
     assert j.size == 1
+    # bit-exact by design: the quick answer is a copy of the sample the curves hold
     assert np.array_equal(batch.rows["position"][j[0]], answered[0].rows["position"][-1])
     again = synth.poses_until(float(late["time_s"]) + 0.004)
     assert synth.animations == before + 2, "the late hit joins the curves at the next call"

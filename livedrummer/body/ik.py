@@ -218,9 +218,13 @@ class LegSolution:
 
 def foot_pitch(rise_m: np.ndarray, foot_m: float) -> np.ndarray:
     """How far the foot turns up at the ankle (radians) when the ball of the foot is ``rise_m``
-    above the footboard and the heel follows by :data:`HEEL_FOLLOW` of that."""
-    drop = np.sin(HEEL_UP_RAD) - (1.0 - HEEL_FOLLOW) * np.maximum(rise_m, 0.0) / foot_m
-    out: np.ndarray = HEEL_UP_RAD - np.arcsin(np.clip(drop, -1.0, 1.0))
+    above the footboard and the heel follows by :data:`HEEL_FOLLOW` of that.
+
+    A foot at rest (``rise_m <= 0``) is exactly flat: ``arcsin(sin(x))`` gives back ``x`` only
+    to within a rounding step that depends on the CPU's SIMD path, so rest is set, not computed."""
+    rise = np.maximum(rise_m, 0.0)
+    drop = np.sin(HEEL_UP_RAD) - (1.0 - HEEL_FOLLOW) * rise / foot_m
+    out: np.ndarray = np.where(rise > 0.0, HEEL_UP_RAD - np.arcsin(np.clip(drop, -1.0, 1.0)), 0.0)
     return out
 
 

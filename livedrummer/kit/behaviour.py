@@ -119,8 +119,12 @@ def swing_of(piece: Piece) -> Swing:
 
 def footboard_angle(rise_m: np.ndarray) -> np.ndarray:
     """The footboard's turn up from rest (radians) that lifts the ball of the foot, on the board
-    :data:`FOOTBOARD_HINGE_M` from the hinge, by ``rise_m`` (clipped to the board's travel)."""
-    s = math.sin(FOOTBOARD_REST_RAD) + np.asarray(rise_m, np.float64) / FOOTBOARD_HINGE_M
+    :data:`FOOTBOARD_HINGE_M` from the hinge, by ``rise_m`` (clipped to the board's travel).
+
+    At rest (``rise_m <= 0``) the board is exactly at 0: ``arcsin(sin(x)) - x`` is zero only to
+    within a rounding step that depends on the CPU's SIMD path, so rest is set, not computed."""
+    rise = np.asarray(rise_m, np.float64)
+    s = math.sin(FOOTBOARD_REST_RAD) + rise / FOOTBOARD_HINGE_M
     angle = np.arcsin(np.clip(s, -1.0, 1.0)) - FOOTBOARD_REST_RAD
-    out: np.ndarray = np.clip(angle, 0.0, FOOTBOARD_MAX_RAD)
+    out: np.ndarray = np.where(rise > 0.0, np.clip(angle, 0.0, FOOTBOARD_MAX_RAD), 0.0)
     return out
