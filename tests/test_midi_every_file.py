@@ -318,9 +318,10 @@ def test_check_folder_reads_every_extension_and_goes_on_past_a_broken_file(
 
 
 def test_every_file_command_prints_the_unknown_notes_line(tmp_path: Path) -> None:
-    messages = [m for i in range(4) for m in note((36, 99)[i % 2], 0 if i == 0 else 470)]
+    # note 0: no bundled map names it (the drum plugins' maps name nearly every other note)
+    messages = [m for i in range(4) for m in note((36, 0)[i % 2], 0 if i == 0 else 470)]
     path = save(tmp_path / "odd.mid", messages)
-    line = (f"livedrummer: {path}: unknown notes: note 99 x2 (not in map general-midi; "
+    line = (f"livedrummer: {path}: unknown notes: note 0 x2 (not in map general-midi; "
             "not played)")  # fmt: skip
     out = tmp_path / "odd.bvh"
     for args in (["sticking", str(path)], ["export", str(path), "-o", str(out), "--fps", "10"]):

@@ -15,7 +15,8 @@ MAPS = Path(__file__).resolve().parent.parent / "kits" / "maps"
 
 def test_bundled_maps() -> None:
     assert note_map_names() == [
-        "alesis-nitro", "general-midi", "rock-band-chart", "roland-td", "yamaha-dtx",
+        "addictive2", "alesis-nitro", "alesis-surge", "ezdrummer2", "ezdrummer3", "general-midi",
+        "mt-powerdrumkit", "rock-band-chart", "roland-td", "ssd5", "superior3", "yamaha-dtx",
         "yamaha-dtx502",
     ]  # fmt: skip
 
@@ -108,5 +109,21 @@ def test_map_name_must_match_file_name(tmp_path: Path) -> None:
 
 
 def test_unknown_map_lists_known_ones() -> None:
-    with pytest.raises(NoteMapError, match="unknown note map 'td30'; known maps: alesis-nitro"):
+    with pytest.raises(
+        NoteMapError, match="unknown note map 'td30'; known maps: addictive2, alesis"
+    ):
         load_note_map("td30")
+
+
+def test_the_chart_map_follows_the_chart_format_table() -> None:
+    chart = load_note_map("rock-band-chart")
+    assert chart.lookup(101).instrument == "tom3"  # type: ignore[union-attr]  # 5-lane green
+    assert chart.ignored[109] == "Flam marker"
+    assert {65, 77, 89} <= set(chart.ignored)  # 5-lane green of Easy, Medium, Hard
+    assert "1 lane" in chart.ignored[126] and "2 lanes" in chart.ignored[127]
+
+
+def test_map_sources_must_be_a_list_of_strings(tmp_path: Path) -> None:
+    path = _map_with(tmp_path, "sources = [", "sources = 3\nsourcez = [")
+    with pytest.raises(NoteMapError, match=r"sources: expected a list of strings"):
+        load_note_map(str(path))

@@ -13,7 +13,8 @@ stream, counting them. At one tick a marker's end is applied before a gem and it
 gem, so a marker covers the gems from its first tick up to, not including, its last.
 
 Limits: only the first drum track is read (``PART DRUMS`` before the ``_2X`` and Phase Shift
-variants); disco flips, drum fills and the ``.chart`` text format are not read.
+variants); disco flips, drum fills, the ``[ENABLE_CHART_DYNAMICS]`` event (velocities are
+played as written) and the ``.chart`` text format are not read.
 """
 
 from __future__ import annotations

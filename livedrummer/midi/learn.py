@@ -11,7 +11,9 @@ the foot-chick note (the pedal's range is recorded whenever it moves); aftertouc
 cymbal note marks that the module sends chokes. :meth:`MapLearner.toml` writes a note map that
 :func:`~livedrummer.midi.notemap.load_note_map` loads, with where it came from in its header.
 
-Limits: one note per prompt (a module sending two notes for one zone teaches the first);
+Limits: one note per prompt. A module that sends several notes for one hit (a DTX-PRO input
+with more than one of its Note.1-4 set) teaches the first; the others, arriving within
+:data:`SAME_HIT_S` of it, are reported as part of that hit, not taken as the next pad's;
 the pedal's closed value is the largest controller value seen (modules send 0 open ... N
 closed); a pad the drummer skips is simply absent from the map (``inspect`` then reports its
 notes as unknown).
@@ -22,6 +24,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from livedrummer.midi.decode import ChannelMessage
+
+#: A note this soon after the note that answered a prompt comes from the same hit: modules send
+#: a hit's notes back to back (a MIDI message takes 1 ms on a DIN cable), a drummer reaches the
+#: next pad after reading its prompt, hundreds of milliseconds later.
+SAME_HIT_S = 0.010
 
 #: (piece, zone, hi-hat state or "", label): the prompts of a five-piece kit with three
 #: cymbals, in the order a drummer goes round the kit.
@@ -73,6 +80,7 @@ class MapLearner:
     done: list[Learned] = field(default_factory=list)
     cc_values: list[int] = field(default_factory=list)
     chokes: bool = False
+    answered_s: float | None = None  # when the last prompt was answered by a note
 
     @property
     def prompt(self) -> tuple[str, str, str, str] | None:
@@ -91,8 +99,9 @@ class MapLearner:
     def notes(self) -> dict[int, Learned]:
         return {d.note: d for d in self.done if d.note is not None}
 
-    def feed(self, msg: ChannelMessage) -> str | None:
-        """One message; returns a line for the drummer when it answered or was refused."""
+    def feed(self, msg: ChannelMessage, time_s: float | None = None) -> str | None:
+        """One message (``time_s``: when it came, seconds on any clock; None: no same-hit
+        check); returns a line for the drummer when it answered or was refused."""
         prompt = self.prompt
         if msg.type == "control_change" and msg.control == self.hihat_cc:
             self.cc_values.append(msg.value)  # the pedal moves during the hi-hat prompts too
@@ -103,6 +112,14 @@ class MapLearner:
             return None
         if msg.type != "note_on" or msg.velocity == 0 or prompt is None:
             return None
+        if time_s is not None and self.answered_s is not None:
+            if time_s - self.answered_s < SAME_HIT_S:
+                last = next(d for d in reversed(self.done) if d.note is not None)
+                return (
+                    f"note {msg.note} came in the same hit as note {last.note} ({last.label}): "
+                    "not learned; a pad sending several notes teaches the first (turn the "
+                    "others off on the module to learn them apart)"
+                )
         known = self.notes()
         if msg.note in known:
             if prompt[1] == "pedal" and known[msg.note].piece != "hihat":
@@ -110,6 +127,7 @@ class MapLearner:
             return (f"note {msg.note} is already {known[msg.note].label}: hit {prompt[3]} "
                     "again, or skip it")  # fmt: skip
         self._answer(msg.note)
+        self.answered_s = time_s
         return f"{prompt[3]}: note {msg.note}"
 
     def finish_pedal(self) -> str | None:

@@ -273,20 +273,57 @@ def read_midi_file(
     return read_midi_bytes(data, name, note_map, source, channel)
 
 
+#: General MIDI is kept unless a map with a larger table knows more than this share of a
+#: file's notes more: a GM or GS file with a few notes outside 27-87 (GS's snare roll 25, say)
+#: is still read as GM, not as a drum plugin's map that names every note but files GM's
+#: percussion elsewhere. Smaller tables (the modules') need no margin: a Roland file with a
+#: few hi-hat edge notes (22, 26) is a Roland file.
+GM_MARGIN = 0.01
+
+
 def choose_map(maps: Sequence[NoteMap], notes: Counter[int]) -> tuple[NoteMap, str]:
-    """The map that knows most of ``notes`` (note-on counts; first of ``maps`` on a tie) and
-    the line that says so."""
+    """The map that knows most of ``notes`` (note-on counts) and the line that says so.
+
+    ``maps`` are in :func:`~livedrummer.midi.notemap.bundled_note_maps`' order (General MIDI,
+    then the smaller tables, then by name) and the first wins a tie; the line names the maps
+    tied with it and why it was preferred, or else the runner-up. ``general-midi`` is kept
+    while no map with a larger table knows more than :data:`GM_MARGIN` of the notes more.
+    """
     if not maps:
         raise ValueError("choose_map: no candidate maps")
     total = sum(notes.values())
     known = [sum(n for note, n in notes.items() if m.knows(note)) for m in maps]
-    best = max(range(len(maps)), key=lambda i: (known[i], -i))
-    line = f"map auto: {maps[best].name} knows {known[best]:,} of {total:,} drum notes"
-    others = sorted((k, -i) for i, k in enumerate(known) if i != best)
+    top = max(range(len(maps)), key=lambda i: (known[i], -i))
+    gm = next((i for i, m in enumerate(maps) if m.name == "general-midi"), None)
+    if (
+        gm is not None
+        and gm != top
+        and maps[top].size > maps[gm].size
+        and known[top] - known[gm] <= GM_MARGIN * total
+    ):
+        line = (
+            f"map auto: general-midi knows {known[gm]:,} of {total:,} drum notes; "
+            f"{maps[top].name} knows {known[top]:,}, within {GM_MARGIN:.0%} of it, so General "
+            f"MIDI is kept (--map {maps[top].name} reads the file with that map)"
+        )
+        return maps[gm], line
+    chosen = maps[top]
+    line = f"map auto: {chosen.name} knows {known[top]:,} of {total:,} drum notes"
+    tied = [m for i, m in enumerate(maps) if i != top and known[i] == known[top]]
+    if tied:
+        if chosen.name == "general-midi":
+            why = "General MIDI goes first"
+        elif all(m.size > chosen.size for m in tied):
+            why = f"the smallest table, {chosen.size} notes"
+        else:
+            why = "the smallest table, then by name"
+        names = ", ".join(m.name for m in tied)
+        return chosen, f"{line}, tied with {names} ({chosen.name} preferred: {why})"
+    others = sorted((k, -i) for i, k in enumerate(known) if i != top)
     if others:
         k, i = others[-1]
         line += f" (next: {maps[-i].name}, {k:,})"
-    return maps[best], line
+    return chosen, line
 
 
 def read_midi_bytes(

@@ -46,6 +46,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {name:<16} ERROR {exc}")
             continue
         print(f"  {name:<16} {nm.description} ({len(nm.notes)} notes) [{entry.path}]")
+        for source in nm.sources:
+            print(f"  {'':<16}   source: {source}")
     print("expression presets (--preset NAME):")
     for name, entry in sorted(entries("kits/presets").items()):
         try:

@@ -59,8 +59,8 @@ def run(args: argparse.Namespace) -> int:
     learner = MapLearner(out.stem, source.name, args.hihat_cc)
     said: list[str] = []
 
-    def heard(_time_s: float, msg: RawMidi) -> None:
-        line = learner.feed(msg)
+    def heard(time_s: float, msg: RawMidi) -> None:
+        line = learner.feed(msg, time_s)
         if line is not None:
             said.append(line)
 
