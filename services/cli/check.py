@@ -83,9 +83,9 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
-    from .common import avatar_of, rig_for
+    from .common import avatar_of, fitted, rig_for
 
-    avatar = avatar_of(args)
+    kit, avatar = fitted(args, kit, avatar_of(args))
     rig = rig_for(kit, avatar)
     map_names: set[str] = set()
     expression = load_expression(args.preset) if args.preset else None
@@ -214,9 +214,10 @@ def run_stage(args: argparse.Namespace) -> int:
         kit = load_kit(p.kit)
         avatar = None
         if p.avatar is not None:
-            from .common import avatar_of
+            from .common import avatar_of, fitted
 
             avatar = avatar_of(argparse.Namespace(avatar=p.avatar))
+            kit, avatar = fitted(args, kit, avatar)
         expression = load_expression(p.preset) if p.preset else None
         sticking = sticking_of(args, part.performance, kit)
         done = perform(part.performance, rig_for(kit, avatar), part.note_map, expression,
