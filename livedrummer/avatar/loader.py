@@ -10,8 +10,9 @@ the renderer from the body's own proportions: it loads as ``None``. A bone map i
 
 :func:`inspect_avatar` is ``avatar info``'s view: it reports what was found even when the
 avatar cannot be used (bones missing, or a kit it cannot be fitted to: the same
-:func:`~livedrummer.avatar.fit.fit_avatar` the commands call), with the one-line reason. Limits: files are read whole
-into memory; nothing is cached between calls (a CLI command loads its avatar once).
+:func:`~livedrummer.avatar.fit.fit_avatar` the commands call), with the one-line reason.
+Limits: files are read whole into memory; nothing is cached between calls (a CLI command
+loads its avatar once).
 """
 
 from __future__ import annotations
