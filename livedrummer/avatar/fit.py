@@ -97,8 +97,10 @@ def scaled_avatar(avatar: Avatar, k: float) -> Avatar:
         bind[tip, :3, 3] = bind[stick, :3, 3] + (mesh.bind[tip, :3, 3] - mesh.bind[stick, :3, 3])
     new_mesh = replace(mesh, positions=(mesh.positions * np.float32(k)).astype(np.float32),
                        bind=bind)  # fmt: skip
-    return Avatar(f"{avatar.name}", avatar.source, scaled_lengths(avatar.lengths, k), new_mesh,
-                  dict(avatar.bones))  # fmt: skip
+    faces = {name: replace(f, deltas=(f.deltas * np.float32(k)).astype(np.float32))
+             for name, f in avatar.faces.items()}  # fmt: skip
+    return Avatar(avatar.name, avatar.source, scaled_lengths(avatar.lengths, k), new_mesh,
+                  dict(avatar.bones), faces=faces)  # fmt: skip
 
 
 def moved_kit(kit: Kit, k: float) -> Kit:

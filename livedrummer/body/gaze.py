@@ -96,3 +96,14 @@ def gaze_direction(head_world_q: np.ndarray, look_fraction: float, neutral_pitch
     az = azimuth(fwd) + yaw
     el = elevation(fwd) + pitch
     return np.stack([-np.sin(az) * np.cos(el), np.cos(az) * np.cos(el), np.sin(el)], axis=-1)
+
+
+def neutral_head_pitch(lean_deg: float) -> float:
+    """Elevation (radians) of the head's forward with no look and no bob: the seated torso's
+    lean, its chest's 0.3 of it back and the neck's 1.3 of it (the torso's rest pose)."""
+    lean = np.radians(lean_deg)
+    x = np.array([1.0, 0.0, 0.0])
+    q = quat.mul(quat.from_axis_angle(x, np.array([-lean])),
+                 quat.mul(quat.from_axis_angle(x, np.array([0.3 * lean])),
+                          quat.from_axis_angle(x, np.array([1.3 * lean]))))  # fmt: skip
+    return float(elevation(quat.rotate(q, FORWARD[None]))[0])

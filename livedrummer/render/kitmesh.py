@@ -19,7 +19,7 @@ percussion are drawn as small drums.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -115,6 +115,8 @@ class KitMesh:
     pivot: np.ndarray  # float64 (N, 3)
     axis: np.ndarray  # float64 (N, 3): lift direction or beater hinge axis
     pieces: int
+    #: (P,) bool: the pieces whose hard hits surprise the face (crash, splash, china)
+    crash_like: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     @property
     def groups(self) -> dict[str, np.ndarray]:
@@ -307,7 +309,10 @@ def build_kit_mesh(kit: Kit, *, floor: bool = True) -> KitMesh:
             _cymbal(b, piece, i)
         else:
             _drum(b, piece, i)
-    return b.build(len(kit.pieces))
+    from livedrummer.body.face import CRASH_KINDS
+
+    crash = np.array([p.kind.value in CRASH_KINDS for p in kit.pieces], dtype=bool)
+    return replace(b.build(len(kit.pieces)), crash_like=crash)
 
 
 def empty_stage() -> KitMesh:
