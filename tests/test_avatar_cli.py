@@ -170,6 +170,7 @@ def test_avatar_info_predicts_what_render_and_check_do(groove_dir: Path, small: 
     if said["usable"]:
         line = f"livedrummer: fit: {said['fit']['said']}"
         assert said["fit"]["mode"] == "avatar"
+        assert json.loads(check.stdout)["fit"] == said["fit"]
         assert line in check.stderr.splitlines() and line in render.stderr.splitlines()
         assert any((tmp_path / "f").glob("*.png"))
     else:

@@ -83,9 +83,10 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
-    from .common import avatar_of, fitted, rig_for
+    from .common import avatar_of, fitting_of, rig_for
 
-    kit, avatar = fitted(args, kit, avatar_of(args))
+    fitting = fitting_of(args, kit, avatar_of(args))
+    kit, avatar = fitting.kit, fitting.avatar
     rig = rig_for(kit, avatar)
     map_names: set[str] = set()
     expression = load_expression(args.preset) if args.preset else None
@@ -139,6 +140,7 @@ def run(args: argparse.Namespace) -> int:
         "files_without_drums": no_drums,
         "kit": kit.name,
         "avatar": "default" if avatar is None else avatar.source,
+        **({} if avatar is None else {"fit": fitting.as_json()}),
         "map": ", ".join(sorted(map_names)) or None,
         **totals,
         **hard,

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 from livedrummer.resources import data_dir
 
 if TYPE_CHECKING:
+    from livedrummer.avatar.fit import Fitting
     from livedrummer.avatar.model import Avatar
     from livedrummer.body.rig import Rig
     from livedrummer.kit.model import Kit
@@ -298,16 +299,22 @@ def avatar_argv(args: argparse.Namespace) -> list[str]:
     return out
 
 
-def fitted(args: argparse.Namespace, kit: Kit, avatar: Avatar | None,
-           quiet: bool = False) -> tuple[Kit, Avatar | None]:  # fmt: skip
-    """``--fit``: the kit and avatar to play (:func:`livedrummer.avatar.fit.fit_avatar`, the
+def fitting_of(args: argparse.Namespace, kit: Kit, avatar: Avatar | None) -> Fitting:
+    """``--fit``: how the avatar plays the kit (:func:`livedrummer.avatar.fit.fit_avatar`, the
     path ``avatar info`` reports); with an avatar, one line on stderr says how it was fitted
     and why. A piece left out of reach is the one-line error."""
     from livedrummer.avatar.fit import fit_avatar
 
     done = fit_avatar(kit, avatar, getattr(args, "fit", "auto"))
-    if avatar is not None and not quiet:
+    if avatar is not None:
         print(f"livedrummer: fit: {done.line}", file=sys.stderr)
+    return done
+
+
+def fitted(args: argparse.Namespace, kit: Kit, avatar: Avatar | None
+           ) -> tuple[Kit, Avatar | None]:  # fmt: skip
+    """The kit and avatar to play, as :func:`fitting_of` settles them."""
+    done = fitting_of(args, kit, avatar)
     return done.kit, done.avatar
 
 
