@@ -142,6 +142,7 @@ class Spec:
     rigid: bool = False
     unit: float = 1.0  # 100.0 writes centimetres
     drop: tuple[str, ...] = ()  # humanoid bones left out of the VRM map
+    faces: bool = False  # morph targets on the head and the VRM's expressions binding them
     extra: dict[str, Any] = field(default_factory=dict)
 
 
@@ -313,8 +314,12 @@ def build(spec: Spec) -> bytes:
         local = {index["head"]: 1, index["hair"]: 2}
         hparts = [(*_box(a, e, t), np.full(8, local[index[bone]]), mat)
                   for bone, a, e, t, mat in head_parts]  # fmt: skip
-        g.nodes.append(pygltflib.Node(name="Face", mesh=_mesh(w, hparts, skinned=True), skin=1))
+        k_face = spec.height_m / HEIGHT_M * spec.unit
+        targets = tuple(tuple(k_face * c for c in t) for t in FACE_TARGETS) if spec.faces else ()
+        face_mesh = _mesh(w, hparts, skinned=True, targets=targets)  # type: ignore[arg-type]
+        g.nodes.append(pygltflib.Node(name="Face", mesh=face_mesh, skin=1))
         roots.append(len(g.nodes) - 1)
+        face_node = len(g.nodes) - 1
     g.scenes = [pygltflib.Scene(nodes=roots)]
     g.scene = 0
     ext: dict[str, Any] = {}
@@ -335,12 +340,28 @@ def build(spec: Spec) -> bytes:
                                          "useDefaultValues": True} for b in human]},
             "materialProperties": [{"name": "skin", "shader": "VRM/MToon"}],
         }  # fmt: skip
+        if spec.faces:
+            ext["VRM"]["blendShapeMaster"] = {"blendShapeGroups": [
+                {"name": "Blink", "presetName": "blink",
+                 "binds": [{"mesh": face_mesh, "index": 0, "weight": 100}]},
+                {"name": "Joy", "presetName": "joy",
+                 "binds": [{"mesh": face_mesh, "index": 1, "weight": 50}]},
+                {"name": "O", "presetName": "o",
+                 "binds": [{"mesh": face_mesh, "index": 2, "weight": 100}]},
+            ]}  # fmt: skip
         g.extensionsUsed = ["VRM"]
     elif spec.vrm == "1":
         ext["VRMC_vrm"] = {
             "specVersion": "1.0",
             "humanoid": {"humanBones": {b: {"node": index[b]} for b in human}},
         }
+        if spec.faces:
+            ext["VRMC_vrm"]["expressions"] = {"preset": {
+                "blink": {"morphTargetBinds": [{"node": face_node, "index": 0, "weight": 1.0}]},
+                "happy": {"morphTargetBinds": [{"node": face_node, "index": 1, "weight": 0.5}]},
+                "surprised": {"morphTargetBinds": [{"node": face_node, "index": 2,
+                                                    "weight": 1.0}]},
+            }}  # fmt: skip
         g.materials[1].extensions = {"VRMC_materials_mtoon": {"specVersion": "1.0"}}
         g.extensionsUsed = ["VRMC_vrm", "VRMC_materials_mtoon"]
     ext.update(spec.extra)
@@ -358,9 +379,16 @@ def _translation(p: np.ndarray) -> np.ndarray:
     return m
 
 
+#: With ``Spec.faces``: the head's morph targets, one uniform move (glTF frame, metres at
+#: 1.75 m) each: 0 shuts the eyes (down), 1 is a smile (towards the character's left), 2 opens
+#: the mouth (forward, towards the face's side in a +z-facing file).
+FACE_TARGETS = ((0.0, -0.01, 0.0), (0.02, 0.0, 0.0), (0.0, 0.0, 0.03))
+
+
 def _mesh(w: _Writer, parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]],
-          skinned: bool) -> int:  # fmt: skip
-    """One mesh, one primitive per material, from (corners, faces, joint per corner, material)."""
+          skinned: bool, targets: tuple[tuple[float, float, float], ...] = ()) -> int:  # fmt: skip
+    """One mesh, one primitive per material, from (corners, faces, joint per corner, material);
+    ``targets``: morph targets moving every vertex of every primitive by one vector each."""
     prims = []
     by_mat: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
     for corners, faces, joints, mat in parts:
@@ -383,9 +411,12 @@ def _mesh(w: _Writer, parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]
             wt[:, 0] = 1.0
             attrs.JOINTS_0 = w.accessor(j, "VEC4", 5123, 34962)
             attrs.WEIGHTS_0 = w.accessor(wt, "VEC4", 5126, 34962)
+        morphs = [pygltflib.Attributes(POSITION=w.accessor(
+            np.tile(np.float32(t), (p.shape[0], 1)), "VEC3", 5126, 34962, minmax=True))
+            for t in targets]  # fmt: skip
         prims.append(pygltflib.Primitive(attributes=attrs, material=mat,
                                          indices=w.accessor(f.reshape(-1, 1), "SCALAR", 5125,
-                                                            34963)))  # fmt: skip
+                                                            34963), targets=morphs or None))  # fmt: skip
     w.g.meshes.append(pygltflib.Mesh(primitives=prims))
     return len(w.g.meshes) - 1
 

@@ -109,10 +109,75 @@ def test_a_bad_avatar_is_one_line_and_exit_2(groove_dir: Path, tmp_path: Path, c
 def test_an_avatar_too_small_for_the_kit_is_the_reach_error(groove_dir: Path, tmp_path: Path
                                                             ) -> None:  # fmt: skip
     child = af.write(tmp_path, "child.vrm", af.Spec(height_m=0.9, vrm="1"))
-    proc = run("check", str(groove_dir / GROOVES[0]), "--map", "roland-td", "--avatar", str(child))
+    proc = run("check", str(groove_dir / GROOVES[0]), "--map", "roland-td", "--avatar", str(child),
+               "--fit", "none")  # fmt: skip
     assert proc.returncode == 2
     (line,) = proc.stderr.strip().splitlines()
     assert "out of reach of the" in line and " mm" in line and f"with avatar {child}" in line
+    assert "(--fit none; --fit auto would fit it: avatar x" in line
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A third-party-like VRM 1.0 of 0.66 m (a VRoid-sized model)."""
+    return af.write(tmp_path_factory.mktemp("small"), "small.vrm",
+                    af.Spec(height_m=0.66, pose="A", vrm="1"))  # fmt: skip
+
+
+@pytest.mark.parametrize("kit", ["rock5", "rock5-left"])
+def test_a_small_vrm_plays_the_default_kit_fitted(groove_dir: Path, small: Path, kit: str
+                                                  ) -> None:  # fmt: skip
+    grooves = [str(groove_dir / g) for g in GROOVES]
+    proc = run("check", *grooves, "--map", "roland-td", "--kit", kit, "--avatar", str(small),
+               "--json", "--summary")  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["notes"] > 500 and out["not_played"] == 0
+    assert out["contact_error_mm"]["max"] <= 5.0
+    assert out["penetration_mm"] <= 2.0
+    fit = [line for line in proc.stderr.splitlines() if line.startswith("livedrummer: fit: ")]
+    assert len(fit) == 1 and "avatar scaled x2." in fit[0] and "0.66 m -> 1." in fit[0]
+
+
+def _snare(tmp_path: Path) -> Path:
+    import mido
+
+    mid = mido.MidiFile(ticks_per_beat=480)
+    track = mido.MidiTrack()
+    for _ in range(2):
+        track.append(mido.Message("note_on", channel=9, note=38, velocity=100, time=0))
+        track.append(mido.Message("note_off", channel=9, note=38, velocity=0, time=240))
+    mid.tracks.append(track)
+    song = tmp_path / "snare.mid"
+    mid.save(song)
+    return song
+
+
+@pytest.mark.parametrize("fit", ["auto", "kit"])
+def test_avatar_info_predicts_what_render_and_check_do(groove_dir: Path, small: Path,
+                                                       tmp_path: Path, fit: str) -> None:  # fmt: skip
+    """auto scales the 0.66 m avatar; kit would have to move the kit x0.35 and refuses."""
+    info = run("avatar", "info", str(small), "--fit", fit, "--json")
+    said = json.loads(info.stdout)
+    check = run("check", str(groove_dir / GROOVES[0]), "--map", "roland-td", "--avatar",
+                str(small), "--fit", fit, "--json", "--summary")  # fmt: skip
+    render = run("render", str(_snare(tmp_path)), "--map", "general-midi", "--avatar", str(small),
+                 "--fit", fit, "--frames-dir", str(tmp_path / "f"), "--size", "64x36", "--fps",
+                 "5", "--tail", "0")  # fmt: skip
+    assert said["usable"] == (fit == "auto")
+    for proc in (info, check, render):
+        assert proc.returncode == (0 if said["usable"] else 2), proc.stderr
+    if said["usable"]:
+        line = f"livedrummer: fit: {said['fit']['said']}"
+        assert said["fit"]["mode"] == "avatar"
+        assert json.loads(check.stdout)["fit"] == said["fit"]
+        assert line in check.stderr.splitlines() and line in render.stderr.splitlines()
+        assert any((tmp_path / "f").glob("*.png"))
+    else:
+        error = f"livedrummer: error: {said['error']}"
+        assert info.stderr.strip().splitlines()[-1] == error
+        assert check.stderr.strip().splitlines()[-1] == error
+        assert render.stderr.strip().splitlines()[-1] == error
 
 
 def test_avatars_lists_built_in_and_user_files(tmp_path: Path) -> None:

@@ -384,8 +384,10 @@ def test_practice_headless_shows_player_ghost_and_readout(
     teacher = body_scene(args, perf, kit, load_note_map("roland-td"))
     snare = perf.onsets["time_s"][perf.onsets["note"] == 38]
     near = min(during, key=lambda f: float(np.min(np.abs(snare - f["teacher_s"]))))
+    # (the ghost covers 0.9-1.3 % of these 320x180 frames, less where its raised hands pass in
+    # front of the player's shirt; without a ghost it is 0)
     for f in (during[0], near, during[-1]):
-        assert tint_fraction(read_png(frames / f"frame_{f['frame']:06d}.png")) > 0.01, f["frame"]
+        assert tint_fraction(read_png(frames / f"frame_{f['frame']:06d}.png")) > 0.005, f["frame"]
     # the player's drummer is drawn in every frame, and driven live: its sticks move
     assert all(f["pose_s"] is not None for f in log)
     tips = np.array([f["tips"] for f in log])

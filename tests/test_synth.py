@@ -7,7 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from livedrummer.body import animation
 from livedrummer.body.animation import animate, hihat_openness
+from livedrummer.body.ready import ReadyParams
 from livedrummer.body.rig import Rig
 from livedrummer.body.skeleton import J
 from livedrummer.live.calibration import Calibration, CalibrationError
@@ -89,7 +91,12 @@ def test_with_no_input_the_drummer_breathes(rig: Rig) -> None:
     assert np.abs(np.diff(head, axis=0)).max() < 0.002, "idling is smooth"
 
 
-def test_prediction_raises_the_stick_before_regular_hits(rig: Rig, groove: Performance) -> None:
+def test_prediction_raises_the_stick_before_regular_hits(rig: Rig, groove: Performance,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+    # a hand resting long enough waits ready (livedrummer.body.ready), its stick up live as
+    # offline, which leaves the predictor nothing to add on this groove (0.97 either way, see
+    # test_body_ready): its own share is measured without the ready waits
+    monkeypatch.setattr(animation, "READY", ReadyParams(enabled=False))
     onsets = groove.onsets[groove.onsets["time_s"] < 7.0].copy()
     onsets["time_s"] += START
     prep = 0.05

@@ -26,7 +26,10 @@ smoothly. The fingers are weighted partly to the stick joint, so they stay wrapp
 stick as it pivots in the hand. The bind pose is the body's rest pose (all local rotations
 identity): every ``bind`` matrix is a pure translation.
 
-Limits: no textures (flat colours), no facial expression, linear blend skinning (a joint
+The face has shapes of its own for the blinks, looks and reactions of
+:mod:`livedrummer.body.face` (:func:`_faces`: eyes, brows and mouth moved, no eyelids).
+
+Limits: no textures (flat colours), linear blend skinning (a joint
 bent past ~130 degrees thins a little on its inner side); the face is a stage-distance
 face, not a portrait.
 """
@@ -35,7 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from livedrummer.avatar.model import Avatar, Material, Primitive, SkinnedMesh
+from livedrummer.avatar.model import Avatar, FaceShape, Material, Primitive, SkinnedMesh, face_shape
 from livedrummer.body.skeleton import N_JOINTS, PARENTS, J, SegmentLengths, build_skeleton
 
 #: The head is modelled looking up by this much (radians), its eyes looking down by as much:
@@ -91,6 +94,12 @@ class _Parts:
 
     def __init__(self) -> None:
         self.parts: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = []
+        self.tags: dict[int, str] = {}  # part index -> a face part's name (see faces())
+        self.where: dict[str, np.ndarray] = {}  # set by mesh(): tag -> vertex indices
+
+    def tag(self, name: str) -> None:
+        """Name the part added last (the face's shapes move tagged parts)."""
+        self.tags[len(self.parts) - 1] = name
 
     def add(self, material: int, pos: np.ndarray, tri: np.ndarray, weights: np.ndarray) -> None:
         self.parts.append((material, pos, tri, weights))
@@ -123,6 +132,9 @@ class _Parts:
         by_material: dict[int, int] = {}
         for n in order:
             material, pos, tri, w = self.parts[n]
+            if n in self.tags:
+                got = self.where.get(self.tags[n], np.zeros(0, np.int64))
+                self.where[self.tags[n]] = np.concatenate([got, base + np.arange(pos.shape[0])])
             positions.append(pos)
             normals.append(_normals(pos, tri))
             weights.append(w)
@@ -291,7 +303,56 @@ def build_character(lengths: SegmentLengths | None = None) -> Avatar:
     mesh = SkinnedMesh(mesh.positions, mesh.normals, mesh.uv, mesh.joints, mesh.weights,
                        mesh.indices, mesh.primitives, mesh.materials, bind)  # fmt: skip
     mesh.check("built-in character")
-    return Avatar("drummer", "built-in", s, mesh)
+    return Avatar("drummer", "built-in", s, mesh, faces=_faces(mesh.positions, parts.where))
+
+
+def _faces(pos: np.ndarray, where: dict[str, np.ndarray]) -> dict[str, FaceShape]:
+    """The character's own shapes for :data:`livedrummer.body.face.FACES` (moves of its eyes,
+    brows and mouth in the bind pose, metres): a blink flattens each eye into a line and sinks
+    it into the face, a look moves iris and pupil across the eye, happy widens the mouth and
+    lifts its corners and the brows, surprised opens the mouth and raises the brows higher."""
+    p = pos.astype(np.float64)
+    shapes: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+
+    def move(name: str, idx: np.ndarray, delta: np.ndarray) -> None:
+        shapes.setdefault(name, []).append((idx, delta))
+
+    for eye in ("eye_r", "eye_l"):
+        white = where[f"{eye}_white"]
+        parts_ = np.concatenate([white, where[f"{eye}_iris"], where[f"{eye}_pupil"]])
+        centre = p[white].mean(axis=0)
+        d = np.zeros((parts_.size, 3))
+        d[:, 2] = (centre[2] - p[parts_, 2]) * 0.88
+        d[:, 1] = -0.004
+        move("blink", parts_, d)
+        front = np.concatenate([where[f"{eye}_iris"], where[f"{eye}_pupil"]])
+        for name, axis, amount in (("look_left", 0, -0.0055), ("look_right", 0, 0.0055),
+                                   ("look_up", 2, 0.0035), ("look_down", 2, -0.0035)):  # fmt: skip
+            d = np.zeros((front.size, 3))
+            d[:, axis] = amount
+            move(name, front, d)
+        wide = np.zeros((white.size, 3))
+        wide[:, 2] = (p[white, 2] - centre[2]) * 0.25
+        move("surprised", white, wide)
+    mouth = where["mouth"]
+    mc = p[mouth].mean(axis=0)
+    rel = p[mouth] - mc
+    half = max(float(np.abs(rel[:, 0]).max()), 1e-6)
+    smile = np.zeros_like(rel)
+    smile[:, 0] = rel[:, 0] * 0.3
+    smile[:, 2] = 0.005 * (rel[:, 0] / half) ** 2
+    move("happy", mouth, smile)
+    open_ = np.zeros_like(rel)
+    open_[:, 2] = rel[:, 2] * 1.6 - 0.002
+    open_[:, 0] = -rel[:, 0] * 0.2
+    move("surprised", mouth, open_)
+    for brow in ("brow_r", "brow_l"):
+        for name, up in (("happy", 0.002), ("surprised", 0.006)):
+            b = where[brow]
+            d = np.zeros((b.size, 3))
+            d[:, 2] = up
+            move(name, b, d)
+    return {name: face_shape(parts_) for name, parts_ in shapes.items()}
 
 
 def _torso(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
@@ -417,13 +478,17 @@ def _head(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
     for sign in (1.0, -1.0):
         x = 0.032 * sign
         c = front(eye_u, x) - np.array([0, 0.0085, 0])
+        eye = "eye_r" if sign > 0 else "eye_l"
         _ellipsoid(parts, EYE_WHITE, c, (0.0138, 0.011, 0.0098), h)
+        parts.tag(f"{eye}_white")
         # the eyes look down by the face's tilt (see FACE_TILT_RAD)
         gaze = _rot_x(-FACE_TILT_RAD - 0.05)
         _ellipsoid(parts, IRIS, c + gaze @ np.array([0, 0.0083, 0]), (0.0069, 0.0038, 0.0069),
                    h, rot=gaze)  # fmt: skip
+        parts.tag(f"{eye}_iris")
         _ellipsoid(parts, PUPIL, c + gaze @ np.array([0, 0.0108, 0]), (0.0031, 0.0018, 0.0031),
                    h, rot=gaze)  # fmt: skip
+        parts.tag(f"{eye}_pupil")
         brow = front(eye_u + 0.19, x * 1.05) - np.array([0, 0.002, 0])
         _ellipsoid(
             parts,
@@ -433,6 +498,7 @@ def _head(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
             h,
             rot=_rot_z(0.0) @ np.array([[1, 0, 0], [0, 1, 0], [-0.12 * sign, 0, 1]]),
         )
+        parts.tag("brow_r" if sign > 0 else "brow_l")
         ear = np.array(
             [
                 base[0] + sign * (float(_head_ring(np.array(eye_u - 0.1))[0]) + 0.002),
@@ -447,6 +513,7 @@ def _head(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
     _ellipsoid(parts, SKIN, tip, (0.0095, 0.0075, 0.0075), h)
     mouth = front(eye_u - 0.53, 0.0) - np.array([0, 0.0035, 0])
     _ellipsoid(parts, LIPS, mouth, (0.024, 0.0072, 0.0068), h)
+    parts.tag("mouth")
     # hair: the skull pushed outward from its centre, from a hairline (low at the back, a
     # fringe in front) to the crown; each column of the grid starts at its own hairline
     theta = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False)

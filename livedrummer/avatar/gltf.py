@@ -18,9 +18,10 @@ file and the object, never an IndexError. Images (PNG, JPEG) are decoded with Py
 dependency for video, so no imaging library is added.
 
 Limits: triangles, triangle strips and fans only (points and lines are skipped); one UV set
-(``TEXCOORD_0``); sparse accessors are applied; morph targets, animations, cameras and lights
-are ignored; KTX2/Basis textures are not decoded (the material keeps its colour factor);
-Draco- or meshopt-compressed files are refused by name.
+(``TEXCOORD_0``); sparse accessors are applied; morph targets are read as position deltas
+(as displayed, for the face: :mod:`~livedrummer.avatar.faces`), their normals ignored;
+animations, cameras and lights are ignored; KTX2/Basis textures are not decoded (the
+material keeps its colour factor); Draco- or meshopt-compressed files are refused by name.
 """
 
 from __future__ import annotations
@@ -80,6 +81,10 @@ class GltfScene:
     materials: tuple[Material, ...]
     extensions: dict[str, Any] = field(default_factory=dict)  # the file's top-level ones
     textures: int = 0  # images decoded
+    #: (node, morph target) -> (vertex indices, position deltas (M, 3) as displayed): the
+    #: targets a VRM's expressions bind (see :mod:`~livedrummer.avatar.faces`)
+    morphs: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    mesh_nodes: dict[int, tuple[int, ...]] = field(default_factory=dict)  # mesh -> its nodes
 
     def node_named(self, name: str) -> int | None:
         for i, node in enumerate(self.nodes):
@@ -395,17 +400,20 @@ class _Reader:
         nodes, order = self.nodes()
         materials, decoded = self.materials()
         default_material = len(materials)
-        parts: list[dict[str, np.ndarray]] = []
+        parts: list[dict[str, Any]] = []
         prims: list[Primitive] = []
         first = 0
         base = 0
         width = 4
         used_default = False
+        morphs: dict[tuple[int, int], list[tuple[np.ndarray, np.ndarray]]] = {}
+        mesh_nodes: dict[int, list[int]] = {}
         for ni in order:
             gnode = self.gltf.nodes[ni]
             if gnode.mesh is None:
                 continue
             mesh = self._item("meshes", gnode.mesh)
+            mesh_nodes.setdefault(int(gnode.mesh), []).append(ni)
             for pi, prim in enumerate(mesh.primitives or []):
                 what = f"mesh {gnode.mesh} ({mesh.name or ''}) primitive {pi}"
                 part = self._primitive(prim, ni, gnode, nodes, what)
@@ -422,6 +430,9 @@ class _Reader:
                     raise self.fail(f"{what} names material {mat}, not a material")
                 prims.append(Primitive(int(mat), first, int(tri.size)))
                 first += int(tri.size)
+                for k, delta in part.pop("morphs", {}).items():
+                    moved = np.flatnonzero(np.abs(delta).max(axis=1) > 0.0)
+                    morphs.setdefault((ni, k), []).append((base + moved, delta[moved]))
                 base += part["positions"].shape[0]
                 parts.append(part)
         if not parts:
@@ -445,10 +456,13 @@ class _Reader:
             weights=pad("weights", 0.0), indices=cat("indices").astype(np.uint32),
             primitives=tuple(prims), materials=tuple(materials), extensions=dict(ext),
             textures=decoded,
+            morphs={key: (np.concatenate([m[0] for m in got]), np.concatenate([m[1] for m in got]))
+                    for key, got in morphs.items()},
+            mesh_nodes={m: tuple(n) for m, n in mesh_nodes.items()},
         )  # fmt: skip
 
     def _primitive(self, prim: Any, ni: int, gnode: Any, nodes: list[Node], what: str
-                   ) -> dict[str, np.ndarray] | None:  # fmt: skip
+                   ) -> dict[str, Any] | None:  # fmt: skip
         mode = 4 if prim.mode is None else int(prim.mode)
         if mode not in (4, 5, 6):
             log.info("%s: %s: mode %d (points or lines) skipped", self.source, what, mode)
@@ -522,8 +536,10 @@ class _Reader:
             world_nrm = np.einsum("vij,vj->vi", m[:, :3, :3], nrm)
             bones = np.asarray(skin_joints, np.int64)[local]
             bones[empty, 0] = ni
+            linear = m[:, :3, :3]
         else:
             w = nodes[ni].world
+            linear = np.broadcast_to(w[:3, :3], (v, 3, 3))
             world_pos = pos @ w[:3, :3].T + w[:3, 3]
             world_nrm = nrm @ np.linalg.inv(w[:3, :3])  # inverse transpose, row vectors
             bones = np.full((v, 4), ni, np.int64)
@@ -533,7 +549,15 @@ class _Reader:
         world_nrm = np.where(norm > 1e-12, world_nrm / np.maximum(norm, 1e-12), [0.0, 1.0, 0.0])
         if not np.isfinite(world_pos).all():
             raise self.fail(f"{what}: vertex positions are not finite")
+        morphs = {}
+        for k, target in enumerate(prim.targets or []):
+            index = target.get("POSITION") if isinstance(target, dict) else getattr(
+                target, "POSITION", None)  # fmt: skip
+            delta = per_vertex(index, f"morph target {k} POSITION", 3)
+            if delta is not None:
+                morphs[k] = np.einsum("vij,vj->vi", linear, delta.astype(np.float64))
         return {
+            "morphs": morphs,
             "positions": world_pos,
             "normals": world_nrm,
             "uv": np.zeros((v, 2)) if uv is None else uv.astype(np.float64),

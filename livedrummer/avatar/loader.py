@@ -9,8 +9,10 @@ the renderer from the body's own proportions: it loads as ``None``. A bone map i
 ``bone_map``, else ``FILE.bones.toml`` beside the file (:mod:`~livedrummer.avatar.bonemap`).
 
 :func:`inspect_avatar` is ``avatar info``'s view: it reports what was found even when the
-avatar cannot be used (bones missing), with the one-line reason. Limits: files are read whole
-into memory; nothing is cached between calls (a CLI command loads its avatar once).
+avatar cannot be used (bones missing, or a kit it cannot be fitted to: the same
+:func:`~livedrummer.avatar.fit.fit_avatar` the commands call), with the one-line reason.
+Limits: files are read whole into memory; nothing is cached between calls (a CLI command
+loads its avatar once).
 """
 
 from __future__ import annotations
@@ -23,9 +25,12 @@ from typing import Any
 
 from livedrummer.avatar.bonemap import REQUIRED, Humanoid, find_humanoid, sidecar
 from livedrummer.avatar.catalog import DEFAULT, SUFFIXES, avatar_dirs, list_avatars
+from livedrummer.avatar.fit import Fitting, fit_avatar
 from livedrummer.avatar.gltf import GltfScene, read_gltf_file
 from livedrummer.avatar.model import Avatar, AvatarError
 from livedrummer.avatar.retarget import Fitted, retarget
+from livedrummer.errors import UnreachableError
+from livedrummer.kit.model import Kit
 from livedrummer.resources import user_home
 
 
@@ -82,10 +87,14 @@ class AvatarInfo:
     fitted: Fitted | None = None
     textures: int = 0
     error: str = ""
+    #: how it will play the kit asked about (:func:`~livedrummer.avatar.fit.fit_avatar`, the
+    #: call render and check make), when a kit was given and the avatar binds
+    fitting: Fitting | None = None
 
     def as_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {
-            "file": self.source, "usable": self.avatar is not None, "error": self.error or None,
+            "file": self.source, "usable": self.avatar is not None and not self.error,
+            "error": self.error or None,
             "nodes": self.nodes, "convention": self.convention or None,
             "humanoid_bones": self.humanoid, "required_missing": self.missing,
         }  # fmt: skip
@@ -106,11 +115,16 @@ class AvatarInfo:
                               for m in a.mesh.materials],
                 "textures": self.textures,
             })  # fmt: skip
+            if self.fitting is not None:
+                out["fit"] = self.fitting.as_json()
         return out
 
 
-def inspect_avatar(path: Path, bone_map: Path | None = None) -> AvatarInfo:
-    """Everything ``avatar info`` shows; a file that is not glTF at all still raises."""
+def inspect_avatar(path: Path, bone_map: Path | None = None, kit: Kit | None = None,
+                   fit: str = "auto") -> AvatarInfo:  # fmt: skip
+    """Everything ``avatar info`` shows; a file that is not glTF at all still raises. With
+    ``kit``, the avatar is also fitted to it as ``render --fit FIT`` would (the same call), and
+    a piece it would leave out of reach makes it unusable with that reason."""
     scene: GltfScene = read_gltf_file(path)
     info = AvatarInfo(str(path), nodes=len(scene.nodes), textures=scene.textures)
     try:
@@ -131,6 +145,12 @@ def inspect_avatar(path: Path, bone_map: Path | None = None) -> AvatarInfo:
         info.avatar, info.fitted = retarget(scene, human, path.stem)
     except AvatarError as exc:
         info.error = str(exc)
+        return info
+    if kit is not None:
+        try:
+            info.fitting = fit_avatar(kit, info.avatar, fit)
+        except UnreachableError as exc:
+            info.error = str(exc)
     return info
 
 

@@ -26,7 +26,8 @@ roughness factor, and a shading flag (``lit``, or ``toon`` for VRM's MToon drawn
 lighting).
 
 Limits: four weights per vertex (extra influences are dropped by the loader and the rest
-renormalised); one UV set; no morph targets (faces do not change expression); 32-bit indices.
+renormalised); one UV set; morph targets only as the face shapes named by
+:data:`livedrummer.body.face.FACES` (positions, not normals); 32-bit indices.
 """
 
 from __future__ import annotations
@@ -140,6 +141,26 @@ class SkinnedMesh:
 
 
 @dataclass(frozen=True)
+class FaceShape:
+    """One face shape (a blend shape, a morph target): the vertices it moves and by how much
+    at full weight, in the bind pose's frame (metres). Shapes add: a drawn face is the mesh
+    plus the sum of weight times shape."""
+
+    vertices: np.ndarray  # int64 (M,), sorted, unique
+    deltas: np.ndarray  # float32 (M, 3)
+
+
+def face_shape(moves: list[tuple[np.ndarray, np.ndarray]]) -> FaceShape:
+    """The shape of a list of (vertex indices, deltas) moves, summed where they overlap."""
+    idx = np.concatenate([m[0] for m in moves]).astype(np.int64)
+    d = np.concatenate([m[1] for m in moves]).astype(np.float64)
+    uniq, inv = np.unique(idx, return_inverse=True)
+    total = np.zeros((uniq.size, 3))
+    np.add.at(total, inv, d)
+    return FaceShape(uniq, total.astype(np.float32))
+
+
+@dataclass(frozen=True)
 class Avatar:
     """A drawable character and the proportions its motion must use."""
 
@@ -150,6 +171,9 @@ class Avatar:
     #: our joint name -> the avatar's bone (node) name it was mapped from (``avatar info``)
     bones: dict[str, str] = field(default_factory=dict)
     digest: str = ""  # hex; announced by the synth in READY so a display can compare
+    #: face shapes by the names of :data:`livedrummer.body.face.FACES` (a VRM's expressions,
+    #: the built-in character's own); empty for an avatar without any
+    faces: dict[str, FaceShape] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not self.digest:

@@ -28,6 +28,9 @@ avatar's bones, the avatar is bound once to *our* skeleton, sized to it:
    the head, a skirt by the hips, fingers and toes by the hand and foot, unparented meshes by
    the pelvis), duplicates summed, the four largest kept and renormalised.
 
+Faces: a VRM's expressions (:mod:`~livedrummer.avatar.faces`) come along as face shapes,
+turned and scaled like the vertices.
+
 Fingers are curled around the grip before binding (the avatar's own skin, posed on its own
 finger bones: proximal 75, middle 90, distal 60 degrees, the thumb less, towards the palm,
 the palm found from the thumb's side), since they then ride on our wrist joint. Limits: a
@@ -42,8 +45,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.avatar.bonemap import FINGERS, SIDES, Humanoid
+from livedrummer.avatar.faces import vrm_faces
 from livedrummer.avatar.gltf import GltfScene
-from livedrummer.avatar.model import MAX_INFLUENCES, Avatar, AvatarError, SkinnedMesh
+from livedrummer.avatar.model import MAX_INFLUENCES, Avatar, AvatarError, SkinnedMesh, face_shape
 from livedrummer.avatar.skinning import joint_matrices
 from livedrummer.body import quat
 from livedrummer.body.skeleton import (
@@ -227,7 +231,10 @@ def retarget(scene: GltfScene, human: Humanoid, name: str) -> tuple[Avatar, Fitt
     mesh.check(src)
     bones = {our: scene.nodes[human.bones[b]].name for b, our in _mapping(human).items()}
     height = float(pos[:, 2].max() - pos[:, 2].min())
-    return Avatar(name, src, lengths, mesh, bones), Fitted(height, unit, facing, up_axis, curled)
+    # the VRM's expressions, turned and scaled as the vertices (the fingers' curl is no face's)
+    faces = {k: face_shape([(idx, (d @ rot.T) * unit)]) for k, (idx, d) in vrm_faces(scene).items()}
+    avatar = Avatar(name, src, lengths, mesh, bones, faces=faces)
+    return avatar, Fitted(height, unit, facing, up_axis, curled)
 
 
 def _mapping(human: Humanoid) -> dict[str, str]:

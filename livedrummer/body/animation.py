@@ -35,7 +35,8 @@ import numpy as np
 
 from livedrummer.body import fk, quat, spline
 from livedrummer.body.expression import Expression
-from livedrummer.body.ik import solve_leg
+from livedrummer.body.ik import ArmSolution, solve_leg
+from livedrummer.body.ready import ReadyParams, ready_keys, solve_ready
 from livedrummer.body.rig import Rig, neutral_world
 from livedrummer.body.secondary import BOB_KINDS, SecondaryParams, Torso, TorsoStyle, build_torso
 from livedrummer.body.skeleton import ARM, LEG, N_JOINTS, J
@@ -60,7 +61,6 @@ X = np.array([1.0, 0.0, 0.0])
 #: and sways under it (only the shoulder joint's position moves); the rest are local.
 PARENT_IS_CHEST = {j: j in (ARM["R"][0], ARM["L"][0]) for j in range(N_JOINTS)}
 FOOT_LIFT_M = 0.07
-HOVER_LIFT = 0.5
 REST_LIFT = 0.15  # a foot with nothing to play hovers this far above its footboard
 ELBOW_MAX_RAD = np.radians(150.0)
 GUARD_TOLERANCE_M = 0.0005
@@ -69,6 +69,7 @@ PROBES = 2  # samples per segment next to a key, for the clearance search
 TRIES_SCALE = (0.6, 0.3, 0.0)  # factors on a stroke key's lift
 TRIES_TRAVEL = (0.4, 0.8, -0.3)  # added to a travel key's lift
 PEDAL_WINDOW_S = 0.05  # the controller's openness fades out this close to a pedal stroke
+READY = ReadyParams()  # the waiting hand (livedrummer.body.ready)
 
 
 @dataclass(frozen=True)
@@ -360,7 +361,7 @@ def animate(
             home = _home_piece(rig, LIMBS[code])
             t = np.zeros(1)
             pz = (np.array([home]), np.array([ZONES.index(kit.pieces[home].zones[0])]))
-            lift_v = np.array([HOVER_LIFT])
+            lift_v = np.array([READY.lift])
             openn = np.array([np.nan])
         else:
             pz = (piece[notes], zone[notes])
@@ -368,33 +369,30 @@ def animate(
             openn = on["openness"][notes]
         chest_q, r_sh, l_sh = _spine(rig, torso, t)
         shoulder = r_sh if side == "r" else l_sh
-        sol, point, normal = solve_strike(rig, code, shoulder, chest_q, pz[0], pz[1], openn)
-        world = {sh_j: sol.shoulder_q, el_j: sol.elbow_q, wr_j: sol.wrist_q, st_j: sol.stick_q}
-        # the shoulder's stays in the world frame (see Animation.locals), the rest local
-        base = dict(zip((sh_j, el_j, wr_j, st_j),
-                        to_local(None, *world.values()), strict=True))  # fmt: skip
-        pivots = {sh_j: shoulder, el_j: sol.elbow, wr_j: sol.wrist, st_j: sol.fulcrum}
-        n_notes = t.size
-        flexion = _angle(sol.elbow - shoulder, sol.wrist - sol.elbow)
-        amps = {
-            sh_j: np.full(n_notes, amp_s),
-            # a stroke never folds the elbow past ELBOW_MAX_RAD
-            el_j: np.clip(ELBOW_MAX_RAD - flexion, 0.0, amp_e),
-            wr_j: np.full(n_notes, amp_w),
-            st_j: np.full(n_notes, amp_w / 3.0),
-        }
+        if notes.size == 0:  # a hand with nothing to play waits ready over its home piece
+            sol, point, normal = solve_ready(rig, code, shoulder, chest_q, pz[0], pz[1], openn,
+                                             READY.height_m)  # fmt: skip
+        else:
+            sol, point, normal = solve_strike(rig, code, shoulder, chest_q, pz[0], pz[1], openn)
+        poses = _ArmPoses.of(sol, shoulder, point, normal, (amp_s, amp_e, amp_w), side)
         scales = {sh_j: ts_s, el_j: ts_e, wr_j: ts_w * (1 - sp.lag), st_j: ts_w * (1 - 2 * sp.lag)}
         if notes.size == 0:
             keys = Keys(t, lift_v, np.array([0]), np.array([0]), np.array([0]), t)
         else:
             target_id = pz[0] * len(ZONES) + pz[1]
             keys = stroke_keys(t, target_id, lift_v, elasticity[pz[0]], sp, pz[0])
-        signed = {}
-        for j in (sh_j, el_j, wr_j, st_j):
-            axis_w = quat.rotate(world[j], X)
-            rise = np.sum(axis_w * quat.cross(point - pivots[j], normal), axis=-1)
-            signed[j] = np.where(rise >= 0, 1.0, -1.0)
-        arm = _ArmKeys(keys, base, signed, amps, scales, ex.ctb_bias)
+            ready = ready_keys(keys, t, READY)
+            if ready.time_s.size:  # the ready poses ride behind the contacts as virtual notes
+                keys = ready.keys
+                r = ready.note
+                chest_r, r_sh_r, l_sh_r = _spine(rig, torso, ready.time_s)
+                shoulder_r = r_sh_r if side == "r" else l_sh_r
+                sol_r, point_r, normal_r = solve_ready(
+                    rig, code, shoulder_r, chest_r, pz[0][r], pz[1][r], openn[r], READY.height_m
+                )
+                poses = poses.then(_ArmPoses.of(sol_r, shoulder_r, point_r, normal_r,
+                                                (amp_s, amp_e, amp_w), side))  # fmt: skip
+        arm = _ArmKeys(keys, poses.base, poses.signed, poses.amps, scales, ex.ctb_bias)
         arm_keys[side] = arm
         arms[side] = arm.curves()
         step()
@@ -428,6 +426,51 @@ def animate(
 
 def _nothing() -> None:
     return None
+
+
+@dataclass(frozen=True)
+class _ArmPoses:
+    """Per note (contact, or ready: see :mod:`~livedrummer.body.ready`), each arm joint's
+    base rotation, the sign that lifts its stick and its full-lift amplitude."""
+
+    base: dict[int, np.ndarray]
+    signed: dict[int, np.ndarray]
+    amps: dict[int, np.ndarray]
+
+    @classmethod
+    def of(cls, sol: ArmSolution, shoulder: np.ndarray, point: np.ndarray, normal: np.ndarray,
+           amp: tuple[float, float, float], side: str) -> _ArmPoses:  # fmt: skip
+        amp_s, amp_e, amp_w = amp
+        sh_j, el_j, wr_j, st_j, _ = ARM[side.upper()]
+        world = {sh_j: sol.shoulder_q, el_j: sol.elbow_q, wr_j: sol.wrist_q, st_j: sol.stick_q}
+        # the shoulder's stays in the world frame (see Animation.locals), the rest local
+        base = dict(zip((sh_j, el_j, wr_j, st_j),
+                        to_local(None, *world.values()), strict=True))  # fmt: skip
+        pivots = {sh_j: shoulder, el_j: sol.elbow, wr_j: sol.wrist, st_j: sol.fulcrum}
+        n = shoulder.shape[0]
+        flexion = _angle(sol.elbow - shoulder, sol.wrist - sol.elbow)
+        amps = {
+            sh_j: np.full(n, amp_s),
+            # a stroke never folds the elbow past ELBOW_MAX_RAD
+            el_j: np.clip(ELBOW_MAX_RAD - flexion, 0.0, amp_e),
+            wr_j: np.full(n, amp_w),
+            st_j: np.full(n, amp_w / 3.0),
+        }
+        signed = {}
+        for j in (sh_j, el_j, wr_j, st_j):
+            axis_w = quat.rotate(world[j], X)
+            rise = np.sum(axis_w * quat.cross(point - pivots[j], normal), axis=-1)
+            signed[j] = np.where(rise >= 0, 1.0, -1.0)
+        return cls(base, signed, amps)
+
+    def then(self, more: _ArmPoses) -> _ArmPoses:
+        """These poses followed by ``more`` (indices n.. are ``more``'s)."""
+
+        def cat(a: dict[int, np.ndarray], b: dict[int, np.ndarray]) -> dict[int, np.ndarray]:
+            return {j: np.concatenate([a[j], b[j]]) for j in a}
+
+        return _ArmPoses(cat(self.base, more.base), cat(self.signed, more.signed),
+                         cat(self.amps, more.amps))  # fmt: skip
 
 
 @dataclass

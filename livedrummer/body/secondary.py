@@ -14,14 +14,16 @@ a function of time built from keys:
   between the strike range and the mid-beat, each sub-interval weighted ``w_i / (1 + i c)``
   with i counted from 0 next to the beat, so an empty side gives exactly 1; the larger side
   wins).
-* **Look-at** (head yaw and pitch): keyed slightly before each hand onset towards its target.
+* **Look-at** (head yaw and pitch): keyed slightly before each hand onset, ``look_fraction``
+  of the gaze towards the struck target, smoothed and limited (:mod:`~livedrummer.body.gaze`:
+  a run of alternating hits holds the gaze between them; the eyes turn the rest).
 * **Style** (:class:`TorsoStyle`, from the expression): sway and bob keyed on a grid of
   ``frequency`` times the beats (0.5: every other beat, 2: on every half beat, interpolated
   through the beats' own times, so it follows a changing tempo); a sideways sway (lower
   back roll, about the forward axis) to one side on one beat of its grid and to the other
   on the next; a constant sideways head tilt.
 
-Limits: the pelvis stays still on the throne; no breathing; look-at ignores the other hand.
+Limits: the pelvis stays still on the throne; no breathing; one gaze for both hands.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from livedrummer.body import quat, spline
+from livedrummer.body.gaze import GazeParams, gaze_keys
 
 X = np.array([1.0, 0.0, 0.0])
 Y = np.array([0.0, 1.0, 0.0])
@@ -48,7 +51,8 @@ class SecondaryParams:
     strike_range_s: float = 0.025
     density_c: float = 1.0
     look_ahead_s: float = 0.12
-    look_fraction: float = 0.6
+    look_fraction: float = 0.6  # the head's share of the gaze; the eyes turn the rest
+    gaze: GazeParams = field(default_factory=GazeParams)  # smoothing and limits
 
 
 @dataclass(frozen=True, slots=True)
@@ -239,7 +243,7 @@ def build_torso(
     )
     bob_t, bob_v = _beat_keys(bob_beats, head_amp_rad * np.clip(factor, 0.0, 1.5))
     rel = hand_targets - head_m
-    look_pitch = params.look_fraction * np.arctan2(-rel[:, 2], np.hypot(rel[:, 0], rel[:, 1]))
+    gaze_yaw, gaze_pitch = gaze_keys(hand_s, rel, params.gaze)
     return Torso(
         lean_rad=np.radians(params.lean_deg),
         twist_t=hand_s,
@@ -249,8 +253,8 @@ def build_torso(
         bob_t=bob_t,
         bob_rad=bob_v,
         look_t=hand_s - params.look_ahead_s,
-        look_yaw=params.look_fraction * azimuth(rel),
-        look_pitch=look_pitch,
+        look_yaw=params.look_fraction * gaze_yaw,
+        look_pitch=-params.look_fraction * gaze_pitch,  # the head's pitch is positive down
         roll_t=roll_t,
         roll_rad=roll_v,
         tilt_rad=st.head_tilt_rad,

@@ -19,7 +19,7 @@ percussion are drawn as small drums.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -115,6 +115,18 @@ class KitMesh:
     pivot: np.ndarray  # float64 (N, 3)
     axis: np.ndarray  # float64 (N, 3): lift direction or beater hinge axis
     pieces: int
+    #: bool (N,): instances of the pieces whose hard hits surprise the face (crash, splash,
+    #: china; :mod:`livedrummer.body.face`); empty: none
+    crash: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+    @property
+    def crash_like(self) -> np.ndarray:
+        """bool (P,): per piece, whether it is crash-like (see ``crash``)."""
+        out = np.zeros(self.pieces, dtype=bool)
+        if self.crash.shape == self.piece.shape:
+            hit = self.piece[self.crash]
+            out[hit[hit >= 0]] = True
+        return out
 
     @property
     def groups(self) -> dict[str, np.ndarray]:
@@ -307,7 +319,11 @@ def build_kit_mesh(kit: Kit, *, floor: bool = True) -> KitMesh:
             _cymbal(b, piece, i)
         else:
             _drum(b, piece, i)
-    return b.build(len(kit.pieces))
+    from livedrummer.body.face import CRASH_KINDS
+
+    crash = np.array([p.kind.value in CRASH_KINDS for p in kit.pieces] + [False], dtype=bool)
+    built = b.build(len(kit.pieces))
+    return replace(built, crash=crash[built.piece])  # piece -1 (floor, throne): the False
 
 
 def empty_stage() -> KitMesh:

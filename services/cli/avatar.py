@@ -3,9 +3,12 @@
 Prints the humanoid bones found (and from which map: VRM 1.0, VRM 0.x, Mixamo, Blender/Rigify,
 Unreal or a bone map file), which of our joints each was mapped from, required bones that are
 missing, the facing, up axis, unit and height found, the proportions the rig will use, the
-mesh's triangles and the materials with their textures; ``--json`` prints the same as one
-object. An avatar that cannot be used is still described, then its one-line reason ends the
-output and the exit status is 2.
+mesh's triangles and the materials with their textures, and how it is fitted to ``--kit``
+with ``--fit`` (:func:`livedrummer.avatar.fit.fit_avatar`, the very call ``render``, ``check``,
+``export``, ``synth`` and ``display`` make, so "usable" here is what they do); ``--json``
+prints the same as one object. An avatar that cannot be used (a bone missing, or a piece the
+fit leaves out of reach) is still described, then its one-line reason ends the output and the
+exit status is 2.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from .common import Subparsers, add_command
+from .common import FITS, Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:
@@ -28,17 +31,27 @@ def register(sub: Subparsers) -> None:
                       help="TOML bone map (default: FILE.bones.toml beside the file, "
                       "if any)")  # fmt: skip
     info.add_argument("--json", action="store_true", help="print one JSON object")
+    info.add_argument(
+        "--kit", default="rock5", help="the kit it is fitted to, as render --kit (default: rock5)"
+    )
+    info.add_argument(
+        "--fit",
+        choices=FITS,
+        default="auto",
+        help="how it is fitted, as render --fit (default: auto)",
+    )
     info.set_defaults(func=run_info)
 
 
 def run_info(args: argparse.Namespace) -> int:
     from livedrummer.avatar.loader import inspect_avatar, resolve_avatar
     from livedrummer.avatar.model import AvatarError
+    from livedrummer.kit.loader import load_kit
 
     path = resolve_avatar(args.file)
     if path is None:
         raise AvatarError(f"avatar {args.file!r} is the built-in character: no file to describe")
-    info = inspect_avatar(path, args.bone_map)
+    info = inspect_avatar(path, args.bone_map, load_kit(args.kit), args.fit)
     report = info.as_json()
     if args.json:
         print(json.dumps(report, indent=1))
@@ -56,7 +69,7 @@ def text_lines(r: dict[str, Any]) -> list[str]:
              f"{'usable' if r['usable'] else 'NOT usable'}"]  # fmt: skip
     lines.append(f"  humanoid bones   {len(found)} found: {', '.join(found) or '-'}")
     lines.append(f"  required missing {', '.join(r['required_missing']) or 'none'}")
-    if not r["usable"]:
+    if "proportions_m" not in r:
         return lines
     lines.append(f"  frame            faces {r['faces']}, up {r['up']}, unit "
                  f"{r['unit_scale']:g} m, height {r['height_m']:.3f} m, "
@@ -73,4 +86,7 @@ def text_lines(r: dict[str, Any]) -> list[str]:
         tex = f"texture {m['texture'][0]}x{m['texture'][1]}" if m["texture"] else "colour"
         mats.append(f"{m['name']} ({tex}, {m['alpha']}, {m['shading']})")
     lines.append(f"  materials        {r['textures']} textures: {'; '.join(mats)}")
+    if "fit" in r:
+        lines.append(f"  fit              --fit {r['fit']['asked']} on kit {r['fit']['kit']}: "
+                     f"{r['fit']['said']}")  # fmt: skip
     return lines

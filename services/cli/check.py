@@ -83,9 +83,10 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
-    from .common import avatar_of, rig_for
+    from .common import avatar_of, fitting_of, rig_for
 
-    avatar = avatar_of(args)
+    fitting = fitting_of(args, kit, avatar_of(args))
+    kit, avatar = fitting.kit, fitting.avatar
     rig = rig_for(kit, avatar)
     map_names: set[str] = set()
     expression = load_expression(args.preset) if args.preset else None
@@ -139,6 +140,7 @@ def run(args: argparse.Namespace) -> int:
         "files_without_drums": no_drums,
         "kit": kit.name,
         "avatar": "default" if avatar is None else avatar.source,
+        **({} if avatar is None else {"fit": fitting.as_json()}),
         "map": ", ".join(sorted(map_names)) or None,
         **totals,
         **hard,
@@ -214,9 +216,10 @@ def run_stage(args: argparse.Namespace) -> int:
         kit = load_kit(p.kit)
         avatar = None
         if p.avatar is not None:
-            from .common import avatar_of
+            from .common import avatar_of, fitted
 
             avatar = avatar_of(argparse.Namespace(avatar=p.avatar))
+            kit, avatar = fitted(args, kit, avatar)
         expression = load_expression(p.preset) if p.preset else None
         sticking = sticking_of(args, part.performance, kit)
         done = perform(part.performance, rig_for(kit, avatar), part.note_map, expression,

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 from livedrummer.resources import data_dir
 
 if TYPE_CHECKING:
+    from livedrummer.avatar.fit import Fitting
     from livedrummer.avatar.model import Avatar
     from livedrummer.body.rig import Rig
     from livedrummer.kit.model import Kit
@@ -250,6 +251,11 @@ def background_of(args: argparse.Namespace, window: bool = False) -> Background:
     return bg
 
 
+#: ``--fit`` choices, as :data:`livedrummer.avatar.fit.FITS` names them (kept here so that
+#: building the parser imports no numpy; a test holds the two equal).
+FITS = ("auto", "avatar", "kit", "none")
+
+
 def add_avatar_option(parser: Any) -> None:
     """``--avatar FILE|NAME`` and ``--bone-map FILE``: who plays. The rig takes the avatar's
     proportions (:func:`rig_for`), the renderer its mesh; the same in every command."""
@@ -262,6 +268,12 @@ def add_avatar_option(parser: Any) -> None:
         "--bone-map", type=Path, metavar="FILE",
         help="TOML bone map for a glTF rig whose bone names are not known (default: "
         "FILE.bones.toml beside the avatar, else the VRM map or known rig names)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--fit", choices=FITS, default="auto",
+        help="an avatar whose size does not suit the kit: scale the avatar to the body the kit "
+        "is built for, move the throne, pedals and stands to the avatar, or neither; auto "
+        "leaves an avatar that reaches the kit alone (default: auto)",
     )  # fmt: skip
 
 
@@ -282,7 +294,28 @@ def avatar_argv(args: argparse.Namespace) -> list[str]:
         out += ["--avatar", str(args.avatar)]
     if getattr(args, "bone_map", None) is not None:
         out += ["--bone-map", str(args.bone_map)]
+    if getattr(args, "fit", "auto") != "auto":
+        out += ["--fit", str(args.fit)]
     return out
+
+
+def fitting_of(args: argparse.Namespace, kit: Kit, avatar: Avatar | None) -> Fitting:
+    """``--fit``: how the avatar plays the kit (:func:`livedrummer.avatar.fit.fit_avatar`, the
+    path ``avatar info`` reports); with an avatar, one line on stderr says how it was fitted
+    and why. A piece left out of reach is the one-line error."""
+    from livedrummer.avatar.fit import fit_avatar
+
+    done = fit_avatar(kit, avatar, getattr(args, "fit", "auto"))
+    if avatar is not None:
+        print(f"livedrummer: fit: {done.line}", file=sys.stderr)
+    return done
+
+
+def fitted(args: argparse.Namespace, kit: Kit, avatar: Avatar | None
+           ) -> tuple[Kit, Avatar | None]:  # fmt: skip
+    """The kit and avatar to play, as :func:`fitting_of` settles them."""
+    done = fitting_of(args, kit, avatar)
+    return done.kit, done.avatar
 
 
 def rig_for(kit: Kit, avatar: Avatar | None) -> Rig:

@@ -43,6 +43,7 @@ from .common import (
     check_aa,
     cues_of,
     demo_groove,
+    fitted,
     osc_allow,
     read_performance,
 )
@@ -176,8 +177,7 @@ def run(args: argparse.Namespace) -> int:
         overlays=parse_overlays(args.overlay), screenshot=args.screenshot, background=background,
         frame_log=args.frame_log,
     )  # fmt: skip
-    kit = load_kit(args.kit)
-    avatar = avatar_of(args)
+    kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
     body = body_scene(args, performance, kit, note_map, avatar)
     sound = None
     if not args.no_sound:
@@ -244,7 +244,7 @@ def run_live(args: argparse.Namespace) -> int:
     if not 0 < args.fps <= 1000:
         raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps})")
     calibration = Calibration.load()
-    avatar = avatar_of(args)
+    kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
     clock: FrameClock
     if args.clock == "audio":
         clock = AudioFrameClock(calibration.audio_ms / 1000.0)
@@ -269,7 +269,6 @@ def run_live(args: argparse.Namespace) -> int:
         cues=cues_of(args), background=background, overlays=overlays,
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    kit = load_kit(args.kit)
     if args.practice is not None:
         config.extra = practice_view(args, ctx, kit, avatar)
     if args.synth_control is not None:  # one line when the synth plays another avatar

@@ -65,9 +65,9 @@ def run(args: argparse.Namespace) -> int:
     if not performance.onsets.size:  # said on stderr: no motion to write
         return 0
     kit = load_kit(args.kit)
-    from .common import avatar_of, rig_for
+    from .common import avatar_of, fitted, rig_for
 
-    avatar = avatar_of(args)
+    kit, avatar = fitted(args, kit, avatar_of(args))
     rig = rig_for(kit, avatar)
     expression = load_expression(args.preset) if args.preset else None
     done = perform(

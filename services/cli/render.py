@@ -43,6 +43,7 @@ from .common import (
     avatar_of,
     background_of,
     demo_groove,
+    fitted,
     parse_aa,
     read_performance,
     rig_for,
@@ -236,8 +237,7 @@ def run(args: argparse.Namespace) -> int:
     source = Path(args.file) if args.file else demo_groove()
     # Every option is checked before the file is read (and its report printed): a mistyped
     # option is the one line on stderr.
-    kit = load_kit(args.kit)
-    avatar = avatar_of(args)
+    kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
     background = background_of(args)
     get_strategy(args.sticking)
     if args.cues is not None:  # checked now, applied once the file is animated
@@ -316,7 +316,7 @@ def run_stage(args: argparse.Namespace) -> int:
         kit = load_kit(p.kit)
         own = argparse.Namespace(**{**vars(args), "preset": p.preset or args.preset,
                                     "avatar": p.avatar or args.avatar})  # fmt: skip
-        avatar = avatar_of(own)
+        kit, avatar = fitted(own, kit, avatar_of(own))
         body = body_scene(own, part.performance, kit, part.note_map, avatar)
         drummers.append(StageDrummer(body, part.performance, part.placement, avatar))
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)

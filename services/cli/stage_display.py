@@ -49,14 +49,19 @@ def run_stage_live(args: argparse.Namespace) -> int:
         window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
                                monitor=args.monitor, camera=args.camera, samples=0,
                                vsync=False)  # fmt: skip
+    from livedrummer.avatar.fit import fit_avatar
+
     avatars = {}
     if any(p.avatar for _, p, _ in live):
         from livedrummer.avatar.loader import load_avatar
 
         avatars = {p.id: load_avatar(p.avatar) for _, p, _ in live if p.avatar is not None}
     kits = {p.kit: load_kit(p.kit) for _, p, _ in live}
+    # each performer's synth fits its avatar to its kit (--fit auto): the same here
+    fits = {p.id: fit_avatar(kits[p.kit], avatars[p.id]) for _, p, _ in live if p.id in avatars}
     performers = [StagePerformer(p.id if p.copy == 0 else f"{p.id}.{p.copy}", k, sub,
-                                 kits[p.kit], spot, avatars.get(p.id))
+                                 fits[p.id].kit if p.id in fits else kits[p.kit], spot,
+                                 fits[p.id].avatar if p.id in fits else None)
                   for (k, p, spot), sub in zip(live, subs, strict=True)]  # fmt: skip
     calibration = Calibration.load()
     config = StageConfig(

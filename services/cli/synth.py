@@ -21,6 +21,7 @@ from .common import (
     add_style_options,
     avatar_of,
     cues_of,
+    fitted,
     osc_allow,
     rig_for,
 )
@@ -101,8 +102,8 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--tick-hz: expected 0 < hz <= 1000 (got {args.tick_hz})")
     note_map = load_note_map(args.map)
     cc_open = np.array([note_map.openness(v) for v in range(128)])
-    avatar = avatar_of(args)
-    rig = rig_for(load_kit(args.kit), avatar)
+    kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
+    rig = rig_for(kit, avatar)
     expression = load_expression(args.preset) if args.preset else None
     synth = LiveSynth(rig, params, strokes=StrokeParams(model=args.strokes), cc_open=cc_open,
                       note_map=note_map, expression=expression)  # fmt: skip

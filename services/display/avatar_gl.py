@@ -12,7 +12,9 @@ transparent parts rarely overlap one another).
 
 :meth:`SkinnedDraw.skinned_positions` runs the same vertex shader through transform feedback
 and returns the skinned positions, which is how the tests compare the GPU with the numpy
-reference (:func:`livedrummer.avatar.skinning.skin`). Limits: 24 joints (the body's), one
+reference (:func:`livedrummer.avatar.skinning.skin`). The face (:meth:`SkinnedDraw.set_face`) is
+a second vertex buffer of offsets added to the bind-pose positions before skinning, the
+avatar's face shapes summed at their weights. Limits: 24 joints (the body's), one
 base-colour texture per material, sampled linear with mipmaps; no shadows of its own.
 """
 
@@ -58,7 +60,17 @@ class SkinnedDraw:
         mesh = avatar.mesh
         self._vbo = ctx.buffer(interleave(avatar).tobytes())
         self._ibo = ctx.buffer(mesh.indices.tobytes())
-        self._vao = ctx.vertex_array(program, [self._layout(program)], index_buffer=self._ibo,
+        # the face: shapes summed on the CPU into one offset per vertex, rewritten only where
+        # the shapes reach and only when the weights change (most frames: none do)
+        self._faces = {k: f for k, f in avatar.faces.items() if f.vertices.size}
+        self._offset_vbo: Any = None
+        self._face_key: tuple[float, ...] = ()
+        if self._faces:
+            touched = np.concatenate([f.vertices for f in self._faces.values()])
+            self._face_span = (int(touched.min()), int(touched.max()) + 1)
+            self._offsets = np.zeros((mesh.vertex_count, 3), np.float32)
+            self._offset_vbo = ctx.buffer(self._offsets.tobytes(), dynamic=True)
+        self._vao = ctx.vertex_array(program, self._content(program), index_buffer=self._ibo,
                                      index_element_size=4)  # fmt: skip
         self._inv_bind = np.linalg.inv(mesh.bind.astype(np.float64))
         self._textures: list[Any] = []
@@ -76,6 +88,33 @@ class SkinnedDraw:
         self._order = [mesh.primitives[i] for i in order]
         self._feedback: tuple[Any, Any, Any] | None = None
         self._depth: Any = None
+
+    @property
+    def has_face(self) -> bool:
+        return bool(self._faces)
+
+    def set_face(self, weights: dict[str, float]) -> None:
+        """The face of the next draws: each shape of the avatar at its weight (0..1; names
+        of :data:`livedrummer.body.face.FACES`; a name the avatar has no shape for is
+        ignored)."""
+        if not self._faces:
+            return
+        key = tuple(round(float(weights.get(k, 0.0)), 4) for k in self._faces)
+        if key == self._face_key:
+            return
+        self._face_key = key
+        lo, hi = self._face_span
+        self._offsets[lo:hi] = 0.0
+        for w, (_name, f) in zip(key, self._faces.items(), strict=True):
+            if w:
+                self._offsets[f.vertices] += np.float32(w) * f.deltas
+        self._offset_vbo.write(self._offsets[lo:hi].tobytes(), offset=lo * 12)
+
+    def _content(self, program: Any) -> list[tuple[Any, ...]]:
+        out = [self._layout(program)]
+        if self._offset_vbo is not None and "in_offset" in program:
+            out.append((self._offset_vbo, "3f", "in_offset"))
+        return out
 
     def _layout(self, program: Any) -> tuple[Any, ...]:
         names = ("in_pos", "in_normal", "in_uv", "in_joints", "in_weights")
@@ -135,7 +174,7 @@ class SkinnedDraw:
 
         if self._depth is None:
             self._depth = self.ctx.vertex_array(
-                program, [self._layout(program)], index_buffer=self._ibo, index_element_size=4
+                program, self._content(program), index_buffer=self._ibo, index_element_size=4
             )
         self._write_skin(program, self.skin_matrices(rotations_q, joints_m))
         materials = self.avatar.mesh.materials
@@ -150,7 +189,7 @@ class SkinnedDraw:
 
         if self._feedback is None:
             prog = self.ctx.program(vertex_shader=shader_source("skin.vert"), varyings=["v_pos"])
-            vao = self.ctx.vertex_array(prog, [self._layout(prog)])
+            vao = self.ctx.vertex_array(prog, self._content(prog))
             # a stand-alone (EGL) context has no default framebuffer: without one bound the
             # draw is refused (GL_INVALID_FRAMEBUFFER_OPERATION) even with nothing rasterised
             fbo = self.ctx.framebuffer(color_attachments=[self.ctx.renderbuffer((1, 1))])

@@ -42,12 +42,13 @@ from typing import Any, Literal
 import numpy as np
 
 from livedrummer.avatar.model import Avatar
-from livedrummer.body.skeleton import N_JOINTS
+from livedrummer.body.face import FaceTrack
+from livedrummer.body.skeleton import N_JOINTS, J
 from livedrummer.render.background import HALL, Background
 from livedrummer.render.camera import Camera, look_at, perspective
 from livedrummer.render.geometry import Mesh, all_meshes
 from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
-from livedrummer.render.scene import SceneFrame, Skeleton, Tone, empty_channels
+from livedrummer.render.scene import CH_HIGHLIGHT, SceneFrame, Skeleton, Tone, empty_channels
 from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
 
 from .avatar_gl import SkinnedDraw
@@ -137,6 +138,9 @@ class Renderer:
 
                 avatar = build_character()
             self.skinned = SkinnedDraw(ctx, self.programs["skin"], avatar)
+        self._face: FaceTrack | None = None  # blinks, looks and reactions (body.face)
+        if self.skinned is not None and self.skinned.has_face:
+            self._face = FaceTrack(kit_mesh.crash_like)
         self._pose: tuple[np.ndarray, np.ndarray] | None = None
         self._fbo: Any = None
         self._resolve: Any = None
@@ -234,6 +238,10 @@ class Renderer:
         self._pose = None
         if has_body and self.skinned is not None and frame.rotations_q is not None:
             self._pose = (frame.rotations_q, frame.joints_m)
+            if self._face is not None and self.skinned is not None:
+                self.skinned.set_face(self._face.weights(frame.time_s,
+                                                         frame.channels[:, CH_HIGHLIGHT],
+                                                         frame.rotations_q[J["head"]]))  # fmt: skip
             has_body = False  # the avatar, not the capsules; the sticks stay
         self._seg_count = len(self._seg) if has_body else 2
         if has_body and self.skeleton is not None:
