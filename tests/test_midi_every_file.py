@@ -487,3 +487,20 @@ def test_percussion_extension_plays_gm_percussion_notes(tmp_path: Path) -> None:
     out = json.loads(proc.stdout)
     assert out["notes"] == len(notes) and out["not_played"] == 0
     assert out["contact_error_mm"]["max"] < 5.0
+
+
+def test_check_of_an_unreadable_file_gives_its_error_and_no_figures(tmp_path: Path) -> None:
+    broken = tmp_path / "broken.mid"
+    broken.write_bytes(b"MThd\x00\x00\x00\x06\x00\x01\x00\x01\x01\xe0MTrk\x00\x00\x01\x00")
+    proc = cli("check", str(broken), "--json", "--summary", "--fps", "60")
+    assert proc.returncode == 2
+    out = json.loads(proc.stdout)
+    assert out["files"] == 0 and out["unreadable_files"] == 1
+    assert out["contact_error_mm"] is None and out["penetration_mm"] is None
+    assert out["joint_limit_violations"] is None
+    (failed,) = out["unreadable"]
+    assert failed["file"] == str(broken) and "truncated" in failed["error"]
+    assert f"livedrummer: error: {failed['error']}" in proc.stderr.splitlines()
+    text = cli("check", str(broken), "--fps", "60")
+    assert text.returncode == 2 and "within 5 mm" not in text.stdout
+    assert "no figures" in text.stdout
