@@ -247,12 +247,15 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
             return "no hits"
         return f"mean {r['mean_offset_ms']:+.1f} ms, sd {r['sd_offset_ms']:.1f} ms"
 
+    from livedrummer.practice.grade import window_words
+
+    w = window_words(result)
     lines = [
-        f"{result['reference_notes']} notes: {result['hits']} hits, "
+        f"{result['reference_notes']} notes: {result['hits']} hits ({w['hits']}), "
         f"{result['wrong_piece']} wrong piece, {result['missed']} missed, {result['extra']} extra",
-        f"timing: {timing(result)}; perfect {result['perfect']}, good {result['good']}, "
-        f"ok {result['ok']}",
-        f"accuracy {result['accuracy_pct']:.1f} % (±{result['level_window_ms']:g} ms), "
+        f"timing: {timing(result)}; perfect {result['perfect']} ({w['perfect']}), "
+        f"good {result['good']} ({w['good']}), ok {result['ok']} ({w['ok']})",
+        f"accuracy {result['accuracy_pct']:.1f} % ({w['on_time']}), "
         f"score {result['score']:.1f}/100",
     ]
     for piece, r in result["per_piece"].items():
