@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -82,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.body.expression import load_expression
     from livedrummer.body.perform import perform
     from livedrummer.body.strokes import StrokeParams
-    from livedrummer.kit.loader import load_kit
+    from livedrummer.kit.loader import kit_that_plays, load_kit
     from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
@@ -104,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
     worst_contact: tuple[float, str] = (0.0, "")
     per_file: list[dict[str, Any]] = []
     hard = {"too_fast": 0, "crossed": 0}
+    no_piece: Counter[str] = Counter()  # notes of instruments the kit has no piece for
     failed: list[dict[str, str]] = []
     no_drums = 0
     for path in files:
@@ -126,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
             per_file.append({"file": str(path), "sticking": done.sticking.strategy, "notes": notes})
         for key in totals:
             totals[key] += getattr(r, key)
+        no_piece.update(without_piece(done.sticking))
         hard["too_fast"] += int(too_fast(done.sticking, kit).sum())
         hard["crossed"] += int(crossings(done.sticking, kit).sum())
         for k, v in r.violations_by_limit.items():
@@ -152,6 +155,8 @@ def run(args: argparse.Namespace) -> int:
         "penetration_file": worst["file"],
         "penetration_at_s": round(worst["at_s"], 4) if checked else None,
         "violations_by_limit": by_limit,
+        "no_piece": dict(no_piece.most_common()),
+        "kit_that_plays_them": kit_that_plays(kit, no_piece) if no_piece else None,
     }
     if not checked:
         summary["joint_limit_violations"] = None
@@ -166,7 +171,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         c = summary["contact_error_mm"] or {"max": 0.0, "p99": 0.0, "mean": 0.0, "within_5mm": 0.0}
         print(f"{summary['files']} file(s), kit {kit.name}, map {summary['map']}")
-        print(f"  notes checked      {summary['notes']}  (not played: {summary['not_played']})")
+        print(f"  notes checked      {summary['notes']}  (not played: {summary['not_played']}"
+              f"{no_piece_words(no_piece, kit.name, summary['kit_that_plays_them'])})")  # fmt: skip
         print(f"  too hard to play   {hard['too_fast']} too fast for one hand, "
               f"{hard['crossed']} with the arms crossed")  # fmt: skip
         if summary["contact_error_mm"] is None:
@@ -188,6 +194,24 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         return 2
     return 0
+
+
+def without_piece(sticking: Sticking) -> Counter[str]:
+    """Notes per instrument that the sticking's kit has no piece for."""
+    from livedrummer.kit.vocabulary import INSTRUMENTS
+
+    codes = sticking.onsets["instrument"][sticking.piece < 0]
+    return Counter(INSTRUMENTS[int(c)] for c in codes.tolist())
+
+
+def no_piece_words(no_piece: Counter[str], kit: str, plays: str | None) -> str:
+    """``; tambourine x2, cowbell x2 have no piece on rock5: --kit rock5+percussion plays
+    them`` (empty when the kit has a piece for every note)."""
+    if not no_piece:
+        return ""
+    listed = ", ".join(f"{name} x{n}" for name, n in no_piece.most_common())
+    then = f": --kit {plays} plays them" if plays else ""
+    return f"; {listed} have no piece on {kit}{then}"
 
 
 def contact_json(error_mm: np.ndarray, worst_file: str) -> dict[str, Any] | None:
