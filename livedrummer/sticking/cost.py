@@ -16,9 +16,11 @@ teacher would name has to be a term here, measured from the kit rather than writ
   grid), the hands go hand to hand, so one hand twice in a row costs ``triplet_double``; the lead
   hand's habit follows the groupings of three (beat, second and third eighth-triplet), not the
   off-beat eighth that the fourth note of the beat falls on; and the hand that leads onto the
-  next drum may pass the other one for a stroke, as a drummer's does moving around the toms,
-  which costs what a conventional crossing does (per metre) when the two drums are neighbours
-  (no further apart than a conventional reach), not the crossing's full price.
+  next drum may pass the other one for a stroke, as a drummer's does moving around the toms:
+  when the two drums are neighbours (no further apart than a conventional reach) and the other
+  hand then meets it on that drum, the pass costs ``triplet_pass`` plus a conventional
+  crossing's price per metre (``pass_stance``), not the crossing's full price (the trellis
+  charges the full one and gives the difference back at the meeting note, :mod:`.optimal`).
 
 All arrays are indexed by ``kit.pieces`` index and by hand (0 = right, 1 = left). The weights
 were tuned on the annotated corpus in ``tests/data/sticking`` (accuracy) and a sample of the

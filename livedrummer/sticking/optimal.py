@@ -17,7 +17,13 @@ at tens of thousands of notes per second, whatever its length.
 Triplet runs (:mod:`.cost`) need one fact more than a state: whether the previous step was a
 single drum note on the sixteenth-triplet grid, a sixth of a beat before this one. That is the
 same for every state (it is the input's, not the sticking's), so the trellis keeps it beside
-the step's time, and a state's hand tells whether the run's hands alternated.
+the step's time, and a state's hand tells whether the run's hands alternated. A hand passing
+the other onto a neighbouring drum is charged the full crossing when it strikes, and the
+difference to the pass's price is given back, along that state's path, only when the next note
+of the run is the other hand on the same drum: a pass is cheap where the hands then meet there
+(a drummer's move around the toms), never where the run ends crossed. So the online form, which
+commits a note before the next is heard, does not pass; its short lookahead plays the change
+of drum without the pass (a double or a lead change), as before.
 """
 
 from __future__ import annotations
@@ -54,6 +60,7 @@ class Snapshot:
     doubles: np.ndarray
     steps: int
     sixth_s: float
+    refund: np.ndarray
 
 
 class Trellis:
@@ -90,6 +97,7 @@ class Trellis:
         self.times = np.full(4 * n, -10.0)
         self.doubles = np.zeros(4 * n, dtype=bool)  # was that hand's last stroke a double?
         self.sixth_s = 0.0  # the last step's triplet sixth: a single drum note on that grid
+        self.refund = np.zeros(2 * n)  # per state: a pass's crossing, returned if it is met
         self.backpointers = []
         self.offset = 0.0  # what normalisation took off the values: best total = offset + min
 
@@ -102,6 +110,7 @@ class Trellis:
             self.doubles.copy(),
             len(self.backpointers),
             self.sixth_s,
+            self.refund.copy(),
         )
 
     def restore(self, s: Snapshot) -> None:
@@ -109,6 +118,7 @@ class Trellis:
         self.times = s.times.copy()
         self.doubles = s.doubles.copy()
         self.sixth_s = s.sixth_s
+        self.refund = s.refund.copy()
         del self.backpointers[s.steps :]
 
     def _table(self, p: int, run: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -161,10 +171,11 @@ class Trellis:
         run = self._in_run(p, t, sixth_s)
         if run:
             beat = grouping
-        stroke, stance = self._table(p, run)
+        stroke, stance = self._table(p)
         gap = t - self.times
         cost, double = self._hand(stroke, self._at[self.main], gap, p, self.doubles)
-        cost += stance * (gap[self._swap] <= m.stance_window_s)
+        near = gap[self._swap] <= m.stance_window_s
+        cost += stance * near
         iso = min(1.0, (t - self.time_s) / m.weights.isolation_s)
         c0 = self.value + cost[:n2]
         c0 += m.bias[0, p] * iso + m.beat_bias[0, p] * beat
@@ -173,6 +184,9 @@ class Trellis:
         if run:  # hand to hand: a state whose hand struck the previous note strikes again
             c0[:n] += m.weights.triplet_double
             c1[n:] += m.weights.triplet_double
+            if p == self.main:  # the other hand meets the passing one on its drum
+                c0[n:] -= self.refund[n:]
+                c1[:n] -= self.refund[:n]
         pm = self.main
         value = np.concatenate((c0[:n], c1[n:]))
         back = self._ar2.copy()
@@ -194,8 +208,14 @@ class Trellis:
         doubles[n:n2] = self.doubles[back[n:]]
         doubles[n2 : n2 + n] = self.doubles[n2 + back[:n]]
         doubles[n2 + n :] = double[n2 + back[n:]]
+        refund = np.zeros(n2)
+        if run:
+            owed = (stance - self._table(p, True)[1]) * near
+            refund[:n] = owed[:n2][back[:n]]
+            refund[n:] = owed[n2:][back[n:]]
         self._advance(value, back, times, doubles, p, t)
         self.sixth_s = sixth_s if m.drum[p] else 0.0
+        self.refund = refund
 
     def _in_run(self, p: int, t: float, sixth_s: float) -> bool:
         """Is a drum note at ``t`` the next of a sixteenth-triplet run (see the docstring)?"""
@@ -232,6 +252,7 @@ class Trellis:
             doubles[s], doubles[n2 + s] = dr[k], dl[k]
         self._advance(value, back, np.full(4 * n, t), doubles, a, t)
         self.sixth_s = 0.0
+        self.refund = np.zeros(n2)
 
     def _advance(
         self,
