@@ -156,3 +156,19 @@ def test_json_and_text_name_the_windows_and_grades_alike(groove_dir: Path, tmp_p
             f"ok {out['ok']} (≤ 80 ms)") in lines[1]  # fmt: skip
     assert lines[2].startswith(f"accuracy {out['accuracy_pct']:.1f} % (on time ±20 ms, hard)")
     assert "100 ms" not in text.stdout  # the default window appears nowhere
+
+
+def test_a_file_scored_against_itself_says_its_notices_once(
+    groove_dir: Path, tmp_path: Path
+) -> None:
+    ref = groove_dir / SOUL
+    proc = run("practice", "score", str(ref), str(ref))  # both read with --map auto
+    assert proc.returncode == 0, proc.stderr
+    said = [line for line in proc.stderr.splitlines() if "map auto:" in line]
+    assert len(said) == 1 and said[0].startswith(f"livedrummer: {ref}: "), proc.stderr
+    take = tmp_path / "take.mid"
+    plant_take(ref, take, seed=3)
+    other = run("practice", "score", str(ref), str(take))  # a take of its own is named apart
+    assert other.returncode == 0, other.stderr
+    named = {line.split(": ")[1] for line in other.stderr.splitlines() if "map auto:" in line}
+    assert named == {str(ref), str(take)}, other.stderr

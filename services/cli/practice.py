@@ -190,6 +190,13 @@ def judge_settings(args: argparse.Namespace) -> tuple[float, frozenset[int] | No
     return args.window_ms, pieces, Level(args.level)
 
 
+def _same_file(a: Path | str, b: Path | str) -> bool:
+    try:
+        return Path(a).resolve() == Path(b).resolve()
+    except OSError:
+        return False
+
+
 def run_score(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -200,9 +207,14 @@ def run_score(args: argparse.Namespace) -> int:
     from .common import read_performance
 
     window_ms, pieces, level = judge_settings(args)
-    ref, _ = read_performance(args, args.reference)
+    ref, ref_map = read_performance(args, args.reference)
     take_args = argparse.Namespace(**{**vars(args), "map": args.take_map})
-    take, _ = read_performance(take_args, args.take)
+    take, take_map = read_performance(take_args, args.take, quiet=True)
+    same = _same_file(args.reference, args.take)
+    said = set(ref.report_lines(ref_map.ignored)) if same else set()
+    for line in take.report_lines(take_map.ignored):
+        if line not in said:  # the reference scored against itself: its notices once
+            print(f"livedrummer: {args.take}: {line}", file=sys.stderr)
     if not ref.onsets.size:
         raise LivedrummerError(f"{args.reference}: no drum notes to judge against")
     from ..practice.take import take_lead_s
