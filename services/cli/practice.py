@@ -9,6 +9,9 @@ JSON object with ``--json``. ``--report FILE.html`` writes the self-contained HT
 (:mod:`livedrummer.practice.report`), ``--save`` keeps the result in the practice database
 (:mod:`services.practice.store`), which ``practice history`` lists and plots over days.
 
+Each file's notices (the map ``auto`` chose, notes left out) are printed once: a reference
+scored against itself, the first thing a newcomer tries, does not say them again as the take.
+
 The take is judged on the reference's clock: a take the practice rig wrote
 (:mod:`services.practice.take`) says in a marker where the reference starts in it, and that
 lead is subtracted; any other file is judged as written, its time zero the reference's.
