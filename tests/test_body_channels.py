@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -75,3 +77,16 @@ def test_beater_touches_the_kick_head_at_zero_angle() -> None:
     np.testing.assert_allclose(beater_tip(kick, np.array(0.0)), contact, atol=1e-12)
     back = beater_tip(kick, np.array(0.6))
     assert np.dot(back - contact, kick.normal) == pytest.approx(BEATER_LENGTH_M * np.sin(0.6))
+
+
+def test_a_first_hit_minutes_into_a_song_overflows_nothing() -> None:
+    """A full-band file's drums may start minutes in: the frames before the first hit are
+    silent, computed without numpy's overflow warning (which reached the user of `render`)."""
+    t = np.arange(0.0, 400.0, 0.5)
+    hit = np.array([380.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        swing = vibration(t, hit, np.ones(1), np.zeros(0), V)
+        lum = glow(t, hit, np.ones(1), 0.001)
+    assert np.all(swing[t < 380.0] == 0.0) and np.all(lum[t < 380.0] == 0.0)
+    assert np.all(np.isfinite(swing)) and lum[t == 380.0][0] == 1.0

@@ -128,3 +128,24 @@ def test_demo_takes_size_camera_and_kit(tmp_path: Path) -> None:
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--camera 'nope'" in bad.stderr
     bad = run("demo", "--offline", "--map", "nope", DISPLAY="", WAYLAND_DISPLAY="")
     assert bad.returncode == 2 and "unknown note map 'nope'" in bad.stderr
+
+
+def test_inspect_summarises_hundreds_of_tempo_changes(tmp_path: Path) -> None:
+    import mido
+
+    track = mido.MidiTrack()
+    bpms = [60.0 + (i * 7) % 61 for i in range(300)]  # a rubato: 60-120 bpm, 300 changes
+    for bpm in bpms:
+        track.append(mido.MetaMessage("set_tempo", tempo=mido.bpm2tempo(bpm), time=0))
+        track.append(mido.Message("note_on", channel=9, note=36, velocity=90, time=0))
+        track.append(mido.Message("note_on", channel=9, note=36, velocity=0, time=240))
+    mid = mido.MidiFile(ticks_per_beat=480)
+    mid.tracks.append(track)
+    path = tmp_path / "rubato.mid"
+    mid.save(path)
+    text = run("inspect", str(path), "--map", "general-midi")
+    assert text.returncode == 0, text.stderr
+    (line,) = [ln for ln in text.stdout.splitlines() if ln.startswith("  tempo")]
+    assert line == "  tempo     300 tempos, 60-120 bpm (first 60 bpm at 0.00 s; --json lists them)"
+    out = json.loads(run("inspect", str(path), "--map", "general-midi", "--json").stdout)
+    assert [bpm for _, bpm in out["tempos_bpm"]] == pytest.approx(bpms, abs=1e-3)

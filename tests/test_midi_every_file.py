@@ -488,3 +488,40 @@ def test_percussion_extension_plays_gm_percussion_notes(tmp_path: Path) -> None:
     out = json.loads(proc.stdout)
     assert out["notes"] == len(notes) and out["not_played"] == 0
     assert out["contact_error_mm"]["max"] < 5.0
+
+
+def test_check_of_an_unreadable_file_gives_its_error_and_no_figures(tmp_path: Path) -> None:
+    broken = tmp_path / "broken.mid"
+    broken.write_bytes(b"MThd\x00\x00\x00\x06\x00\x01\x00\x01\x01\xe0MTrk\x00\x00\x01\x00")
+    proc = cli("check", str(broken), "--json", "--summary", "--fps", "60")
+    assert proc.returncode == 2
+    out = json.loads(proc.stdout)
+    assert out["files"] == 0 and out["unreadable_files"] == 1
+    assert out["contact_error_mm"] is None and out["penetration_mm"] is None
+    assert out["joint_limit_violations"] is None
+    (failed,) = out["unreadable"]
+    assert failed["file"] == str(broken) and "truncated" in failed["error"]
+    assert f"livedrummer: error: {failed['error']}" in proc.stderr.splitlines()
+    text = cli("check", str(broken), "--fps", "60")
+    assert text.returncode == 2 and "within 5 mm" not in text.stdout
+    assert "no figures" in text.stdout
+
+
+def test_the_not_played_count_names_the_kit_that_plays_the_percussion(tmp_path: Path) -> None:
+    from livedrummer.kit.loader import kit_that_plays, load_kit
+
+    notes = [36, 54, 38, 56, 36, 76, 38, 56]  # kick, tambourine, snare, cowbell, conga, cowbell
+    path = save(tmp_path / "perc.mid", [m for i, n in enumerate(notes)
+                                        for m in note(n, 0 if i == 0 else 230)])  # fmt: skip
+    proc = cli("check", str(path), "--fps", "30")
+    assert proc.returncode == 0, proc.stderr
+    (line,) = [ln for ln in proc.stdout.splitlines() if "not played" in ln]
+    assert line.endswith("(not played: 4; cowbell x2, tambourine x1, percussion x1 have no piece "
+                         "on rock5: --kit rock5+percussion plays them)")  # fmt: skip
+    out = json.loads(cli("check", str(path), "--fps", "30", "--json", "--summary").stdout)
+    assert out["no_piece"] == {"cowbell": 2, "tambourine": 1, "percussion": 1}
+    assert out["kit_that_plays_them"] == "rock5+percussion"
+    extended = cli("check", str(path), "--fps", "30", "--kit", "rock5+percussion").stdout
+    assert "(not played: 0)" in extended
+    assert kit_that_plays(load_kit("rock5-left"), ["cowbell"]) == "rock5-left+percussion"
+    assert kit_that_plays(load_kit("rock5+percussion"), ["cowbell"]) is None  # has it already

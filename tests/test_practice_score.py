@@ -136,3 +136,39 @@ def test_newer_database_is_one_line(tmp_path: Path) -> None:
     proc = run("practice", "history", "--db", str(db))
     assert proc.returncode == 2
     assert f"{db}: practice database version 99 is newer" in proc.stderr
+
+
+def test_json_and_text_name_the_windows_and_grades_alike(groove_dir: Path, tmp_path: Path) -> None:
+    ref = groove_dir / SOUL
+    take = tmp_path / "take.mid"
+    plant_take(ref, take, seed=5)
+    args = ("practice", "score", str(ref), str(take), "--map", "roland-td", "--take-map",
+            "roland-td", "--window-ms", "80", "--level", "hard")  # fmt: skip
+    proc, text = run(*args, "--json"), run(*args)
+    assert proc.returncode == 0 and text.returncode == 0, proc.stderr + text.stderr
+    out = json.loads(proc.stdout)
+    assert "window_ms" not in out and "level_window_ms" not in out  # the words of the past
+    assert (out["match_window_ms"], out["on_time_window_ms"], out["level"]) == (80.0, 20.0, "hard")
+    assert out["grade_limits_ms"] == {"perfect": 20.0, "good": 40.0, "ok": 80.0}
+    lines = text.stdout.splitlines()
+    assert f"{out['hits']} hits (match window ±80 ms)" in lines[0]
+    assert (f"perfect {out['perfect']} (≤ 20 ms), good {out['good']} (≤ 40 ms), "
+            f"ok {out['ok']} (≤ 80 ms)") in lines[1]  # fmt: skip
+    assert lines[2].startswith(f"accuracy {out['accuracy_pct']:.1f} % (on time ±20 ms, hard)")
+    assert "100 ms" not in text.stdout  # the default window appears nowhere
+
+
+def test_a_file_scored_against_itself_says_its_notices_once(
+    groove_dir: Path, tmp_path: Path
+) -> None:
+    ref = groove_dir / SOUL
+    proc = run("practice", "score", str(ref), str(ref))  # both read with --map auto
+    assert proc.returncode == 0, proc.stderr
+    said = [line for line in proc.stderr.splitlines() if "map auto:" in line]
+    assert len(said) == 1 and said[0].startswith(f"livedrummer: {ref}: "), proc.stderr
+    take = tmp_path / "take.mid"
+    plant_take(ref, take, seed=3)
+    other = run("practice", "score", str(ref), str(take))  # a take of its own is named apart
+    assert other.returncode == 0, other.stderr
+    named = {line.split(": ")[1] for line in other.stderr.splitlines() if "map auto:" in line}
+    assert named == {str(ref), str(take)}, other.stderr

@@ -229,6 +229,15 @@ def test_a_late_avatar_is_reported_live_and_in_the_summary(tmp_path: Path,
     assert "synth: " in out and "contacts published after their show time (the first" in out
     late = int(out.split(" contacts late")[0].rsplit(", ", 1)[1])
     assert late > 0
+    # the lines say what was measured and what it means; the knob is named, not ordered
+    lines = [ln for ln in out.splitlines() if "after their show time" in ln
+             or "after every frame they cover" in ln]  # fmt: skip
+    assert lines and all("measured on this machine" in ln and "raise" not in ln for ln in lines)
+    # no --png: the folder holds the frame log only, and up says so
+    log = tmp_path / "f" / "frames.jsonl"
+    assert log.exists() and not list((tmp_path / "f").glob("*.png"))
+    assert f"up: input, synth and display running; frame log in {log}" in run.stdout
+    assert f"restarts); frame log in {log}" in run.stderr  # up: stopped (N restarts); ...
 
 
 def write_rig(path: Path, port_base: int) -> Path:

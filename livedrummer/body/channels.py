@@ -61,7 +61,9 @@ def vibration(
     i = np.searchsorted(hit_s, times, side="right") - 1
     live = i >= 0
     k = np.maximum(i, 0)
-    dt = times - hit_s[k]
+    # Before the first hit dt is negative and eta**dt grows without bound (a first hit minutes
+    # into a song overflows float64); those samples are masked, so they are evaluated at 0.
+    dt = np.where(live, times - hit_s[k], 0.0)
     if choke_s.size:
         c = np.searchsorted(choke_s, times, side="right") - 1
         choked = (c >= 0) & (choke_s[np.maximum(c, 0)] >= hit_s[k])
@@ -76,7 +78,8 @@ def glow(times: np.ndarray, hit_s: np.ndarray, hit_velocity: np.ndarray, tau_s: 
         return np.zeros_like(times, dtype=np.float64)
     i = np.searchsorted(hit_s, times, side="right") - 1
     k = np.maximum(i, 0)
-    return np.where(i >= 0, hit_velocity[k] * np.exp(-(times - hit_s[k]) / tau_s), 0.0)
+    dt = np.where(i >= 0, times - hit_s[k], 0.0)  # no exp of a large positive before the first hit
+    return np.where(i >= 0, hit_velocity[k] * np.exp(-dt / tau_s), 0.0)
 
 
 def beater_tip(piece: Piece, angle: np.ndarray) -> np.ndarray:

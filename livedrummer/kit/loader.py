@@ -39,6 +39,7 @@ mirrored when the kit is of the other hand, and a piece name the kit already has
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from dataclasses import replace
 from pathlib import Path
 
@@ -248,3 +249,19 @@ def kit_names() -> list[str]:
             continue  # listed by `livedrummer kits` with its error
         names.append(f"{name}-{'left' if hand == 'right' else 'right'}")
     return names
+
+
+def kit_that_plays(kit: Kit, instruments: Collection[str]) -> str | None:
+    """The name of ``kit`` with a bundled extension that gives it a piece for every one of
+    ``instruments`` (``rock5+percussion`` for a tambourine and a cowbell), or None when none
+    does or ``kit`` came from a file path (a name is what ``--kit`` is told)."""
+    if not instruments or looks_like_path(kit.name):
+        return None
+    for extension in sorted(entries("kits/extensions")):
+        try:
+            extended = extend_kit(kit, extension)
+        except KitError:
+            continue  # it adds a piece the kit has, or is broken: `livedrummer kits` says so
+        if all(extended.resolve(name) is not None for name in instruments):
+            return extended.name
+    return None

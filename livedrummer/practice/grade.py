@@ -17,6 +17,13 @@ judged events that were hits inside the chosen window (EASY ±40 ms by default, 
 missed ones. **Score** (0 to 100) weighs every reference note: perfect 1, good 0.7, ok 0.4, wrong
 piece 0.1, missed 0, divided by (reference notes + extra notes). Both are simple on purpose, so
 a player can check them by hand; the windows are constants, not tuned per player.
+
+**One vocabulary.** Two windows are at work and every output names them the same way: the
+*match window* (``match_window_ms``, ``--window-ms``, default ±100 ms) decides whether a hit is
+matched to a note at all, the *on-time window* (``on_time_window_ms``: ±40 ms easy, ±20 ms hard)
+decides whether it counts for accuracy. ``grade_limits_ms`` gives each grade's bound
+(perfect ≤ 20, good ≤ 40, ok ≤ the match window). ``practice score`` prints them beside the
+counts they bound (:func:`window_words`), its ``--json`` gives these keys.
 """
 
 from __future__ import annotations
@@ -183,10 +190,29 @@ def summary(matching: Matching, level: Level = Level.EASY) -> dict[str, Any]:
     ]
     return {
         **whole.as_json(),
-        "window_ms": matching.window_ms,
-        "level": level.value,
-        "level_window_ms": level.window_ms,
+        **windows_json(matching.window_ms, level),
         "per_piece": per_piece,
         "notes": listed,
         "extra_notes": extras,
     }
+
+
+def windows_json(match_window_ms: float, level: Level) -> dict[str, Any]:
+    """The windows and grade bounds of a judged take, named as in the module docstring."""
+    return {
+        "level": level.value,
+        "match_window_ms": float(match_window_ms),
+        "on_time_window_ms": level.window_ms,
+        "grade_limits_ms": {"perfect": HARD_WINDOW_MS, "good": EASY_WINDOW_MS,
+                            "ok": float(match_window_ms)},
+    }  # fmt: skip
+
+
+def window_words(result: dict[str, Any]) -> dict[str, str]:
+    """Each window of ``result`` (a :func:`summary`) as a person reads it, by the key it bounds:
+    ``hits``, ``on_time``, and each grade. Text, HTML report and JSON say the same numbers."""
+    limits = result["grade_limits_ms"]
+    words = {grade: f"≤ {limits[grade]:g} ms" for grade in ("perfect", "good", "ok")}
+    words["hits"] = f"match window ±{result['match_window_ms']:g} ms"
+    words["on_time"] = f"on time ±{result['on_time_window_ms']:g} ms, {result['level']}"
+    return words

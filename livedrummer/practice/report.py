@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from livedrummer.practice.grade import EASY_WINDOW_MS, HARD_WINDOW_MS, note_grades
+from livedrummer.practice.grade import EASY_WINDOW_MS, HARD_WINDOW_MS, note_grades, window_words
 from livedrummer.practice.match import PIECES, Result
 
 _GRADE_COLOURS = {
@@ -101,21 +101,22 @@ def take_report(
     ``bar_bpm``: the reference tempo of each bar.
     """
     grades = note_grades(notes)
+    words = window_words(result)
     title = f"Practice: {Path(str(result.get('reference', 'take'))).name}"
     figures = (
         f"<p class='figures'><b>{result['hits']}</b> of {result['reference_notes']} notes hit, "
         f"{result['wrong_piece']} wrong piece, {result['missed']} missed, "
         f"{result['extra']} extra. Accuracy <b>{result['accuracy_pct']:.1f} %</b> "
-        f"(±{result['level_window_ms']:g} ms), score <b>{result['score']:.1f}</b>/100. "
+        f"({words['on_time']}), score <b>{result['score']:.1f}</b>/100. "
         + (
             f"Timing: mean {result['mean_offset_ms']:+.1f} ms (positive = late), "
             f"sd {result['sd_offset_ms']:.1f} ms."
             if result["mean_offset_ms"] is not None
             else "No hits."
         )
-        + f"</p>\n<p>Take: {html.escape(str(result.get('take', '')))}; window "
-        f"±{result['window_ms']:g} ms; perfect ≤ {HARD_WINDOW_MS:g} ms, good ≤ "
-        f"{EASY_WINDOW_MS:g} ms.</p>"
+        + f"</p>\n<p>Take: {html.escape(str(result.get('take', '')))}; hits within the "
+        f"{words['hits']}; perfect {words['perfect']}, good {words['good']}, "
+        f"ok {words['ok']}.</p>"
     )
     body = [
         f"<h1>{html.escape(title)}</h1>",
@@ -136,7 +137,7 @@ def _pieces_in(notes: np.ndarray) -> list[int]:
 def _timeline_svg(notes: np.ndarray, grades: list[str], result: dict[str, Any]) -> str:
     plt = _pyplot()
     pieces = _pieces_in(notes) or [0]
-    window = float(result["window_ms"])
+    window = float(result["match_window_ms"])
     fig, axes = plt.subplots(
         len(pieces), 1, figsize=(10, 1.0 + 1.5 * len(pieces)), sharex=True, squeeze=False
     )
@@ -173,7 +174,7 @@ def _timeline_svg(notes: np.ndarray, grades: list[str], result: dict[str, Any]) 
 
 def _histograms_svg(notes: np.ndarray, result: dict[str, Any]) -> str:
     plt = _pyplot()
-    window = float(result["window_ms"])
+    window = float(result["match_window_ms"])
     hit = notes["result"] == Result.HIT
     pieces = [c for c in _pieces_in(notes) if (hit & (notes["piece"] == c)).any()] or [0]
     cols = min(4, len(pieces))

@@ -11,6 +11,16 @@ teacher would name has to be a term here, measured from the kit rather than writ
 * habit: a piece played by the hand the kit does not prefer for it, more so for the hi-hat and
   ride, which a stationed hand keeps; and any other piece on a strong beat played by the
   non-lead hand, so singles lead with the lead hand, as SMED's third pass and method books do.
+* triplet groupings: in a run of sixteenth triplets on the drums (the beat grid's
+  :data:`~.prepare.BEAT_DTYPE`: consecutive hand notes a sixth of a beat apart, each on that
+  grid), the hands go hand to hand, so one hand twice in a row costs ``triplet_double``; the lead
+  hand's habit follows the groupings of three (beat, second and third eighth-triplet), not the
+  off-beat eighth that the fourth note of the beat falls on; and the hand that leads onto the
+  next drum may pass the other one for a stroke, as a drummer's does moving around the toms:
+  when the two drums are neighbours (no further apart than a conventional reach) and the other
+  hand then meets it on that drum, the pass costs ``triplet_pass`` plus a conventional
+  crossing's price per metre (``pass_stance``), not the crossing's full price (the trellis
+  charges the full one and gives the difference back at the meeting note, :mod:`.optimal`).
 
 All arrays are indexed by ``kit.pieces`` index and by hand (0 = right, 1 = left). The weights
 were tuned on the annotated corpus in ``tests/data/sticking`` (accuracy) and a sample of the
@@ -28,7 +38,12 @@ import numpy as np
 
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import Limb, PieceKind
-from livedrummer.sticking.metrics import DOUBLE_STROKE_FACTOR, STANCE_WINDOW_S, crossing_depth
+from livedrummer.sticking.metrics import (
+    CONVENTIONAL_REACH_M,
+    DOUBLE_STROKE_FACTOR,
+    STANCE_WINDOW_S,
+    crossing_depth,
+)
 from livedrummer.sticking.prepare import lead_hand
 
 _TIMEKEEPERS = (PieceKind.HIHAT, PieceKind.RIDE)
@@ -53,6 +68,8 @@ class Weights:
     isolation_s: float = 0.3  # habits count fully for a note this long after the previous one
     off_role: float = 0.7  # added when that cymbal is the hi-hat or ride
     off_lead_on_beat: float = 0.9  # a single note on the beat (half on the "and") off the lead
+    triplet_double: float = 5.0  # one hand twice in a row in a sixteenth-triplet run on drums
+    triplet_pass: float = 2.5  # ... the leading hand passing the other onto a neighbouring drum
 
 
 @dataclass(frozen=True)
@@ -66,6 +83,8 @@ class CostModel:
     stance: np.ndarray  # (P, P) [right piece, left piece] cost of the crossing
     bias: np.ndarray  # (2, P) habit cost of playing piece with hand
     beat_bias: np.ndarray  # (2, P) cost per unit of beat strength
+    drum: np.ndarray  # (P,) bool: a drum (not a cymbal), where triplet runs are read
+    pass_stance: np.ndarray  # (P, P) stance inside a triplet run: neighbours pass cheaply
     home: tuple[int, int]  # where each hand rests before the first note
     lead: int
     stance_window_s: float = STANCE_WINDOW_S
@@ -88,6 +107,9 @@ class CostModel:
             conventional, w.cross_conventional * depth, w.cross * (w.cross_base + depth)
         )
         stance = np.where(depth > 0, stance, 0.0)
+        neighbours = drum[:, None] & drum[None, :] & (depth <= CONVENTIONAL_REACH_M)
+        passing = w.triplet_pass + w.cross_conventional * depth
+        pass_stance = np.where(neighbours & (depth > 0), passing, stance)
         lead = 0 if lead_hand(kit) is Limb.RH else 1
         bias = np.zeros((2, len(kit.pieces)))
         beat = np.zeros((2, len(kit.pieces)))
@@ -104,7 +126,8 @@ class CostModel:
         )
         lim = np.where(same, DOUBLE_STROKE_FACTOR * gmin, gmin)
         stroke = np.stack((dist, lim, gmin, gmin * comfort[:, None]), axis=1)
-        return cls(w, dist, gap, stroke, stance, bias, beat, _homes(kit, lead), lead)
+        return cls(w, dist, gap, stroke, stance, bias, beat, drum, pass_stance,
+                   _homes(kit, lead), lead)  # fmt: skip
 
 
 def _homes(kit: Kit, lead: int) -> tuple[int, int]:

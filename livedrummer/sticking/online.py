@@ -34,9 +34,10 @@ from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Limb, 
 from livedrummer.sticking.cost import CostModel, Weights
 from livedrummer.sticking.optimal import Snapshot, Trellis, apply_step, feed, hand_of
 from livedrummer.sticking.prepare import (
+    BEAT_DTYPE,
     CHORD_WINDOW_S,
     Routed,
-    beat_strength_at,
+    beat_features_at,
     foot_limb,
     kick_foot,
     piece_table,
@@ -105,7 +106,7 @@ class OnlineSticker:
             np.zeros(_INITIAL, bool),
             {},
         )
-        self._strength = np.zeros(_INITIAL)
+        self._strength = np.zeros(_INITIAL, BEAT_DTYPE)
         self._count = 0  # notes held, the first of them the stream's note number _base
         self._base = 0
         self._steps: list[_Step] = []
@@ -195,7 +196,7 @@ class OnlineSticker:
             return i
         r.hand[i] = True
         if self.beat_s is not None:
-            self._strength[i] = beat_strength_at(float(row["time_s"]), self.beat_s)
+            self._strength[i] = beat_features_at(float(row["time_s"]), self.beat_s)
         return i
 
     def _grow(self) -> None:
@@ -215,7 +216,7 @@ class OnlineSticker:
             grow(r.hand, False),
             r.reasons,
         )
-        self._strength = grow(self._strength, 0.0)
+        self._strength = grow(self._strength, 0)
 
     def _compact(self) -> None:
         """Drop the notes before the first one a step still holds (the arrays grow only when

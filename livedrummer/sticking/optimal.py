@@ -13,6 +13,17 @@ term but the idle hand's last stroke time).
 commits decisions a fixed lag behind; :func:`optimal` runs it over a whole piece and backtracks
 once. Per step it costs a few dozen numpy operations on 4 x P values, so a whole piece goes
 at tens of thousands of notes per second, whatever its length.
+
+Triplet runs (:mod:`.cost`) need one fact more than a state: whether the previous step was a
+single drum note on the sixteenth-triplet grid, a sixth of a beat before this one. That is the
+same for every state (it is the input's, not the sticking's), so the trellis keeps it beside
+the step's time, and a state's hand tells whether the run's hands alternated. A hand passing
+the other onto a neighbouring drum is charged the full crossing when it strikes, and the
+difference to the pass's price is given back, along that state's path, only when the next note
+of the run is the other hand on the same drum: a pass is cheap where the hands then meet there
+(a drummer's move around the toms), never where the run ends crossed. So the online form, which
+commits a note before the next is heard, does not pass; its short lookahead plays the change
+of drum without the pass (a double or a lead change), as before.
 """
 
 from __future__ import annotations
@@ -25,10 +36,11 @@ from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import Limb
 from livedrummer.sticking.cost import CostModel, Weights
 from livedrummer.sticking.prepare import (
+    TRIPLET_TOL,
     UNANNOTATED,
     Routed,
     apply_explicit,
-    beat_strength,
+    beat_features,
     chords,
     reduce_chord,
     route,
@@ -47,6 +59,8 @@ class Snapshot:
     times: np.ndarray
     doubles: np.ndarray
     steps: int
+    sixth_s: float
+    refund: np.ndarray
 
 
 class Trellis:
@@ -70,7 +84,7 @@ class Trellis:
         self._at = [
             np.concatenate((np.full(n, main), ar, ar, np.full(n, main))) for main in range(n)
         ]  # for every state: the right hand's piece (first 2P), the left hand's (last 2P)
-        self._tables: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+        self._tables: dict[tuple[int, int, bool], tuple[np.ndarray, np.ndarray]] = {}
         self.reset()
 
     def reset(self) -> None:
@@ -82,6 +96,8 @@ class Trellis:
         self.time_s = -10.0
         self.times = np.full(4 * n, -10.0)
         self.doubles = np.zeros(4 * n, dtype=bool)  # was that hand's last stroke a double?
+        self.sixth_s = 0.0  # the last step's triplet sixth: a single drum note on that grid
+        self.refund = np.zeros(2 * n)  # per state: a pass's crossing, returned if it is met
         self.backpointers = []
         self.offset = 0.0  # what normalisation took off the values: best total = offset + min
 
@@ -93,24 +109,30 @@ class Trellis:
             self.times.copy(),
             self.doubles.copy(),
             len(self.backpointers),
+            self.sixth_s,
+            self.refund.copy(),
         )
 
     def restore(self, s: Snapshot) -> None:
         self.value, self.main, self.time_s = s.value.copy(), s.main, s.time_s
         self.times = s.times.copy()
         self.doubles = s.doubles.copy()
+        self.sixth_s = s.sixth_s
+        self.refund = s.refund.copy()
         del self.backpointers[s.steps :]
 
-    def _table(self, p: int) -> tuple[np.ndarray, np.ndarray]:
-        """Stroke rows (4, 4P) and stance costs (4P) for striking ``p`` from every state."""
-        key = (p, self.main)
+    def _table(self, p: int, run: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Stroke rows (4, 4P) and stance costs (4P) for striking ``p`` from every state
+        (``run``: inside a triplet run, where neighbouring drums pass)."""
+        key = (p, self.main, run)
         found = self._tables.get(key)
         if found is None:
             m = self.model
             n = m.pieces
             at = self._at[self.main]
             rp, lp = at[: 2 * n], at[2 * n :]
-            found = (m.stroke[p][:, at], np.concatenate((m.stance[p][lp], m.stance[:, p][rp])))
+            st = m.pass_stance if run else m.stance
+            found = (m.stroke[p][:, at], np.concatenate((st[p][lp], st[:, p][rp])))
             self._tables[key] = found
         return found
 
@@ -131,20 +153,40 @@ class Trellis:
         cost += w.comfort * x * x
         return cost, double
 
-    def step(self, p: int, t: float, beat: float, forced: int | None = None) -> None:
-        """One hand note on piece ``p`` at ``t``; ``forced`` fixes the hand (0 right, 1 left)."""
+    def step(
+        self,
+        p: int,
+        t: float,
+        beat: float,
+        forced: int | None = None,
+        sixth_s: float = 0.0,
+        grouping: float = 0.0,
+    ) -> None:
+        """One hand note on piece ``p`` at ``t``; ``forced`` fixes the hand (0 right, 1 left);
+        ``sixth_s`` and ``grouping``: the note on the sixteenth-triplet grid
+        (:data:`~.prepare.BEAT_DTYPE`; 0 off it)."""
         m = self.model
         n = m.pieces
         n2 = 2 * n
+        run = self._in_run(p, t, sixth_s)
+        if run:
+            beat = grouping
         stroke, stance = self._table(p)
         gap = t - self.times
         cost, double = self._hand(stroke, self._at[self.main], gap, p, self.doubles)
-        cost += stance * (gap[self._swap] <= m.stance_window_s)
+        near = gap[self._swap] <= m.stance_window_s
+        cost += stance * near
         iso = min(1.0, (t - self.time_s) / m.weights.isolation_s)
         c0 = self.value + cost[:n2]
         c0 += m.bias[0, p] * iso + m.beat_bias[0, p] * beat
         c1 = self.value + cost[n2:]
         c1 += m.bias[1, p] * iso + m.beat_bias[1, p] * beat
+        if run:  # hand to hand: a state whose hand struck the previous note strikes again
+            c0[:n] += m.weights.triplet_double
+            c1[n:] += m.weights.triplet_double
+            if p == self.main:  # the other hand meets the passing one on its drum
+                c0[n:] -= self.refund[n:]
+                c1[:n] -= self.refund[:n]
         pm = self.main
         value = np.concatenate((c0[:n], c1[n:]))
         back = self._ar2.copy()
@@ -166,7 +208,20 @@ class Trellis:
         doubles[n:n2] = self.doubles[back[n:]]
         doubles[n2 : n2 + n] = self.doubles[n2 + back[:n]]
         doubles[n2 + n :] = double[n2 + back[n:]]
+        refund = np.zeros(n2)
+        if run:
+            owed = (stance - self._table(p, True)[1]) * near
+            refund[:n] = owed[:n2][back[:n]]
+            refund[n:] = owed[n2:][back[n:]]
         self._advance(value, back, times, doubles, p, t)
+        self.sixth_s = sixth_s if m.drum[p] else 0.0
+        self.refund = refund
+
+    def _in_run(self, p: int, t: float, sixth_s: float) -> bool:
+        """Is a drum note at ``t`` the next of a sixteenth-triplet run (see the docstring)?"""
+        if sixth_s <= 0.0 or self.sixth_s <= 0.0 or not self.model.drum[p]:
+            return False
+        return abs(t - self.time_s - sixth_s) < TRIPLET_TOL * sixth_s
 
     def step_chord(self, a: int, b: int, t: float, forced: int | None = None) -> None:
         """Two hand notes at once; ``forced`` fixes the hand of the first (0 right, 1 left).
@@ -196,6 +251,8 @@ class Trellis:
             value[s], back[s] = c[k] + extra, k
             doubles[s], doubles[n2 + s] = dr[k], dl[k]
         self._advance(value, back, np.full(4 * n, t), doubles, a, t)
+        self.sixth_s = 0.0
+        self.refund = np.zeros(n2)
 
     def _advance(
         self,
@@ -253,13 +310,16 @@ def feed(
     trellis: Trellis,
     routed: Routed,
     notes: tuple[int, ...],
-    strength: np.ndarray,
+    beat: np.ndarray,
     forced: int | None = None,
 ) -> None:
-    """Run one step of ``notes`` (indices into ``routed``) through the trellis."""
+    """Run one step of ``notes`` (indices into ``routed``; ``beat``: their
+    :data:`~.prepare.BEAT_DTYPE` rows, by the same index) through the trellis."""
     t = float(routed.onsets["time_s"][notes[0]])
     if len(notes) == 1:
-        trellis.step(int(routed.piece[notes[0]]), t, float(strength[notes[0]]), forced)
+        b = beat[notes[0]]
+        trellis.step(int(routed.piece[notes[0]]), t, float(b["strength"]), forced,
+                     float(b["sixth_s"]), float(b["grouping"]))  # fmt: skip
     else:
         a, b = notes
         trellis.step_chord(int(routed.piece[a]), int(routed.piece[b]), t, forced)
@@ -297,9 +357,9 @@ def optimal(
     reasons.update(why)
     model = CostModel.from_kit(kit, weights)
     trellis = Trellis(model)
-    strength = beat_strength(routed.onsets["time_s"], beat_s)
+    beat = beat_features(routed.onsets["time_s"], beat_s)
     for notes in steps:
-        feed(trellis, routed, notes, strength, forced_hand(notes, explicit))
+        feed(trellis, routed, notes, beat, forced_hand(notes, explicit))
     for notes, state in zip(steps, trellis.best_path().tolist(), strict=True):
         apply_step(routed.limb, notes, state, model.pieces)
     if explicit is not None:  # a score that gives one instant's two notes to one hand wins too

@@ -191,6 +191,48 @@ def beat_strength(times: np.ndarray, beat_s: np.ndarray | None, tol: float = 0.0
     return out
 
 
+#: Per hand note, what the beat grid says of it (:func:`beat_features`): ``strength`` as
+#: :func:`beat_strength`; ``sixth_s``, a sixth of the local beat where the note lies on the
+#: sixteenth-triplet grid (0 elsewhere); ``grouping``, its weight in that grid's groupings of
+#: three (1 on the beat, 0.5 on the second and third eighth-triplet, 0 on the notes between).
+BEAT_DTYPE = np.dtype([("strength", "f8"), ("sixth_s", "f8"), ("grouping", "f8")])
+#: How near a sixteenth-triplet a note must be, in sixths of a beat (at 100 bpm: 20 ms).
+TRIPLET_TOL = 0.2
+
+
+def beat_features(times: np.ndarray, beat_s: np.ndarray | None, tol: float = 0.08) -> np.ndarray:
+    """:data:`BEAT_DTYPE` per time (all 0 without a grid)."""
+    out = np.zeros(times.size, BEAT_DTYPE)
+    out["strength"] = beat_strength(times, beat_s, tol)
+    if beat_s is None or beat_s.size < 2 or times.size == 0:
+        return out
+    i = np.clip(np.searchsorted(beat_s, times, side="right") - 1, 0, beat_s.size - 2)
+    pos = beat_position(times, beat_s)
+    sixth = (pos - np.floor(pos)) * 6.0
+    k = np.round(sixth)
+    on = np.abs(sixth - k) < TRIPLET_TOL
+    out["sixth_s"] = np.where(on, (beat_s[i + 1] - beat_s[i]) / 6.0, 0.0)
+    out["grouping"] = np.where(on & (k % 2 == 0), np.where(k % 6 == 0, 1.0, 0.5), 0.0)
+    return out
+
+
+def beat_features_at(time_s: float, beat_s: np.ndarray | None, tol: float = 0.08
+                     ) -> tuple[float, float, float]:  # fmt: skip
+    """:func:`beat_features` of one time, as a (strength, sixth_s, grouping) tuple."""
+    strength = beat_strength_at(time_s, beat_s, tol)
+    if beat_s is None or beat_s.size < 2:
+        return strength, 0.0, 0.0
+    i = min(max(bisect_right(beat_s, time_s) - 1, 0), beat_s.size - 2)
+    a, b = float(beat_s[i]), float(beat_s[i + 1])
+    pos = i + (time_s - a) / (b - a)
+    sixth = (pos - math.floor(pos)) * 6.0
+    k = round(sixth)
+    if abs(sixth - k) >= TRIPLET_TOL:
+        return strength, 0.0, 0.0
+    grouping = (1.0 if k % 6 == 0 else 0.5) if k % 2 == 0 else 0.0
+    return strength, (b - a) / 6.0, grouping
+
+
 def beat_strength_at(time_s: float, beat_s: np.ndarray | None, tol: float = 0.08) -> float:
     """:func:`beat_strength` of one time, without building arrays (for the online form)."""
     if beat_s is None or beat_s.size < 2:

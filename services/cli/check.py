@@ -17,6 +17,9 @@ it out, e.g. for the whole Groove MIDI Dataset.
 A folder is searched for ``.mid .midi .kar .rmi`` files in any case. A file that cannot be read
 is reported on its own line and the others are checked; a file with no drum notes is reported
 and left out. The count of unreadable files ends the report, and any makes the exit status 2.
+A figure is only given of what was measured: with no note checked the contact error is
+``null`` in ``--json`` (not 0 mm, "100 % within 5 mm"), with no file checked the penetration
+and joint-limit figures are too, and ``unreadable`` lists each file that failed with its error.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -79,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.body.expression import load_expression
     from livedrummer.body.perform import perform
     from livedrummer.body.strokes import StrokeParams
-    from livedrummer.kit.loader import load_kit
+    from livedrummer.kit.loader import kit_that_plays, load_kit
     from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
@@ -102,14 +106,15 @@ def run(args: argparse.Namespace) -> int:
     worst_contact: tuple[float, str] = (0.0, "")
     per_file: list[dict[str, Any]] = []
     hard = {"too_fast": 0, "crossed": 0}
-    unreadable = 0
+    no_piece: Counter[str] = Counter()  # notes of instruments the kit has no piece for
+    failed: list[dict[str, str]] = []
     no_drums = 0
     for path in files:
         try:
             performance, note_map = read_performance(args, path)
         except LivedrummerError as exc:  # one line per file; the others are still checked
             print(f"livedrummer: error: {exc}", file=sys.stderr)
-            unreadable += 1
+            failed.append({"file": str(path), "error": str(exc)})
             continue
         if not performance.onsets.size:  # said on stderr
             no_drums += 1
@@ -124,6 +129,7 @@ def run(args: argparse.Namespace) -> int:
             per_file.append({"file": str(path), "sticking": done.sticking.strategy, "notes": notes})
         for key in totals:
             totals[key] += getattr(r, key)
+        no_piece.update(without_piece(done.sticking))
         hard["too_fast"] += int(too_fast(done.sticking, kit).sum())
         hard["crossed"] += int(crossings(done.sticking, kit).sum())
         for k, v in r.violations_by_limit.items():
@@ -134,8 +140,10 @@ def run(args: argparse.Namespace) -> int:
         if r.contact_error_m.size and r.contact_error_m.max() > worst_contact[0]:
             worst_contact = (float(r.contact_error_m.max()), str(path))
     e = np.concatenate(errors) * 1000.0 if errors else np.zeros(0)
+    unreadable = len(failed)
+    checked = len(files) - unreadable - no_drums
     summary: dict[str, Any] = {
-        "files": len(files) - unreadable - no_drums,
+        "files": checked,
         "unreadable_files": unreadable,
         "files_without_drums": no_drums,
         "kit": kit.name,
@@ -144,30 +152,36 @@ def run(args: argparse.Namespace) -> int:
         "map": ", ".join(sorted(map_names)) or None,
         **totals,
         **hard,
-        "contact_error_mm": {
-            "max": round(float(e.max()), 6) if e.size else 0.0,
-            "p99": round(float(np.percentile(e, 99)), 6) if e.size else 0.0,
-            "mean": round(float(e.mean()), 6) if e.size else 0.0,
-            "within_5mm": round(float(np.mean(e <= 5.0)), 6) if e.size else 1.0,
-            "worst_file": worst_contact[1] or None,
-        },
-        "penetration_mm": round(worst["penetration_mm"], 4),
+        "contact_error_mm": contact_json(e, worst_contact[1]),
+        "penetration_mm": round(worst["penetration_mm"], 4) if checked else None,
         "penetration_file": worst["file"],
-        "penetration_at_s": round(worst["at_s"], 4),
+        "penetration_at_s": round(worst["at_s"], 4) if checked else None,
         "violations_by_limit": by_limit,
+        "no_piece": dict(no_piece.most_common()),
+        "kit_that_plays_them": kit_that_plays(kit, no_piece) if no_piece else None,
     }
+    if not checked:
+        summary["joint_limit_violations"] = None
+    if failed:
+        summary["unreadable"] = failed
     if args.json:
         if per_file:
             summary["per_file"] = per_file
         print(json.dumps(summary, indent=1))
+    elif not checked:
+        print(f"0 file(s) checked, kit {kit.name}: no figures")
     else:
-        c = summary["contact_error_mm"]
+        c = summary["contact_error_mm"] or {"max": 0.0, "p99": 0.0, "mean": 0.0, "within_5mm": 0.0}
         print(f"{summary['files']} file(s), kit {kit.name}, map {summary['map']}")
-        print(f"  notes checked      {summary['notes']}  (not played: {summary['not_played']})")
+        print(f"  notes checked      {summary['notes']}  (not played: {summary['not_played']}"
+              f"{no_piece_words(no_piece, kit.name, summary['kit_that_plays_them'])})")  # fmt: skip
         print(f"  too hard to play   {hard['too_fast']} too fast for one hand, "
               f"{hard['crossed']} with the arms crossed")  # fmt: skip
-        print(f"  contact error mm   max {c['max']:.4f}  p99 {c['p99']:.4f}  mean {c['mean']:.4f}"
-              f"  within 5 mm {c['within_5mm'] * 100:.3f} %")  # fmt: skip
+        if summary["contact_error_mm"] is None:
+            print("  contact error mm   none (no note played)")
+        else:
+            print(f"  contact error mm   max {c['max']:.4f}  p99 {c['p99']:.4f}  "
+                  f"mean {c['mean']:.4f}  within 5 mm {c['within_5mm'] * 100:.3f} %")  # fmt: skip
         print(
             f"  penetration mm     {summary['penetration_mm']:.3f}"
             + (f"  ({worst['file']} at {worst['at_s']:.3f} s)" if worst["file"] else "")
@@ -182,6 +196,32 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         return 2
     return 0
+
+
+def without_piece(sticking: Sticking) -> Counter[str]:
+    """Notes per instrument that the sticking's kit has no piece for."""
+    from livedrummer.kit.vocabulary import INSTRUMENTS
+
+    codes = sticking.onsets["instrument"][sticking.piece < 0]
+    return Counter(INSTRUMENTS[int(c)] for c in codes.tolist())
+
+
+def no_piece_words(no_piece: Counter[str], kit: str, plays: str | None) -> str:
+    """``; tambourine x2, cowbell x2 have no piece on rock5: --kit rock5+percussion plays
+    them`` (empty when the kit has a piece for every note)."""
+    if not no_piece:
+        return ""
+    listed = ", ".join(f"{name} x{n}" for name, n in no_piece.most_common())
+    then = f": --kit {plays} plays them" if plays else ""
+    return f"; {listed} have no piece on {kit}{then}"
+
+
+def contact_json(error_mm: np.ndarray, worst_file: str) -> dict[str, Any] | None:
+    """The contact error's figures over every played note, ``None`` when none was played."""
+    from livedrummer.body.check import contact_figures
+
+    figures = contact_figures(error_mm)
+    return None if figures is None else {**figures, "worst_file": worst_file or None}
 
 
 def notes_json(sticking: Sticking, kit: Kit, contact_error_m: np.ndarray) -> list[dict[str, Any]]:

@@ -1,4 +1,8 @@
-"""``livedrummer inspect FILE.mid``: what a MIDI file holds, as a drummer reads it."""
+"""``livedrummer inspect FILE.mid``: what a MIDI file holds, as a drummer reads it.
+
+A few tempo or meter changes are listed; more (a classical piece's rubato is hundreds of tempo
+events) are summarised on one line, count and range, and ``--json`` lists every one.
+"""
 
 from __future__ import annotations
 
@@ -34,8 +38,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def print_summary(s: dict[str, Any]) -> None:
-    tempos = ", ".join(f"{bpm:g} bpm at {t:.2f} s" for t, bpm in s["tempos_bpm"])
-    meters = ", ".join(f"{n}/{d} at {t:.2f} s" for t, n, d in s["meters"])
+    tempos = tempo_words(s["tempos_bpm"])
+    meters = meter_words(s["meters"])
     print(f"{s['file']}  (map {s['map']})")
     for warning in s.get("warnings", []):
         print(f"  warning   {warning}")
@@ -64,3 +68,26 @@ def print_summary(s: dict[str, Any]) -> None:
         print(f"  ignored   {listed} (no place on a drum kit; not played)")
     if not s["onsets"]:
         print("  no drum notes: nothing for the drummer to play")
+
+
+#: At most this many tempos (or meters) are listed; more are summarised.
+LISTED = 4
+
+
+def tempo_words(tempos: list[tuple[float, float]]) -> str:
+    """``120 bpm at 0.00 s, 90 bpm at 12.00 s``, or for many: ``412 tempos, 38.5-126 bpm
+    (first 72 bpm at 0.00 s; --json lists them)``."""
+    if len(tempos) <= LISTED:
+        return ", ".join(f"{bpm:g} bpm at {t:.2f} s" for t, bpm in tempos)
+    bpms = [bpm for _, bpm in tempos]
+    t0, bpm0 = tempos[0]
+    return (f"{len(tempos)} tempos, {min(bpms):.3g}-{max(bpms):.3g} bpm "
+            f"(first {bpm0:.3g} bpm at {t0:.2f} s; --json lists them)")  # fmt: skip
+
+
+def meter_words(meters: list[tuple[float, int, int]]) -> str:
+    """The meters as :func:`tempo_words` gives tempos: listed, or counted with the ones used."""
+    if len(meters) <= LISTED:
+        return ", ".join(f"{n}/{d} at {t:.2f} s" for t, n, d in meters)
+    used = sorted({f"{n}/{d}" for _, n, d in meters}, key=lambda m: tuple(map(int, m.split("/"))))
+    return f"{len(meters)} meters: {', '.join(used)} (--json lists them)"

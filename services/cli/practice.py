@@ -9,6 +9,9 @@ JSON object with ``--json``. ``--report FILE.html`` writes the self-contained HT
 (:mod:`livedrummer.practice.report`), ``--save`` keeps the result in the practice database
 (:mod:`services.practice.store`), which ``practice history`` lists and plots over days.
 
+Each file's notices (the map ``auto`` chose, notes left out) are printed once: a reference
+scored against itself, the first thing a newcomer tries, does not say them again as the take.
+
 The take is judged on the reference's clock: a take the practice rig wrote
 (:mod:`services.practice.take`) says in a marker where the reference starts in it, and that
 lead is subtracted; any other file is judged as written, its time zero the reference's.
@@ -190,6 +193,13 @@ def judge_settings(args: argparse.Namespace) -> tuple[float, frozenset[int] | No
     return args.window_ms, pieces, Level(args.level)
 
 
+def _same_file(a: Path | str, b: Path | str) -> bool:
+    try:
+        return Path(a).resolve() == Path(b).resolve()
+    except OSError:
+        return False
+
+
 def run_score(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -200,9 +210,14 @@ def run_score(args: argparse.Namespace) -> int:
     from .common import read_performance
 
     window_ms, pieces, level = judge_settings(args)
-    ref, _ = read_performance(args, args.reference)
+    ref, ref_map = read_performance(args, args.reference)
     take_args = argparse.Namespace(**{**vars(args), "map": args.take_map})
-    take, _ = read_performance(take_args, args.take)
+    take, take_map = read_performance(take_args, args.take, quiet=True)
+    same = _same_file(args.reference, args.take)
+    said = set(ref.report_lines(ref_map.ignored)) if same else set()
+    for line in take.report_lines(take_map.ignored):
+        if line not in said:  # the reference scored against itself: its notices once
+            print(f"livedrummer: {args.take}: {line}", file=sys.stderr)
     if not ref.onsets.size:
         raise LivedrummerError(f"{args.reference}: no drum notes to judge against")
     from ..practice.take import take_lead_s
@@ -247,12 +262,15 @@ def summary_lines(result: dict[str, Any]) -> list[str]:
             return "no hits"
         return f"mean {r['mean_offset_ms']:+.1f} ms, sd {r['sd_offset_ms']:.1f} ms"
 
+    from livedrummer.practice.grade import window_words
+
+    w = window_words(result)
     lines = [
-        f"{result['reference_notes']} notes: {result['hits']} hits, "
+        f"{result['reference_notes']} notes: {result['hits']} hits ({w['hits']}), "
         f"{result['wrong_piece']} wrong piece, {result['missed']} missed, {result['extra']} extra",
-        f"timing: {timing(result)}; perfect {result['perfect']}, good {result['good']}, "
-        f"ok {result['ok']}",
-        f"accuracy {result['accuracy_pct']:.1f} % (±{result['level_window_ms']:g} ms), "
+        f"timing: {timing(result)}; perfect {result['perfect']} ({w['perfect']}), "
+        f"good {result['good']} ({w['good']}), ok {result['ok']} ({w['ok']})",
+        f"accuracy {result['accuracy_pct']:.1f} % ({w['on_time']}), "
         f"score {result['score']:.1f}/100",
     ]
     for piece, r in result["per_piece"].items():

@@ -6,12 +6,12 @@ stopped on Ctrl-C / SIGTERM or after ``--seconds``. ``--demo`` plays the bundled
 into the pipeline as if from a kit (looping). With a screen (``DISPLAY`` or
 ``WAYLAND_DISPLAY``) the display opens a window (``--fullscreen --monitor N`` for a
 projector; camera keys 1..8, Q quits the window and the rig). With no screen, or with
-``--headless``, it renders off screen into ``--frames-dir`` (default ``out/live``): numbered PNG
-frames plus ``frames.jsonl``; ``--video FILE`` records those frames on show time into an MP4
-and, when the rig stops, adds the drum track: the journaled onsets (the session's journal, a
-temporary one for ``--demo``) mixed with the built-in kit (or ``--soundfont FILE.sf2``'s) at
-onset + D (:mod:`services.display.record`), so picture and sound line up as the audience would
-see them.
+``--headless``, it renders off screen into ``--frames-dir`` (default ``out/live``): the frame
+log ``frames.jsonl``, and numbered PNG frames with ``--png``; ``--video FILE`` records those
+frames on show time into an MP4 and, when the rig stops, adds the drum track: the journaled
+onsets (the session's journal, a temporary one for ``--demo``) mixed with the built-in kit (or
+``--soundfont FILE.sf2``'s) at onset + D (:mod:`services.display.record`), so picture and
+sound line up as the audience would see them.
 
 Security. ``--curve-secret RIG.key_secret`` makes every stream of the rig CURVE: the input
 daemon and the synth bind as CURVE servers with that key pair, and the synth and the display
@@ -439,8 +439,7 @@ def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
     try:
         sup.start()
-        where = "in a window" if windowed(args) else f"frames in {args.frames_dir}/"
-        print(f"up: input, synth and display running; {where}", flush=True)
+        print(f"up: input, synth and display running; {shown_where(args)}", flush=True)
         # A set-length recording ends when the display has recorded it (a minute's grace
         # for a display that never gets a pose); otherwise --seconds ends the rig itself.
         # (the display draws a set-length recording after the show: up to a few times its length)
@@ -458,9 +457,20 @@ def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
         for s, handler in old.items():
             signal.signal(s, handler)
     restarts = sum(sup.restarts.values())
-    where = "" if windowed(args) else f"; frames in {args.frames_dir}/"
+    where = "" if windowed(args) else f"; {shown_where(args)}"
     print(f"up: stopped ({restarts} restarts){where}", file=sys.stderr)
     return 0
+
+
+def shown_where(args: argparse.Namespace) -> str:
+    """Where the show goes, as the display writes it: a window, PNG frames (``--png``, not
+    with ``--video``) beside ``frames.jsonl``, or only the frame log (and the video)."""
+    if windowed(args):
+        return "in a window"
+    if args.png and args.video is None:
+        return f"frames in {args.frames_dir}/ (PNG, and frames.jsonl)"
+    video = f"; video {args.video}" if args.video is not None else ""
+    return f"frame log in {args.frames_dir / 'frames.jsonl'}{video}"
 
 
 def add_drum_track(args: argparse.Namespace, sessions: Path, started: float) -> None:

@@ -278,7 +278,9 @@ class LiveDisplay(Service):
         self._last_show = -math.inf  # show time of the last frame drawn
         self._spool: IO[bytes] | None = None  # pose messages of a deferred recording
         self.late = BehindCounter("pose messages arrived after every frame they cover",
-                                  "the avatar is behind: raise the synth's --delay-ms")  # fmt: skip
+                                  "measured on this machine: the synth's answer took longer "
+                                  "than the show delay (--delay-ms), so those frames drew the "
+                                  "drummer from the pose before")  # fmt: skip
         self.held = BehindCounter("frames drawn with a stale pose (the pose stream stalled)")
         self.show: DisplayShow | None = None
         self.strips = LiveStrips(kit)  # fed only where strips may be drawn (see run)

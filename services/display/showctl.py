@@ -70,7 +70,8 @@ class DisplayShow:
             if late:
                 self.late_cues += 1
                 log.warning("display: a stage cue (bar %d) arrived %.0f ms after its show time: "
-                            "raise the synth's --delay-ms or lighten the machine",
+                            "it took this machine longer than the show delay (--delay-ms), "
+                            "so the cue is applied in the next frame",
                             int(row["bar"]), 1000 * (self._shown_s - at_s))  # fmt: skip
         self._timed.sort(key=lambda tc: tc[0])
         self.stage_cues += rows.size

@@ -165,7 +165,8 @@ class SynthService(Service):
         self._seq = 0
         self.late = BehindCounter(
             "contacts published after their show time",
-            "the avatar is behind the sound: raise --delay-ms or lighten the machine",
+            "measured on this machine: it answered those hits later than the show delay "
+            "(--delay-ms), so the drummer reached them late on screen; the sound is on time",
         )
         self._ticked = 0  # onsets heard when the last tick began
         self.osc: OscEndpoint | None = None
