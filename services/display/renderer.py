@@ -66,6 +66,7 @@ SEGMENT_FLOATS = 15  # a xyz, b xyz, radius, colour rgba, material
 BALL_FLOATS = 12  # centre xyz radius, colour rgba, material
 SHADOW_SIZE = 512  # texels a side: ~7 mm at the kit, from the key light 4.6 m away
 SHADOW_RADIUS_M = 1.8  # the sphere round the kit's centre that the shadow map covers
+MAX_CELL_OTHERS = 128  # neighbours a stage floor's cell is cut by (shaders/floor_cell.glsl)
 SHADOW_UNIT = 1  # texture unit of the shadow map (unit 0 is the avatar's base colour)
 
 
@@ -138,6 +139,9 @@ class Renderer:
                 avatar = build_character()
             self.skinned = SkinnedDraw(ctx, self.programs["skin"], avatar)
         self._pose: tuple[np.ndarray, np.ndarray] | None = None
+        #: the other drummers' pool centres on a stage, in this kit's frame: the floor is drawn
+        #: only nearer to its own (``shaders/floor_cell.glsl``); empty for one drummer
+        self.floor_cell_others = np.zeros((0, 2), np.float32)
         self._fbo: Any = None
         self._resolve: Any = None
         if offscreen:
@@ -284,6 +288,7 @@ class Renderer:
         light_vp = key_light_view_projection(key, np.array([centre[0], centre[1], 0.6]))
         uniforms["u_light_vp"] = light_vp.T.tobytes()
         uniforms["u_shadow_on"] = int(self.shadows)
+        self._floor_cell_uniforms()
         for prog in self.programs.values():
             for name, value in uniforms.items():
                 if name in prog:
@@ -315,6 +320,23 @@ class Renderer:
                                        moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)  # fmt: skip
             vao.render(instances=len(idx))
         self.ctx.disable(moderngl.BLEND)
+
+    def pool_centre(self) -> np.ndarray:
+        """The centre (x, y) of the floor's pool of key light, in this kit's frame."""
+        if not len(self.kit_mesh.model):
+            return np.zeros(2)
+        return np.asarray(self.kit_mesh.model[0, :2, 3], float)
+
+    def _floor_cell_uniforms(self) -> None:
+        prog = self.programs["floor"]
+        if "u_cell_count" not in prog:
+            return
+        others = np.asarray(self.floor_cell_others, np.float32).reshape(-1, 2)[:MAX_CELL_OTHERS]
+        prog["u_cell_count"].value = len(others)
+        if len(others):
+            padded = np.zeros((MAX_CELL_OTHERS, 2), np.float32)
+            padded[: len(others)] = others
+            prog["u_cell_others"].write(padded.tobytes())
 
     def _draw_background_image(self, image: np.ndarray) -> None:
         """Stretch ``image`` ((H, W, 3) uint8, top row first) over the whole frame, writing no
