@@ -16,12 +16,17 @@ by frame (export: the first).
 
 ``--compare REV`` times instead the whole ``livedrummer render`` command, start-up included
 (a fresh process: imports, the EGL context, the character, the mix, the encode), of the code
-at git revision REV (checked out into a temporary worktree) and of this tree, alternately,
+at git revision REV (its files extracted by ``git archive`` into a temporary folder, so the
+repository is not written to) and of this tree, alternately,
 ``--rounds`` times each: before, after, before, after ... so both meet the same load; then the
 same for ``render --stage`` of ``--stage-drummers`` drummers on a line. It prints each run's
 real-time factor (seconds of video over wall seconds; the frame count and length are read
 from the command's own summary line, so an old ``render --stage`` that ignored ``--end`` is
-still measured right), the medians and their ratio.
+still measured right), the medians and their ratio. Last, for each of ``--live-drummers``
+(default 1 and 4), the live stage display's drawing capacity at 1280x720 (median ms a frame of
+:func:`services.bench.stage.draw_capacity`, in a fresh process per run), alternating the same
+way. A revision whose group camera frames the drummers differently draws different pixels:
+the live figure compares the code and what it shows together.
 """
 
 from __future__ import annotations
@@ -72,6 +77,9 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--stage-drummers", type=int, default=4,
                         help="--compare: drummers of the render --stage run (0: skip)")  # fmt: skip
     parser.add_argument("--stage-size", default="640x360", help="--compare: render --stage size")
+    parser.add_argument("--live-drummers", default="1,4",
+                        help="--compare: live stage drawing capacity for these drummer counts "
+                        "('': skip)")  # fmt: skip
     args = parser.parse_args(argv)
     if args.compare:
         return compare(args)
@@ -200,7 +208,40 @@ def compare(args: argparse.Namespace) -> int:
                        ["render", "--stage", str(stage), "--end", secs, "--tail", "0", "--size",
                         args.stage_size, "-o", str(Path(tmp) / "stage.mp4")],
                        before, here, args.rounds, Path(tmp))  # fmt: skip
+        for n in (int(v) for v in args.live_drummers.split(",") if v.strip()):
+            _alternate_live(n, before, here, args.rounds)
     return 0
+
+
+_LIVE = (
+    "import sys, numpy as np\n"
+    "from services.bench.stage import draw_capacity\n"
+    "ms = draw_capacity(int(sys.argv[1]), (1280, 720), 26)\n"
+    "sys.stdout.write(f'median {float(np.median(ms)):.3f} ms\\n')\n"
+)
+
+
+def _alternate_live(drummers: int, before: Path, after: Path, rounds: int) -> None:
+    """The live stage painter's median ms a frame, ``drummers`` drummers at 1280x720, with
+    the code of ``before`` then ``after``, ``rounds`` times; then the medians and fps ratio."""
+    print(f"live stage display, {drummers} drummer(s), 1280x720, draw + read-back")
+    took: dict[str, list[float]] = {"before": [], "after": []}
+    for k in range(rounds):
+        for label, root in (("before", before), ("after", after)):
+            env = {**os.environ, "PYTHONPATH": str(root)}
+            run = subprocess.run([sys.executable, "-c", _LIVE, str(drummers)], cwd=root,
+                                 env=env, capture_output=True, text=True)  # fmt: skip
+            found = re.search(r"median ([\d.]+) ms", run.stdout)
+            if run.returncode != 0 or found is None:
+                print(f"  {label}: failed ({run.returncode}): {run.stderr.strip()[-200:]}")
+                continue
+            ms = float(found.group(1))
+            took[label].append(ms)
+            print(f"  round {k + 1} {label:>6}: {ms:.1f} ms a frame = {1000 / ms:.1f} fps")
+    if took["before"] and took["after"]:
+        b, a = statistics.median(took["before"]), statistics.median(took["after"])
+        print(f"  median before {1000 / b:.1f} fps, after {1000 / a:.1f} fps: "
+              f"after/before {b / a:.2f}")  # fmt: skip
 
 
 def _alternate(title: str, command: list[str], before: Path, after: Path, rounds: int,
