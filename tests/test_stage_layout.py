@@ -174,6 +174,12 @@ def test_render_stage_honours_end_and_tail(tmp_path: Path) -> None:
     perf = read_midi_file(GROOVE, load_note_map("roland-td"))
     seconds = perf.duration_s + 0.4 - perf.grid.bar_start_s(7)
     assert len(list(late.glob("*.png"))) == math.ceil(seconds * 5 - 1e-9)
+    # the same span as the single-drummer render of the same part with the same options
+    for span, got in ((["--end", "2"], frames), (["--start", "bar8", "--tail", "0.4"], late)):
+        single = tmp_path / f"single{len(span)}"
+        assert main(["render", str(GROOVE), "--map", "roland-td", "--frames-dir", str(single),
+                     "--size", "64x36", "--fps", "5", *span]) == 0  # fmt: skip
+        assert len(list(single.glob("*.png"))) == len(list(got.glob("*.png"))), span
 
 
 def test_a_formation_too_tight_for_its_kits_is_one_line(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
