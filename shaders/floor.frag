@@ -3,6 +3,7 @@
 // pool of key light around the kit that fades into the dark hall (no specular, no rim), in
 // which the drummer and the kit cast the key light's shadow. The rim fades to transparent.
 #include "shadow.glsl"
+#include "floor_cell.glsl"
 uniform vec3 u_stage_centre;
 uniform float u_stage_radius;
 
@@ -15,6 +16,9 @@ in float v_ring;
 out vec4 f_color;
 
 void main() {
+    if (outside_floor_cell(v_pos.xy, u_stage_centre.xy)) {
+        discard;
+    }
     float d = length(v_pos.xy - u_stage_centre.xy);
     float pool = 1.0 - smoothstep(0.4, u_stage_radius, d);
     pool *= mix(0.45, 1.0, key_shadow(v_pos, vec3(0.0, 0.0, 1.0)));

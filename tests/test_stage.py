@@ -33,7 +33,7 @@ def test_a_line_is_centred_and_faces_the_audience() -> None:
 
 
 def test_an_arc_keeps_every_drummer_at_the_radius_and_center_facing_looks_inwards() -> None:
-    spots = place(Formation("arc", radius=6.0, span_deg=90, facing="center"), 5)
+    spots = place(Formation("arc", radius=6.0, span_deg=90, spacing=2.0, facing="center"), 5)
     focus = np.array([0.0, -6.0])
     assert all(abs(math.hypot(s.x - focus[0], s.y - focus[1]) - 6.0) < 1e-9 for s in spots)
     cx, cy = np.mean([s.x for s in spots]), np.mean([s.y for s in spots])
@@ -175,17 +175,6 @@ def test_bad_stage_files_are_one_line_errors(
     assert message in str(err.value) and str(path) in str(err.value)
     assert main(["check", "--stage", str(path)]) == 2
     assert capsys.readouterr().err.count("\n") == 1
-
-
-def test_merge_by_depth_keeps_the_nearest_surface() -> None:
-    from services.display.stage_export import merge_by_depth
-
-    a = np.full((2, 2, 4), 10, np.uint8)
-    b = np.full((2, 2, 4), 200, np.uint8)
-    da = np.array([[0.5, 1.0], [0.2, 0.9]], np.float32)
-    db = np.array([[0.4, 1.0], [0.3, 0.1]], np.float32)
-    out = merge_by_depth([a, b], [da, db])
-    assert out[..., 0].tolist() == [[200, 10], [10, 200]]  # a tie (background) keeps the first
 
 
 @pytest.mark.usefixtures("gl_ok")

@@ -302,16 +302,17 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
 
 @pytest.mark.usefixtures("gl_ok")
 def test_one_pass_depth_tested_drawing_is_the_offline_merge_by_depth(tmp_path: Path) -> None:
-    """The live stage draws its drummers into one framebuffer; ``render --stage`` draws each
-    into its own and merges by depth in numpy: the same picture."""
+    """The stage painter (live and ``render --stage``) draws its drummers into one framebuffer;
+    drawing each into its own and keeping per pixel the nearest: the same picture."""
     from livedrummer.kit.loader import load_kit
     from livedrummer.render.body_scene import BODY_SKELETON
     from livedrummer.render.kitmesh import build_kit_mesh
     from livedrummer.stage.formation import Formation, place
+    from livedrummer.stage.layout import cell_neighbours
     from services.display.context import headless_context
     from services.display.renderer import Renderer
-    from services.display.stage_export import group_camera_for, local_camera, merge_by_depth
-    from services.display.stage_live import StagePainter, StagePerformer
+    from services.display.stage_export import StagePainter, group_camera_for, local_camera
+    from services.display.stage_live import StagePerformer
 
     kit = load_kit("rock5")
     spots = place(Formation("arc", radius=4.0, facing="center"), 3)  # overlapping kits
@@ -324,16 +325,20 @@ def test_one_pass_depth_tested_drawing_is_the_offline_merge_by_depth(tmp_path: P
         live = painter.read_rgba().astype(int)
         world = group_camera_for(kit, spots, "front", w / h)
         colours, depths = [], []
-        for s in spots:
-            r = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, (w, h), samples=0,
-                         offscreen=False)  # fmt: skip
+        renderers = [Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, (w, h), samples=0,
+                              offscreen=False) for _ in spots]  # fmt: skip
+        cells = cell_neighbours(spots, [r.pool_centre() for r in renderers])
+        for s, r, cell in zip(spots, renderers, cells, strict=True):
+            r.floor_cell_others = cell
             fbo = ctx.framebuffer(color_attachments=[ctx.texture((w, h), 4)],
                                   depth_attachment=ctx.depth_texture((w, h)))  # fmt: skip
             r.draw(None, local_camera(world, s), target=fbo)
             colours.append(np.frombuffer(fbo.read(components=4), np.uint8).reshape(h, w, 4))
             depths.append(np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4"),
                                         np.float32).reshape(h, w))  # fmt: skip
-        offline = merge_by_depth(colours, depths).astype(int)
+        nearest = np.argmin(np.stack(depths), axis=0)
+        offline = np.take_along_axis(np.stack(colours), nearest[None, :, :, None], 0)[0]
+        offline = offline.astype(int)
     finally:
         ctx.release()
     drawn = live[..., :3].sum(axis=2) > 60

@@ -6,7 +6,8 @@ layout is mirrored. Our shapes are the ones drum lines and drum walls use:
 
 * ``line``: side by side along x, ``spacing`` metres apart, centred on the stage's centre;
 * ``arc``: on a circle of ``radius`` around a focus point behind the audience's view
-  (``span_deg`` wide), so every drummer is the same distance from that point;
+  (``span_deg`` wide), so every drummer is the same distance from that point; neighbours are
+  ``spacing`` apart at least (the radius grows when the span would put them closer);
 * ``grid``: rows of ``columns``, ``spacing`` apart each way, the front row nearest the audience;
 * ``v``: a wedge, the first performer at the apex nearest the audience, the others alternating
   left and right, each step back by ``spacing`` and out by ``spacing``;
@@ -21,9 +22,12 @@ other shapes are symmetric already) mirrors the positions given about x = 0: eac
 mirror line gets a twin at -x, whose yaw is the mirror of its own, so half a layout is given
 once.
 
+Every shape but ``explicit`` keeps neighbours ``spacing`` apart, an ensemble's copies too;
+whether that is room enough for the kits is :func:`livedrummer.stage.layout.check_footprints`'s
+question, asked with the kits at hand.
+
 Limits: a formation is fixed for the whole piece (no evolutions or trajectories between
-formations); performers are not checked for overlap beyond ``spacing`` being at least the
-kit's width, which :func:`check_spacing` does.
+formations).
 """
 
 from __future__ import annotations
@@ -113,8 +117,14 @@ def _points(f: Formation, n: int) -> list[tuple[float, float]]:
         return out
     # arc: centred on a focus point in front (towards the audience); the arc's middle nearest
     span = math.radians(f.span_deg)
+    if n > 1 and span <= 0.0:
+        raise ValueError(f"arc span_deg 0 puts all {n} performers on one spot")
     angles = [0.0] if n == 1 else [(-span / 2 + span * i / (n - 1)) for i in range(n)]
-    return [(f.radius * math.sin(a), f.radius * (math.cos(a) - 1.0)) for a in angles]
+    radius: float = f.radius
+    if n > 1:
+        arc_step = min(span / (n - 1), math.pi)
+        radius = max(radius, f.spacing / (2.0 * math.sin(arc_step / 2.0)))
+    return [(radius * math.sin(a), radius * (math.cos(a) - 1.0)) for a in angles]
 
 
 def _yaw(f: Formation, dx: float, dy: float, twin: bool) -> float:

@@ -13,12 +13,30 @@ Export speed is the whole ``livedrummer render`` job (audio mix, render, H.264/A
 on the first ``--seconds`` of the demo groove, as a multiple of real time. Medians of one run;
 ``--aa 0,fxaa,4`` measures no anti-aliasing, the FXAA pass and multisampling interleaved frame
 by frame (export: the first).
+
+``--compare REV`` times instead the whole ``livedrummer render`` command, start-up included
+(a fresh process: imports, the EGL context, the character, the mix, the encode), of the code
+at git revision REV (its files extracted by ``git archive`` into a temporary folder, so the
+repository is not written to) and of this tree, alternately,
+``--rounds`` times each: before, after, before, after ... so both meet the same load; then the
+same for ``render --stage`` of ``--stage-drummers`` drummers on a line. It prints each run's
+real-time factor (seconds of video over wall seconds; the frame count and length are read
+from the command's own summary line, so an old ``render --stage`` that ignored ``--end`` is
+still measured right), the medians and their ratio. Last, for each of ``--live-drummers``
+(default 1 and 4), the live stage display's drawing capacity at 1280x720 (median ms a frame of
+:func:`services.bench.stage.draw_capacity`, in a fresh process per run), alternating the same
+way. A revision whose group camera frames the drummers differently draws different pixels:
+the live figure compares the code and what it shows together.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import re
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -50,7 +68,21 @@ def main(argv: list[str]) -> int:
                         "frame by frame, so each is loaded alike (default 0)")  # fmt: skip
     parser.add_argument("--seconds", type=float, default=20.0, help="export length (0: skip)")
     parser.add_argument("--export-fps", default="30,60")
+    parser.add_argument("--compare", metavar="REV",
+                        help="time the whole render command at git revision REV against this "
+                        "tree, alternating (see the module docstring)")  # fmt: skip
+    parser.add_argument("--rounds", type=int, default=3, help="--compare: runs of each")
+    parser.add_argument("--compare-seconds", type=float, default=6.0,
+                        help="--compare: seconds of the demo groove rendered")  # fmt: skip
+    parser.add_argument("--stage-drummers", type=int, default=4,
+                        help="--compare: drummers of the render --stage run (0: skip)")  # fmt: skip
+    parser.add_argument("--stage-size", default="640x360", help="--compare: render --stage size")
+    parser.add_argument("--live-drummers", default="1,4",
+                        help="--compare: live stage drawing capacity for these drummer counts "
+                        "('': skip)")  # fmt: skip
     args = parser.parse_args(argv)
+    if args.compare:
+        return compare(args)
 
     kit = load_kit("rock5")
     note_map = load_note_map(DEMO_MAP)
@@ -132,3 +164,107 @@ def main(argv: list[str]) -> int:
                 print(f"  export 1280x720 @ {fps} fps: {report.frames} frames in "
                       f"{report.wall_s:.2f} s = {report.realtime:.2f}x real time")  # fmt: skip
     return 0
+
+
+_SUMMARY = re.compile(r"(\d+) frames, ([\d.]+) s")
+
+
+def compare(args: argparse.Namespace) -> int:
+    """``--compare REV``: see the module docstring."""
+    here = Path(__file__).resolve().parents[2]
+    with tempfile.TemporaryDirectory() as tmp:
+        before = Path(tmp) / "before"
+        before.mkdir()
+        # the revision's files (git archive): nothing is written into the repository itself
+        tar = subprocess.run(["git", "-C", str(here), "archive", "--format=tar", args.compare],
+                             capture_output=True)  # fmt: skip
+        if tar.returncode != 0:
+            print(f"bench render: --compare {args.compare}: {tar.stderr.decode().strip()}")
+            return 2
+        subprocess.run(["tar", "-x", "-C", str(before)], input=tar.stdout, check=True)
+        log = ["git", "-C", str(here), "log", "-1", "--format=%h %s", args.compare]
+        rev = subprocess.run(log, capture_output=True, text=True).stdout.strip()
+        print(f"before: {rev[:90]}\nafter: this tree ({here})")
+        print(f"load average at start: {os.getloadavg()[0]:.2f} (other processes share the "
+              "cores: compare the ratio, not the absolute figures)")  # fmt: skip
+        secs = f"{args.compare_seconds:g}"
+        single = ["render", "--end", secs, "--size", "1280x720", "--fps", "30"]
+        _alternate("render 1280x720 @ 30 fps, character, shadows, FXAA, --end " + secs,
+                   [*single, "-o", str(Path(tmp) / "single.mp4")], before, here, args.rounds,
+                   Path(tmp))  # fmt: skip
+        if args.stage_drummers > 0:
+            from .stage import write_part
+
+            # a part as long as --end: a render --stage from before --end was honoured
+            # renders the whole part either way
+            write_part(Path(tmp) / "part.mid", 8.0, args.compare_seconds, 0.0)
+            stage = Path(tmp) / "line.toml"
+            performers = "".join(f'[[performer]]\nid = "d{k}"\nfile = "part.mid"\n'
+                                 'map = "roland-td"\n\n'
+                                 for k in range(args.stage_drummers))  # fmt: skip
+            stage.write_text('[formation]\nshape = "line"\nspacing = 2.6\n\n' + performers)
+            _alternate(f"render --stage, {args.stage_drummers} drummers, {args.stage_size}, "
+                       f"--end {secs}",
+                       ["render", "--stage", str(stage), "--end", secs, "--tail", "0", "--size",
+                        args.stage_size, "-o", str(Path(tmp) / "stage.mp4")],
+                       before, here, args.rounds, Path(tmp))  # fmt: skip
+        for n in (int(v) for v in args.live_drummers.split(",") if v.strip()):
+            _alternate_live(n, before, here, args.rounds)
+    return 0
+
+
+_LIVE = (
+    "import sys, numpy as np\n"
+    "from services.bench.stage import draw_capacity\n"
+    "ms = draw_capacity(int(sys.argv[1]), (1280, 720), 26)\n"
+    "sys.stdout.write(f'median {float(np.median(ms)):.3f} ms\\n')\n"
+)
+
+
+def _alternate_live(drummers: int, before: Path, after: Path, rounds: int) -> None:
+    """The live stage painter's median ms a frame, ``drummers`` drummers at 1280x720, with
+    the code of ``before`` then ``after``, ``rounds`` times; then the medians and fps ratio."""
+    print(f"live stage display, {drummers} drummer(s), 1280x720, draw + read-back")
+    took: dict[str, list[float]] = {"before": [], "after": []}
+    for k in range(rounds):
+        for label, root in (("before", before), ("after", after)):
+            env = {**os.environ, "PYTHONPATH": str(root)}
+            run = subprocess.run([sys.executable, "-c", _LIVE, str(drummers)], cwd=root,
+                                 env=env, capture_output=True, text=True)  # fmt: skip
+            found = re.search(r"median ([\d.]+) ms", run.stdout)
+            if run.returncode != 0 or found is None:
+                print(f"  {label}: failed ({run.returncode}): {run.stderr.strip()[-200:]}")
+                continue
+            ms = float(found.group(1))
+            took[label].append(ms)
+            print(f"  round {k + 1} {label:>6}: {ms:.1f} ms a frame = {1000 / ms:.1f} fps")
+    if took["before"] and took["after"]:
+        b, a = statistics.median(took["before"]), statistics.median(took["after"])
+        print(f"  median before {1000 / b:.1f} fps, after {1000 / a:.1f} fps: "
+              f"after/before {b / a:.2f}")  # fmt: skip
+
+
+def _alternate(title: str, command: list[str], before: Path, after: Path, rounds: int,
+               cwd: Path) -> None:  # fmt: skip
+    """Run ``livedrummer COMMAND`` with the code of ``before`` then ``after``, ``rounds`` times,
+    and print each real-time factor, the medians and their ratio."""
+    print(title)
+    factors: dict[str, list[float]] = {"before": [], "after": []}
+    for k in range(rounds):
+        for label, root in (("before", before), ("after", after)):
+            env = {**os.environ, "PYTHONPATH": str(root)}
+            t0 = time.perf_counter()
+            run = subprocess.run([sys.executable, "-m", "services", *command], cwd=cwd, env=env,
+                                 capture_output=True, text=True)  # fmt: skip
+            wall = time.perf_counter() - t0
+            found = _SUMMARY.search(run.stdout)
+            if run.returncode != 0 or found is None:
+                print(f"  {label}: failed ({run.returncode}): {run.stderr.strip()[-200:]}")
+                continue
+            video_s = float(found.group(2))
+            factors[label].append(video_s / wall)
+            print(f"  round {k + 1} {label:>6}: {found.group(1)} frames, {video_s:.2f} s of "
+                  f"video in {wall:.2f} s = {video_s / wall:.2f}x real time")  # fmt: skip
+    if factors["before"] and factors["after"]:
+        b, a = statistics.median(factors["before"]), statistics.median(factors["after"])
+        print(f"  median before {b:.2f}x, after {a:.2f}x real time: after/before {a / b:.2f}")

@@ -64,7 +64,8 @@ def draw_capacity(performers: int, size: tuple[int, int], frames: int) -> np.nda
     from ..cli.common import DEMO_MAP, demo_groove, read_performance
     from ..cli.render import body_scene
     from ..display.context import headless_context
-    from ..display.stage_live import StagePainter, StagePerformer
+    from ..display.stage_export import StagePainter
+    from ..display.stage_live import StagePerformer
 
     args = build_parser(["render"]).parse_args(["render", str(demo_groove())])
     performance, note_map = read_performance(args, demo_groove(), DEMO_MAP, quiet=True)

@@ -302,6 +302,7 @@ def run_stage(args: argparse.Namespace) -> int:
     if not 1 <= args.fps <= 240:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
     background = background_of(args)
+    start_pos, end_pos = position_option("--start", args.start), position_option("--end", args.end)
     stage = load_stage(args.stage)
     out = args.output
     if out is None and args.frames_dir is None:
@@ -319,12 +320,20 @@ def run_stage(args: argparse.Namespace) -> int:
         kit, avatar = fitted(own, kit, avatar_of(own))
         body = body_scene(own, part.performance, kit, part.note_map, avatar)
         drummers.append(StageDrummer(body, part.performance, part.placement, avatar))
+    span = None
+    if start_pos is not None or end_pos is not None:  # bars counted on the first part's grid
+        length = max(d.performance.duration_s for d in drummers) + args.tail
+        try:
+            span = span_seconds(start_pos, end_pos, drummers[0].performance.grid, length)
+        except ValueError as exc:
+            raise RenderOptionError(f"{args.stage}: --start/--end: {exc}") from None
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export_stage(drummers, out=out, frames_dir=args.frames_dir, settings=settings,
                           camera=args.camera, tail_s=args.tail, progress=bar,
-                          background=background)  # fmt: skip
+                          background=background, span=span)  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
-    print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s, "
+    print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
+          f"{f' (from {span[0]:.2f} s to {span[1]:.2f} s)' if span else ''}, "
           f"{len(drummers)} drummers ({stage.formation.shape}), {size[0]}x{size[1]} @ "
           f"{args.fps} fps, camera {args.camera}; {report.realtime:.2f}x real time")  # fmt: skip
     return 0

@@ -25,8 +25,10 @@ def run_stage_live(args: argparse.Namespace) -> int:
     from ..service import serve
     from .keys import security_from_args
     from .render import parse_size
+    from .staging import check_room
 
     stage = load_stage(args.stage)
+    check_room(stage)
     live = stage.live()
     subs = [s.strip() for s in args.sub.split(",") if s.strip()]
     if len(subs) != len(live):

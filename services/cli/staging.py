@@ -41,11 +41,31 @@ class Part:
         return p.id if p.copy == 0 else f"{p.id}#{p.copy + 1}"
 
 
+def check_room(stage: Stage) -> None:
+    """A one-line StageError when two drummers of ``stage`` (copies too) stand closer than
+    their kits' footprints allow (:func:`livedrummer.stage.layout.check_footprints`)."""
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.stage.layout import check_footprints, footprint
+    from livedrummer.stage.stagefile import StageError
+
+    prints = {p.kit: footprint(load_kit(p.kit)) for p in stage.performers}
+    players = stage.players()
+    labels = [p.id if p.copy == 0 else f"{p.id}#{p.copy + 1}" for p, _s, _v in players]
+    try:
+        check_footprints([s for _p, s, _v in players], [prints[p.kit] for p, _s, _v in players],
+                         labels)  # fmt: skip
+    except ValueError as exc:
+        shape = stage.formation.shape
+        raise StageError(f"{stage.source}: [formation] {shape}: {exc}") from None
+
+
 def stage_parts(stage: Stage, args: argparse.Namespace) -> list[Part]:
     """Every drummer's part (see the module docstring); a performer without a file is a one-
-    line error (its ``source`` is for ``up --stage``)."""
+    line error (its ``source`` is for ``up --stage``), so are drummers whose kits would
+    overlap (:func:`check_room`)."""
     from livedrummer.stage.variation import bar_edges, vary_rows
 
+    check_room(stage)
     parts: list[Part] = []
     read: dict[str, tuple[Performance, NoteMap]] = {}
     for performer, placement, variation in stage.players():

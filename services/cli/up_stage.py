@@ -58,9 +58,11 @@ def stage_specs(args: argparse.Namespace, stage_file: Path) -> list[ServiceSpec]
 
     from ..supervisor import ServiceSpec
     from .common import DEMO_MAP
+    from .staging import check_room
     from .up import curve_argv, frame_size, recorded, windowed
 
     stage = load_stage(stage_file)
+    check_room(stage)
     live = stage.live()
     curve = curve_argv(args)
     me = program_argv()

@@ -47,7 +47,13 @@ from livedrummer.body.skeleton import N_JOINTS, J
 from livedrummer.render.background import HALL, Background
 from livedrummer.render.camera import Camera, look_at, perspective
 from livedrummer.render.geometry import Mesh, all_meshes
-from livedrummer.render.kitmesh import INSTANCE_FLOATS, MATERIAL_PLAIN, STAGE_RADIUS_M, KitMesh
+from livedrummer.render.kitmesh import (
+    INSTANCE_FLOATS,
+    MATERIAL_PLAIN,
+    MOTION_STATIC,
+    STAGE_RADIUS_M,
+    KitMesh,
+)
 from livedrummer.render.scene import CH_HIGHLIGHT, SceneFrame, Skeleton, Tone, empty_channels
 from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
 
@@ -67,6 +73,7 @@ SEGMENT_FLOATS = 15  # a xyz, b xyz, radius, colour rgba, material
 BALL_FLOATS = 12  # centre xyz radius, colour rgba, material
 SHADOW_SIZE = 512  # texels a side: ~7 mm at the kit, from the key light 4.6 m away
 SHADOW_RADIUS_M = 1.8  # the sphere round the kit's centre that the shadow map covers
+MAX_CELL_OTHERS = 128  # neighbours a stage floor's cell is cut by (shaders/floor_cell.glsl)
 SHADOW_UNIT = 1  # texture unit of the shadow map (unit 0 is the avatar's base colour)
 
 
@@ -87,6 +94,7 @@ class Renderer:
         background: Background | None = None,
         fxaa: bool = False,
         kit_occludes_only: bool = False,
+        cache_static_shadow: bool = True,
     ) -> None:
         self.ctx = ctx
         # the kit drawn into depth only, before the body: the body alone is seen, hidden where
@@ -127,7 +135,12 @@ class Renderer:
         self._shadow_map.compare_func = "<="
         self._shadow_map.filter = (moderngl.LINEAR, moderngl.LINEAR)
         self._shadow_map.repeat_x = self._shadow_map.repeat_y = False
-        self._shadow_fbo = ctx.framebuffer(depth_attachment=self._shadow_map)
+        # a colour attachment, never looked at: a blit copies depth only between framebuffers
+        # that have one (Mesa)
+        self._shadow_fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((side, side), 1)],
+                                           depth_attachment=self._shadow_map)  # fmt: skip
+        self.cache_static_shadow = cache_static_shadow and shadows
+        self._caster_setup(meshes, side)
         for prog in self.programs.values():
             if "u_shadow_map" in prog:
                 prog["u_shadow_map"].value = SHADOW_UNIT
@@ -142,6 +155,9 @@ class Renderer:
         if self.skinned is not None and self.skinned.has_face:
             self._face = FaceTrack(kit_mesh.crash_like)
         self._pose: tuple[np.ndarray, np.ndarray] | None = None
+        #: the other drummers' pool centres on a stage, in this kit's frame: the floor is drawn
+        #: only nearer to its own (``shaders/floor_cell.glsl``); empty for one drummer
+        self.floor_cell_others = np.zeros((0, 2), np.float32)
         self._fbo: Any = None
         self._resolve: Any = None
         if offscreen:
@@ -186,6 +202,37 @@ class Renderer:
             index_buffer=self._ibo[mesh.name],
         )
 
+    def _caster_setup(self, meshes: dict[str, Mesh], side: int) -> None:
+        """The kit's shadow casters split into those that never move (drawn once into
+        :attr:`_static_fbo` per key light) and those that may (drawn each frame)."""
+        km = self.kit_mesh
+        moving = km.motion != MOTION_STATIC
+        rest = km.instances(empty_channels(km.pieces))
+        self._casters_static: list[tuple[Any, int]] = []
+        self._casters_moving: list[tuple[Any, Any, np.ndarray]] = []
+        self._static_key: bytes | None = None  # the light the static map was drawn for
+        self._static_fbo: Any = None
+        if not self.cache_static_shadow:
+            return
+        for name, idx in self._kit_groups.items():
+            if name == "floor":
+                continue
+            still, move = idx[~moving[idx]], idx[moving[idx]]
+            if len(still):
+                buf = self.ctx.buffer(rest[still].tobytes())
+                vao = self._vao("depth_mesh", meshes[name], buf, "16f 4f 4f/i",
+                                "in_model", "in_color", "in_material")  # fmt: skip
+                self._casters_static.append((vao, len(still)))
+            if len(move):
+                buf = self.ctx.buffer(reserve=len(move) * INSTANCE_FLOATS * 4, dynamic=True)
+                vao = self._vao("depth_mesh", meshes[name], buf, "16f 4f 4f/i",
+                                "in_model", "in_color", "in_material")  # fmt: skip
+                self._casters_moving.append((vao, buf, move))
+        depth = self.ctx.depth_texture((side, side))
+        self._static_fbo = self.ctx.framebuffer(
+            color_attachments=[self.ctx.renderbuffer((side, side), 1)], depth_attachment=depth
+        )
+
     def _body_setup(self, meshes: dict[str, Mesh]) -> None:
         sk = self.skeleton
         material = np.array([0.0, 14.0, MATERIAL_PLAIN, 0.0], np.float32)
@@ -228,6 +275,8 @@ class Renderer:
         channels = frame.channels if frame is not None else empty_channels(self.kit_mesh.pieces)
         inst = self.kit_mesh.instances(channels)
         for _vao, buf, idx in self._kit_vaos:
+            buf.write(inst[idx].tobytes())
+        for _vao, buf, idx in self._casters_moving:
             buf.write(inst[idx].tobytes())
         self._draw_body = frame is not None
         if frame is None:
@@ -292,6 +341,7 @@ class Renderer:
         light_vp = key_light_view_projection(key, np.array([centre[0], centre[1], 0.6]))
         uniforms["u_light_vp"] = light_vp.T.tobytes()
         uniforms["u_shadow_on"] = int(self.shadows)
+        self._floor_cell_uniforms()
         for prog in self.programs.values():
             for name, value in uniforms.items():
                 if name in prog:
@@ -323,6 +373,23 @@ class Renderer:
                                        moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)  # fmt: skip
             vao.render(instances=len(idx))
         self.ctx.disable(moderngl.BLEND)
+
+    def pool_centre(self) -> np.ndarray:
+        """The centre (x, y) of the floor's pool of key light, in this kit's frame."""
+        if not len(self.kit_mesh.model):
+            return np.zeros(2)
+        return np.asarray(self.kit_mesh.model[0, :2, 3], float)
+
+    def _floor_cell_uniforms(self) -> None:
+        prog = self.programs["floor"]
+        if "u_cell_count" not in prog:
+            return
+        others = np.asarray(self.floor_cell_others, np.float32).reshape(-1, 2)[:MAX_CELL_OTHERS]
+        prog["u_cell_count"].value = len(others)
+        if len(others):
+            padded = np.zeros((MAX_CELL_OTHERS, 2), np.float32)
+            padded[: len(others)] = others
+            prog["u_cell_others"].write(padded.tobytes())
 
     def _draw_background_image(self, image: np.ndarray) -> None:
         """Stretch ``image`` ((H, W, 3) uint8, top row first) over the whole frame, writing no
@@ -359,19 +426,40 @@ class Renderer:
             fbo.use()
 
     def _shadow_pass(self, light_vp: np.ndarray) -> None:
-        """Draw every caster depth-only from the key light into the shadow map."""
-        self._shadow_fbo.use()
-        self.ctx.viewport = (0, 0, SHADOW_SIZE, SHADOW_SIZE)
-        self._shadow_fbo.clear(depth=1.0)
+        """Draw every caster depth-only from the key light into the shadow map.
+
+        With :attr:`cache_static_shadow`, the kit's parts that never move are drawn once per
+        key light into a map of their own, which each frame starts from (a blit), and only the
+        drummer, the sticks and the parts that may move are drawn over it: the same depths (the
+        nearest of all casters at every texel, in whatever order drawn)."""
         vp = light_vp.T.tobytes()
         for name in ("depth_mesh", "depth_segment", "depth_ball", "depth_skin"):
             self.programs[name]["u_view_proj"].write(vp)
+        if self.cache_static_shadow:
+            if self._static_key != vp:
+                self._static_fbo.use()
+                self.ctx.viewport = (0, 0, SHADOW_SIZE, SHADOW_SIZE)
+                self._static_fbo.clear(depth=1.0)
+                for vao, count in self._casters_static:
+                    vao.render(instances=count)
+                self._static_key = vp
+            self.ctx.copy_framebuffer(self._shadow_fbo, self._static_fbo)
+            self._shadow_fbo.use()
+            self.ctx.viewport = (0, 0, SHADOW_SIZE, SHADOW_SIZE)
+        else:
+            self._shadow_fbo.use()
+            self.ctx.viewport = (0, 0, SHADOW_SIZE, SHADOW_SIZE)
+            self._shadow_fbo.clear(depth=1.0)
         if self._draw_body:
             if self._pose is not None and self.skinned is not None:
                 self.skinned.draw_depth(self.programs["depth_skin"], *self._pose)
             self._seg_depth.render(instances=self._seg_count)
             if self._ball_count:
                 self._ball_depth.render(instances=self._ball_count)
+        if self.cache_static_shadow:
+            for vao, _buf, idx in self._casters_moving:
+                vao.render(instances=len(idx))
+            return
         for vao, idx in self._kit_depth:
             vao.render(instances=len(idx))
 

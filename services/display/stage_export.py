@@ -4,22 +4,29 @@ Why this shape. The renderer draws one kit and one drummer around the seat at th
 lit by a key spot placed relative to that kit. A stage places N of them (the formations of
 :mod:`livedrummer.stage.formation`), each turned by its yaw and moved to its spot. Rather
 than teach the renderer several bodies, each drummer is drawn by its own
-:class:`~services.display.renderer.Renderer` into a framebuffer of its own, seen by the
-stage camera expressed in that drummer's own frame (the camera moved by the inverse of the
-drummer's placement: a yaw about the vertical and a shift on the floor, so the view is the
-same picture of that drummer standing at its spot). The N pictures are then merged pixel by
-pixel by depth: the nearest surface wins, as if all had been drawn in one pass, and where no
-drummer, kit or floor is drawn the background stays. Every drummer keeps its own key light
-and shadows (as if each had a follow spot); the floors are one disc per drummer.
+:class:`~services.display.renderer.Renderer`, seen by the stage camera expressed in that
+drummer's own frame (the camera moved by the inverse of the drummer's placement: a yaw about
+the vertical and a shift on the floor, so the view is the same picture of that drummer
+standing at its spot). All N draw into ONE framebuffer (:class:`StagePainter`, which the live
+stage display shares): the first clears it, the others draw over it with the depth test on,
+so the nearest surface wins, as if all had been drawn in one pass, and where no drummer, kit
+or floor is drawn the background stays. Every drummer keeps its own key light and shadows (as
+if each had a follow spot). The floors are one disc per drummer on the same plane; each is
+drawn only over its own cell (the floor points nearer to its pool of light than to any
+other's, :mod:`livedrummer.stage.layout`): before that, overlapping discs fought pixel by pixel
+(a depth tie between coplanar surfaces, decided by rounding), which showed as blocky black
+jagged patches, one disc's shadowed or dark rim pixels winning over the other's lit pool.
 
-The stage camera is the single-kit camera of the same name (``stage``, ``front``, ...),
-aimed at the group's centre and pulled back by the group's width, so the whole group fits.
+The stage camera is the single-kit camera of the same name (``stage``, ``front``, ...), its
+direction and field of view kept, moved so the group's kits are centred and fill the frame
+(:func:`livedrummer.stage.layout.fit_group_camera`). ``span`` renders a part, as ``render``
+does.
 
-Cost: N renders and a depth merge (one numpy pass) per frame; the sound is each drummer's
-track mixed on its own kit and summed, scaled down as a whole only if it would clip.
+Cost: N renders and one read-back per frame; the sound is each drummer's track mixed on its own
+kit and summed, scaled down as a whole only if it would clip.
 
-Limits: one performer's shadow does not fall on another's kit; a drummer's floor disc may
-show through a gap in another's (both are at floor level, the merge keeps either).
+Limits: one performer's shadow does not fall on another's kit, and ends at its floor cell's
+edge; no anti-aliasing.
 """
 
 from __future__ import annotations
@@ -27,10 +34,10 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -43,6 +50,7 @@ from livedrummer.render.camera import Camera, pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.scene import SceneFrame
 from livedrummer.stage.formation import Placement
+from livedrummer.stage.layout import cell_neighbours, fit_group_camera, footprint, group_points
 from livedrummer.timeline.performance import Performance
 
 from .context import DisplayError, headless_context
@@ -53,7 +61,6 @@ from .renderer import Renderer
 from .video import VideoSettings, VideoWriter, check_video_target
 
 Progress = Callable[[int, int], None]
-KIT_HALF_M = 1.6  # a five-piece kit with its drummer, from the seat to its outer cymbals
 
 
 @dataclass(frozen=True)
@@ -65,34 +72,78 @@ class StageDrummer:
     placement: Placement
     avatar: Avatar | None = None
 
+    @property
+    def kit(self) -> Kit:
+        return self.body.kit
+
+
+class Spot(Protocol):
+    """What :class:`StagePainter` needs of a drummer: its kit, its spot, its avatar."""
+
+    @property
+    def kit(self) -> Kit: ...
+    @property
+    def placement(self) -> Placement: ...
+    @property
+    def avatar(self) -> Avatar | None: ...
+
+
+class StagePainter:
+    """N renderers drawing into one framebuffer (see the module docstring): the first clears
+    it, the others draw over it depth-tested, which is the depth merge done by the GPU; each
+    drummer's floor is cut to its cell (:func:`livedrummer.stage.layout.cell_neighbours`)."""
+
+    def __init__(self, ctx: Any, drummers: Sequence[Spot], size: tuple[int, int], camera: str,
+                 target: Any = None, background: Background | None = None) -> None:  # fmt: skip
+        self.ctx = ctx
+        self.size = size
+        w, h = size
+        world = group_camera_for([d.kit for d in drummers], [d.placement for d in drummers],
+                                 camera, w / h)  # fmt: skip
+        self.camera = world
+        if target is None:
+            target = ctx.framebuffer(color_attachments=[ctx.renderbuffer((w, h), 4)],
+                                     depth_attachment=ctx.depth_renderbuffer((w, h)))  # fmt: skip
+        self.target = target
+        self.passes: list[tuple[Renderer, Camera]] = []
+        for d in drummers:
+            renderer = Renderer(ctx, build_kit_mesh(d.kit), BODY_SKELETON, size, samples=0,
+                                offscreen=False, avatar=d.avatar,
+                                background=background)  # fmt: skip
+            self.passes.append((renderer, local_camera(world, d.placement)))
+        cells = cell_neighbours([d.placement for d in drummers],
+                                [r.pool_centre() for r, _c in self.passes])  # fmt: skip
+        for (renderer, _cam), others in zip(self.passes, cells, strict=True):
+            renderer.floor_cell_others = others
+
+    def draw(self, frames: Sequence[SceneFrame | None]) -> None:
+        for k, ((renderer, cam), frame) in enumerate(zip(self.passes, frames, strict=True)):
+            renderer.draw(frame, cam, target=self.target, clear=k == 0)
+
+    def read_rgba(self) -> np.ndarray:
+        """The frame drawn last, (H, W, 4) uint8, bottom row first (GL order)."""
+        w, h = self.size
+        data = self.target.read(components=4, alignment=1)
+        return np.frombuffer(data, np.uint8).reshape(h, w, 4)
+
 
 def group_camera(drummers: Sequence[StageDrummer], name: str, aspect: float) -> Camera:
-    """The camera ``name`` of the first drummer's kit, aimed at the group's centre and pulled
-    back until the group (each drummer with its kit, about :data:`KIT_HALF_M` around its
-    spot) fits the frame's width and height as one kit fits the single-kit camera."""
-    return group_camera_for(drummers[0].body.kit, [d.placement for d in drummers], name, aspect)
+    """The camera ``name`` of the first drummer's kit, moved to centre the group and fill the
+    frame (:func:`livedrummer.stage.layout.fit_group_camera`: every drummer's kit box, floor to
+    head height, seen whole)."""
+    return group_camera_for([d.body.kit for d in drummers], [d.placement for d in drummers],
+                            name, aspect)  # fmt: skip
 
 
-def group_camera_for(kit: Kit, placements: Sequence[Placement], name: str,
+def group_camera_for(kits: Kit | Sequence[Kit], placements: Sequence[Placement], name: str,
                      aspect: float) -> Camera:  # fmt: skip
-    """:func:`group_camera` from the first kit and the spots alone (the live stage display)."""
-    base = pick_camera(kit, name)
-    xs = np.array([p.x for p in placements])
-    ys = np.array([p.y for p in placements])
-    centre = np.array([(xs.max() + xs.min()) / 2, (ys.max() + ys.min()) / 2, 0.0])
-    offset = np.asarray(base.eye) - np.asarray(base.target)
-    distance = float(np.linalg.norm(offset))
-    half_v = math.tan(math.radians(base.fov_deg) / 2)
-    # The group's half-extent across the view (its width seen from the camera's side) ...
-    across = np.array([-offset[1], offset[0]]) / max(float(np.hypot(offset[0], offset[1])), 1e-9)
-    spread = np.abs((xs - centre[0]) * across[0] + (ys - centre[1]) * across[1]).max()
-    half_extent = float(spread) + KIT_HALF_M
-    # ... fits the frame's width at the distance where one kit filled it
-    needed = half_extent / (aspect * half_v)
-    scale = max(1.0, needed / distance)
-    target = np.asarray(base.target) + centre
-    eye = target + offset * scale
-    return Camera(f"{name} (stage of {len(placements)})", _vec(eye), _vec(target), base.fov_deg)
+    """:func:`group_camera` from the kits (one for all, or one per spot) and the spots alone
+    (the live stage display)."""
+    every = [kits] * len(placements) if isinstance(kits, Kit) else list(kits)
+    prints = {id(k): footprint(k) for k in every}
+    points = group_points(placements, [prints[id(k)] for k in every])
+    base = pick_camera(every[0], name)
+    return fit_group_camera(base, points, aspect, f"{name} (stage of {len(placements)})")
 
 
 def local_camera(camera: Camera, placement: Placement) -> Camera:
@@ -134,9 +185,14 @@ def export_stage(
     tail_s: float = 1.0,
     progress: Progress | None = None,
     background: Background | None = None,
+    span: tuple[float, float] | None = None,
 ) -> ExportReport:
     """Render the stage to ``out`` (MP4 with the summed drum track) and/or PNGs, in front of
-    ``background`` (transparent: alpha 0 where no drummer, kit or floor is nearest)."""
+    ``background`` (transparent: alpha 0 where no drummer, kit or floor is nearest).
+
+    ``span`` = (start_s, end_s) renders only that part, as :func:`.export.export` does
+    (``render --stage --start/--end``): frame ``i`` shows ``start_s + i / fps``, every drummer's
+    motion is its whole performance's and the track is the whole mix's slice."""
     if not drummers:
         raise DisplayError("a stage needs at least one drummer")
     if out is None and frames_dir is None:
@@ -144,40 +200,29 @@ def export_stage(
     start = time.perf_counter()
     fps = settings.fps
     length = max(d.performance.duration_s for d in drummers) + tail_s
-    n = frame_count(length, fps)
-    times = np.arange(n) / fps
+    first_s, end_s = span if span is not None else (0.0, length)
+    n = frame_count(end_s - first_s, fps)
+    times = first_s + np.arange(n) / fps
     if frames_dir is not None:
         frames_dir.mkdir(parents=True, exist_ok=True)
     writer: VideoWriter | None = None
     if out is not None:
         check_video_target(out, settings)
-        audio = _track(drummers, n / fps, settings.sample_rate)
+        lead = round(first_s * settings.sample_rate)
+        length_n = round(n / fps * settings.sample_rate)
+        audio = _track(drummers, (lead + length_n) / settings.sample_rate, settings.sample_rate)
         writer = VideoWriter(partial_path(out), settings)
-        writer.write_audio(audio)
-    world = group_camera(drummers, camera, settings.size[0] / settings.size[1])
+        writer.write_audio(audio[lead:])
     alpha = background is not None and background.transparent
     ctx = None
     done = False
     try:
         ctx = headless_context()
-        w, h = settings.size
-        passes: list[tuple[Renderer, Any, Any, Camera, Iterator[SceneFrame]]] = []
-        for d in drummers:
-            renderer = Renderer(ctx, build_kit_mesh(d.body.kit), BODY_SKELETON, settings.size,
-                                samples=0, avatar=d.avatar, background=background)  # fmt: skip
-            depth = ctx.depth_texture((w, h))
-            fbo = ctx.framebuffer(color_attachments=[ctx.texture((w, h), 4)],
-                                  depth_attachment=depth)  # fmt: skip
-            cam = local_camera(world, d.placement)
-            passes.append((renderer, fbo, depth, cam, d.body.frames(times)))
+        painter = StagePainter(ctx, drummers, settings.size, camera, background=background)
+        frames = [d.body.frames(times) for d in drummers]
         for i in range(n):
-            colours, depths = [], []
-            for renderer, fbo, _depth, cam, frames in passes:
-                renderer.draw(next(frames), cam, target=fbo)
-                colours.append(np.frombuffer(fbo.read(components=4), np.uint8).reshape(h, w, 4))
-                depths.append(np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4"),
-                                            np.float32).reshape(h, w))  # fmt: skip
-            rgba = merge_by_depth(colours, depths)  # bottom row first, as GL reads
+            painter.draw([next(f) for f in frames])
+            rgba = painter.read_rgba()  # bottom row first, as GL reads
             if writer is not None:
                 writer.write(rgba)
             if frames_dir is not None:
@@ -194,11 +239,3 @@ def export_stage(
         if ctx is not None:
             ctx.release()
     return ExportReport(n, n / fps, time.perf_counter() - start)
-
-
-def merge_by_depth(colours: Sequence[np.ndarray], depths: Sequence[np.ndarray]) -> np.ndarray:
-    """Per pixel, the colour of the layer whose depth is nearest (the first on a tie)."""
-    nearest = np.argmin(np.stack(depths), axis=0)
-    stack = np.stack(colours)
-    out: np.ndarray = np.take_along_axis(stack, nearest[None, :, :, None], axis=0)[0]
-    return np.ascontiguousarray(out)

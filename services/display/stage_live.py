@@ -60,17 +60,14 @@ from livedrummer.protocol import (
     SequenceTracker,
     decode,
 )
-from livedrummer.render.body_scene import BODY_SKELETON, frame_from_pose
-from livedrummer.render.camera import Camera
-from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.body_scene import frame_from_pose
 from livedrummer.stage.formation import Placement
 
 from ..badmsg import BadMessages
 from ..net import Security, connect, socket, subscribe_protocol
 from ..service import OnReady, Service
 from .live import FrameClock
-from .renderer import Renderer
-from .stage_export import group_camera_for, local_camera
+from .stage_export import StagePainter
 from .video import VideoSettings, VideoWriter
 from .window import WindowOptions
 
@@ -200,38 +197,6 @@ class _Recorder:
 
     def close(self) -> None:
         self._writer.close()
-
-
-class StagePainter:
-    """N renderers drawing into one framebuffer (see the module docstring): the first clears
-    it, the others draw over it depth-tested, which is the depth merge done by the GPU."""
-
-    def __init__(self, ctx: Any, performers: list[StagePerformer], size: tuple[int, int],
-                 camera: str, target: Any = None) -> None:  # fmt: skip
-        self.ctx = ctx
-        self.size = size
-        w, h = size
-        world: Camera = group_camera_for(performers[0].kit, [p.placement for p in performers],
-                                         camera, w / h)  # fmt: skip
-        if target is None:
-            target = ctx.framebuffer(color_attachments=[ctx.renderbuffer((w, h), 4)],
-                                     depth_attachment=ctx.depth_renderbuffer((w, h)))  # fmt: skip
-        self.target = target
-        self.passes: list[tuple[Renderer, Camera]] = []
-        for p in performers:
-            renderer = Renderer(ctx, build_kit_mesh(p.kit), BODY_SKELETON, size, samples=0,
-                                offscreen=False, avatar=p.avatar)  # fmt: skip
-            self.passes.append((renderer, local_camera(world, p.placement)))
-
-    def draw(self, frames: list[Any]) -> None:
-        for k, ((renderer, cam), frame) in enumerate(zip(self.passes, frames, strict=True)):
-            renderer.draw(frame, cam, target=self.target, clear=k == 0)
-
-    def read_rgba(self) -> np.ndarray:
-        """The frame drawn last, (H, W, 4) uint8, bottom row first (GL order)."""
-        w, h = self.size
-        data = self.target.read(components=4, alignment=1)
-        return np.frombuffer(data, np.uint8).reshape(h, w, 4)
 
 
 class _Window:
