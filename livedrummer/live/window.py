@@ -102,13 +102,14 @@ class NoteWindow:
         self.note_map = note_map
         self.sticker = OnlineSticker(rig.kit, params.lookahead_s, keep_onsets=False)
         self.predictor = HandPredictor()
-        self.beat = BeatTracker()  # the music's beat, for the torso (see _beats)
+        self._beat = BeatTracker()  # the music's beat, for the torso (see _beats)
         self.reset()
 
     def reset(self) -> None:
         self.sticker.reset()
         self.predictor.reset()
-        self.beat.reset()
+        self._beat.reset()
+        self._beat_todo: list[tuple[float, float, float]] = []  # heard, not yet tracked
         self._notes: list[Note] = []  # every note since the window start, by stream index
         self._first = 0  # stream index of self._notes[0]
         self._controls: list[np.ndarray] = []
@@ -125,10 +126,21 @@ class NoteWindow:
             self._notes.append(note)
             notes.append(note)
             self._apply(self.sticker.process(rec))
-            self.beat.process(float(rec["time_s"]), float(weights[i]), float(downbeats[i]))
+            self._beat_todo.append((float(rec["time_s"]), float(weights[i]), float(downbeats[i])))
         if recs.size:  # also while no poses are asked for (a re-animation answering a flood)
             self.prune(float(recs["time_s"].max()) - self.params.lookahead_s)
         return notes
+
+    @property
+    def beat(self) -> BeatTracker:
+        """The beat tracker, fed every onset heard so far. Onsets join it here, when it is
+        read (on the synth's tick), not on arrival: its tempo search costs up to several
+        milliseconds now and then, which a hit's answer must not wait for; fed in order, it
+        gives what it would have given on arrival."""
+        todo, self._beat_todo = self._beat_todo, []
+        for time_s, weight, downbeat in todo:
+            self._beat.process(time_s, weight, downbeat)
+        return self._beat
 
     def control(self, row: np.ndarray | np.void) -> None:
         rec = np.array(row, dtype=CONTROL_DTYPE)
