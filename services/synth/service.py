@@ -19,7 +19,9 @@ one lock, which the animation thread lets go for the long steps (``poses_until(l
 while the curves are rebuilt and sampled, from a copy of what they read), so a hit waits for
 at most one short book-keeping step, never for a re-animation. The GIL's switch interval
 is set to :data:`SWITCH_S` while the service runs, so the answer thread, woken by its
-socket, takes the interpreter from a busy animation thread within that long. The PUB socket
+socket, takes the interpreter from a busy animation thread within that long; and between
+its steps (``poses_until(answer=...)``) a re-animation waits while a hit is being answered,
+so the two share the interpreter only until the re-animation's next step. The PUB socket
 is used by both threads, only ever under the lock (a ZeroMQ socket may pass between threads
 behind a full memory barrier), so batches leave in the order they were cut.
 Each onset is also forwarded on the pose socket the moment it is read, before the synth
@@ -191,6 +193,8 @@ class SynthService(Service):
         self._bars_from = -math.inf
         self._lock = threading.Lock()  # the synth and the PUB socket (see the module docstring)
         self._kick = threading.Event()  # hits answered: the animation thread ticks at once
+        self._idle = threading.Event()  # cleared while hits are being answered
+        self._idle.set()
 
     def open(self) -> None:
         """Bind the pose socket, connect to the input daemon (the base binds the control)."""
@@ -330,7 +334,9 @@ class SynthService(Service):
         """One tick of the animation thread, the lock held: bar cues, then the samples due
         (the lock let go while the curves are rebuilt and sampled: hits are answered then)."""
         self._fire_bar_cues(now)
-        self._publish(self.synth.poses_until(now, lock=self._lock))
+        # between its steps a re-animation waits while a hit is being answered (``_idle`` is
+        # only cleared by a thread holding the lock, so this thread, holding it, never waits)
+        self._publish(self.synth.poses_until(now, answer=self._wait_answered, lock=self._lock))
         self._say(self.late.poll(now))
 
     def _fire_bar_cues(self, now: float) -> None:
@@ -354,6 +360,10 @@ class SynthService(Service):
             self._pub.send_multipart(encode(msg), copy=False)
             self._seq += 1
             self.stats.stage_cues += rows.size
+
+    def _wait_answered(self) -> None:
+        """Passed to ``LiveSynth.poses_until`` as ``answer`` (see :meth:`tick`)."""
+        self._idle.wait()
 
     def _publish(self, batch: PoseBatch) -> None:
         if batch.show_s.size == 0:
@@ -390,7 +400,11 @@ class SynthService(Service):
         while True:
             read_at = self.clock.now()
             with self._lock:
-                got = self._drain_batch(read_at)
+                self._idle.clear()  # only with the lock held: see tick
+                try:
+                    got = self._drain_batch(read_at)
+                finally:
+                    self._idle.set()
             if got < DRAIN_BATCH:
                 return
 
