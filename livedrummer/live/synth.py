@@ -84,7 +84,7 @@ import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
-from threading import Lock
+from typing import Protocol
 
 import numpy as np
 
@@ -129,6 +129,14 @@ class SynthParams:
             raise ValueError(f"rate {self.rate_hz} and window {self.window_s} must be > 0")
         if self.max_notes < 8:
             raise ValueError(f"max_notes {self.max_notes} must be >= 8")
+
+
+class Lock(Protocol):
+    """What ``poses_until(lock=...)`` needs of a lock (:class:`threading.Lock` has it)."""
+
+    def acquire(self) -> bool: ...
+
+    def release(self) -> None: ...
 
 
 @contextmanager
@@ -252,7 +260,7 @@ class LiveSynth:
         :meth:`take_quick`. ``lock``, when given, is held by the caller and released while
         the curves are rebuilt and sampled (the steps that take milliseconds), so that another
         thread holding it meanwhile may call :meth:`process` and :meth:`take_quick` (see the
-        module docstring)."""
+        module docstring); ``answer`` is then called only while it is let go."""
         p = self.params
         self.window.advance(now_s)
         committed = now_s - p.lookahead_s  # every note up to here is decided
@@ -271,7 +279,7 @@ class LiveSynth:
                                                                       lock)  # fmt: skip
         if refreshed:
             start = rewind
-            if answer is not None:
+            if answer is not None and lock is None:  # with a lock: only while it is let go
                 answer()
         self._committed = max(self._committed, committed)
         if top <= start:

@@ -137,10 +137,21 @@ class NoteWindow:
         read (on the synth's tick), not on arrival: its tempo search costs up to several
         milliseconds now and then, which a hit's answer must not wait for; fed in order, it
         gives what it would have given on arrival."""
-        todo, self._beat_todo = self._beat_todo, []
-        for time_s, weight, downbeat in todo:
-            self._beat.process(time_s, weight, downbeat)
+        self.track_heard(self.take_heard())
         return self._beat
+
+    def take_heard(self) -> list[tuple[float, float, float]]:
+        """The onsets heard since the last call that the beat tracker has not had yet (time,
+        weight, downbeat evidence), for :meth:`track_heard`."""
+        todo, self._beat_todo = self._beat_todo, []
+        return todo
+
+    def track_heard(self, heard: list[tuple[float, float, float]]) -> None:
+        """Feed the beat tracker what :meth:`take_heard` gave. Only the beat tracker is
+        touched: a service whose other thread adds notes meanwhile (under its lock) may call
+        this without the lock, from the one thread that reads :attr:`beat`."""
+        for time_s, weight, downbeat in heard:
+            self._beat.process(time_s, weight, downbeat)
 
     def control(self, row: np.ndarray | np.void) -> None:
         rec = np.array(row, dtype=CONTROL_DTYPE)

@@ -23,7 +23,10 @@ socket, takes the interpreter from a busy animation thread within that long; and
 its steps (``poses_until(answer=...)``) a re-animation waits while a hit is being answered,
 so the two share the interpreter only until the re-animation's next step. The PUB socket
 is used by both threads, only ever under the lock (a ZeroMQ socket may pass between threads
-behind a full memory barrier), so batches leave in the order they were cut.
+behind a full memory barrier), so batches leave in the order they were cut. The lock lets
+the answer thread go first (:class:`~services.synth.answerlock.AnswerFirstLock`): a plain
+lock let the animation thread, taking it back between its steps, starve the answers at 100
+notes a second.
 Each onset is also forwarded on the pose socket the moment it is read, before the synth
 works on it, as a SHOWN_ONSET message stamped with its show time (onset + D): a display sounds
 it then (``display --live --sound``), a score strip can draw it. Each control (a cymbal grab,
@@ -102,6 +105,7 @@ from ..net import (
 )
 from ..osc import CUE, PREFIX, STATE, SYNTH_ADDRESSES, Command, OscEndpoint, state_pairs
 from ..service import OnReady, Service
+from .answerlock import AnswerFirstLock
 
 log = logging.getLogger("livedrummer.synth")
 
@@ -191,10 +195,8 @@ class SynthService(Service):
         self._last_onset_s = -math.inf
         self.bar_cues = BarCues(config.cues)  # the list's bar cues, fired as bars are heard
         self._bars_from = -math.inf
-        self._lock = threading.Lock()  # the synth and the PUB socket (see the module docstring)
+        self._lock = AnswerFirstLock()  # the synth and the PUB socket (see the module docstring)
         self._kick = threading.Event()  # hits answered: the animation thread ticks at once
-        self._idle = threading.Event()  # cleared while hits are being answered
-        self._idle.set()
 
     def open(self) -> None:
         """Bind the pose socket, connect to the input daemon (the base binds the control)."""
@@ -238,7 +240,7 @@ class SynthService(Service):
                     self._drain()  # every hit's contact goes out at once
                 if self.osc is not None:
                     for cmd in self.osc.take():
-                        with self._lock:
+                        with self._lock.answering():
                             self.command(cmd)
                 if on_ready is not None and self.stats.pose_messages:
                     on_ready()
@@ -268,6 +270,11 @@ class SynthService(Service):
             if not (provisional and self.stats.onsets != self._ticked):
                 self._kick.wait(max(0.0, wake - self.clock.now()))
             self._kick.clear()  # before the count is read: a later kick is seen next time
+            # the beat tracker's search (up to milliseconds) runs without the lock: it is this
+            # thread's alone, the answer thread only lists what it heard
+            with self._lock:
+                heard = self.synth.window.take_heard()
+            self.synth.window.track_heard(heard)
             with self._lock:
                 now = self.clock.now()
                 fresh = provisional and self.stats.onsets != self._ticked
@@ -334,9 +341,9 @@ class SynthService(Service):
         """One tick of the animation thread, the lock held: bar cues, then the samples due
         (the lock let go while the curves are rebuilt and sampled: hits are answered then)."""
         self._fire_bar_cues(now)
-        # between its steps a re-animation waits while a hit is being answered (``_idle`` is
-        # only cleared by a thread holding the lock, so this thread, holding it, never waits)
-        self._publish(self.synth.poses_until(now, answer=self._wait_answered, lock=self._lock))
+        # between its steps (the lock let go) a re-animation waits while a hit is answered
+        self._publish(self.synth.poses_until(now, answer=self._lock.wait_answered,
+                                             lock=self._lock))  # fmt: skip
         self._say(self.late.poll(now))
 
     def _fire_bar_cues(self, now: float) -> None:
@@ -360,10 +367,6 @@ class SynthService(Service):
             self._pub.send_multipart(encode(msg), copy=False)
             self._seq += 1
             self.stats.stage_cues += rows.size
-
-    def _wait_answered(self) -> None:
-        """Passed to ``LiveSynth.poses_until`` as ``answer`` (see :meth:`tick`)."""
-        self._idle.wait()
 
     def _publish(self, batch: PoseBatch) -> None:
         if batch.show_s.size == 0:
@@ -399,12 +402,8 @@ class SynthService(Service):
         is kicked after each batch with onsets."""
         while True:
             read_at = self.clock.now()
-            with self._lock:
-                self._idle.clear()  # only with the lock held: see tick
-                try:
-                    got = self._drain_batch(read_at)
-                finally:
-                    self._idle.set()
+            with self._lock.answering():
+                got = self._drain_batch(read_at)
             if got < DRAIN_BATCH:
                 return
 
