@@ -12,7 +12,7 @@ each commit measures itself with its own code, its own protocol and its own benc
 other commit's bench may not read this one's messages). The rows each run prints are read
 back (the table's layout has stayed the same since the bench was written) and the medians of
 the runs are printed side by side with their ratio, and the load average at the end. The
-worktree is removed afterwards, also on an error or Ctrl-C.
+worktree is removed afterwards, also on an error, Ctrl-C or SIGTERM.
 
 Limits: the other commit must have ``bench latency`` (``services`` or, before the process
 layer moved there, ``livedrummer`` as the package run with ``-m``) and accept the options
@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import os
 import re
+import signal
 import subprocess
 import sys
 import tempfile
@@ -109,6 +110,7 @@ def run_compare(checkout: Path, rev: str, argv: list[str], runs: int) -> int:
     """Run the bench with ``argv`` from ``rev`` and ``checkout`` alternately, ``runs`` times
     each, echoing every run, then print the medians side by side."""
     results: dict[str, list[dict[str, dict[str, float]]]] = {"this": [], rev: []}
+    signal.signal(signal.SIGTERM, _exit)  # the worktree is removed on the way out
     with worktree(checkout, rev) as other:
         places = [("this", checkout), (rev, other)]
         for k in range(2 * runs):
@@ -125,6 +127,10 @@ def run_compare(checkout: Path, rev: str, argv: list[str], runs: int) -> int:
             results[name].append(parse(done.stdout))
     print_side_by_side(results, rev)
     return 0
+
+
+def _exit(signum: int, _frame: object) -> None:
+    raise SystemExit(128 + signum)
 
 
 def _median(runs: list[dict[str, dict[str, float]]], label: str, key: str) -> float:
