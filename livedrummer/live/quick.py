@@ -11,7 +11,12 @@ sample is near) and the onsets that just arrived with the limbs the synthesizer 
 (decided, or provisional), and returns one pose record per onset time, to show at onset + D:
 
 * the body as sampled nearest the onset (torso, head, the other limbs), or the quick contact
-  already sent for that time (a chord whose notes came in two messages);
+  already sent for that time (a chord whose notes came in two messages); the curves are
+  sampled only when no sample exists yet (start-up): one sample of the curves costs several
+  milliseconds (10 with a cross-fade under way), more than the whole answer otherwise, so a
+  hit that finds the animation behind (a busy machine) starts from the newest sample there
+  is, however old; its limb still lands exactly on its target, the rest of the body is as
+  of that sample until the strokes replace it;
 * each striking limb put on its piece by :func:`~livedrummer.body.strike.strike_poses` (the
   body package's one strike solve, shared with the animation's contact keys): an arm from
   that sample's own shoulder and chest, so the stick tip lies on the target exactly; a foot
@@ -31,9 +36,6 @@ import numpy as np
 from livedrummer.body.rig import Rig
 from livedrummer.body.strike import strike_poses
 from livedrummer.live.curves import CurveView, sample_curves
-
-#: a published or held sample this close to the onset stands for the body at the onset
-NEAR_S = 0.02
 
 
 @dataclass(frozen=True)
@@ -86,7 +88,8 @@ def quick_contact(
 
 def _bodies_at(state: QuickState, times: np.ndarray) -> np.ndarray | None:
     """The body at each of ``times``: the quick contact already sent for that time (a chord
-    completed), else the published or held sample nearest it, else sampled from the curves."""
+    completed), else the published or held sample nearest it, however far, else (nothing
+    sampled yet) sampled from the curves."""
     out = np.zeros(times.size, state.dtype)
     todo = np.ones(times.size, dtype=bool)
     for k, t in enumerate(times.tolist()):
@@ -96,8 +99,8 @@ def _bodies_at(state: QuickState, times: np.ndarray) -> np.ndarray | None:
         i = np.clip(np.searchsorted(state.samples_t, times), 1, state.samples_t.size - 1)
         i = np.where(np.abs(state.samples_t[i - 1] - times) < np.abs(state.samples_t[i] - times),
                      i - 1, i) if state.samples_t.size > 1 else np.zeros_like(i)  # fmt: skip
-        near = todo & (np.abs(state.samples_t[i] - times) <= NEAR_S)
-        out[near], todo[near] = state.samples[i[near]], False
+        out[todo] = state.samples[i[todo]]
+        todo[:] = False
     if todo.any():
         if state.curves.curves is None:
             return None
