@@ -20,7 +20,9 @@ sample is near) and the onsets that just arrived with the limbs the synthesizer 
 * each striking limb put on its piece by :func:`~livedrummer.body.strike.strike_poses` (the
   body package's one strike solve, shared with the animation's contact keys): an arm from
   that sample's own shoulder and chest, so the stick tip lies on the target exactly; a foot
-  on its footboard; the struck piece's channels as at a hit.
+  on its footboard, looked up (:func:`~livedrummer.body.strike.foot_contacts`: a foot's
+  contact depends on the piece alone, so the synth solves it once at start); the struck
+  piece's channels as at a hit.
 
 The whole batch is solved at once (one IK call per limb), so a burst of notes that arrived
 together costs what one does. Nothing in the state is changed. The re-animated curves
@@ -34,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.body.rig import Rig
-from livedrummer.body.strike import strike_poses
+from livedrummer.body.strike import FootContacts, strike_poses
 from livedrummer.live.curves import CurveView, sample_curves
 
 
@@ -48,6 +50,7 @@ class QuickState:
     samples_t: np.ndarray  # performance times of samples published lately and held ahead
     samples: np.ndarray  # their pose records
     struck: dict[float, np.ndarray]  # quick contacts not yet in the curves, by onset time
+    feet: FootContacts | None = None  # the feet's contacts, solved once (else solved here)
 
 
 def quick_contact(
@@ -81,7 +84,7 @@ def quick_contact(
             h = hits[sel]
             base[at[sel]] = strike_poses(
                 state.rig, base[at[sel]], code, piece[sel].astype(np.int64),
-                h["zone"].astype(np.int64), h["velocity"], h["openness"],
+                h["zone"].astype(np.int64), h["velocity"], h["openness"], state.feet,
             )  # fmt: skip
     return times, base
 

@@ -92,6 +92,7 @@ from livedrummer.body.animation import hihat_openness
 from livedrummer.body.expression import Expression, with_param
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import Rig
+from livedrummer.body.strike import foot_contacts
 from livedrummer.body.strokes import StrokeParams
 from livedrummer.live.curves import Answer, CurveSet
 from livedrummer.live.ledger import SampleLedger
@@ -187,6 +188,7 @@ class LiveSynth:
         self.curves = CurveSet(rig, p.blend_s, strokes)
         self.ledger = SampleLedger(self.dtype)
         self.style = StyleRamp(expression, p.style_ramp_s)
+        self.feet = foot_contacts(rig)  # a quick contact's feet, solved once
         self.reset()
 
     def reset(self) -> None:
@@ -235,7 +237,7 @@ class LiveSynth:
     def quick_state(self) -> QuickState:
         """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
         return QuickState(self.rig, self.dtype, self.curves.view(), *self.ledger.samples(),
-                          self.ledger.struck())  # fmt: skip
+                          self.ledger.struck(), self.feet)  # fmt: skip
 
     def take_quick(self) -> PoseBatch:
         """Quick contacts of the hits that arrived since the last call, to publish at once,
