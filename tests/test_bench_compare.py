@@ -57,6 +57,21 @@ def test_the_rows_a_run_prints_are_read_back(capsys: pytest.CaptureFixture[str])
 def test_the_options_are_passed_on_without_compare() -> None:
     argv = ["--rates", "100", "--compare", "abc", "--groove", "30", "--compare-runs=3"]
     assert latency._without_compare(argv) == ["--rates", "100", "--groove", "30"]
+    argv = ["--compare", "abc", "def", "--compare-runs", "2", "--rates", "1", "100"]
+    assert latency._without_compare(argv) == ["--rates", "1", "100"]
+    assert latency._without_compare(["--groove", "30", "--compare=abc"]) == ["--groove", "30"]
+
+
+@pytest.mark.parametrize("names", [["this", "a"], ["this", "a", "b"]])
+def test_each_commit_goes_first_and_last_as_often(names: list[str]) -> None:
+    turns = _compare.order(names, 2 * len(names))
+    assert len(turns) == 2 * len(names) ** 2
+    rounds = [turns[i : i + len(names)] for i in range(0, len(turns), len(names))]
+    assert all(sorted(r) == sorted(names) for r in rounds)
+    for pos in (0, -1):
+        firsts = [r[pos] for r in rounds]
+        assert all(firsts.count(n) == 2 for n in names)
+    assert _compare.order(["this", "a"], 2) == ["this", "a", "a", "this"]
 
 
 def test_the_other_commit_is_checked_out_beside_and_removed() -> None:

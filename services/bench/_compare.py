@@ -1,18 +1,19 @@
-"""``bench latency --compare REV``: the same bench run from another commit and this checkout,
-alternating, in one run, and the two side by side.
+"""``bench latency --compare REV [REV ...]``: the same bench run from other commits and this
+checkout, alternating, in one run, and each beside this checkout.
 
 Why this shape. A latency figure on a shared machine means little alone: the load changes
 from minute to minute. Before/after figures are only comparable when measured alternating,
-under the same load. The other commit is checked out once into a temporary git worktree
+under the same load. Each other commit is checked out once into a temporary git worktree
 (``git worktree add --detach``; nothing to compile: its Python runs with this interpreter
 and its installed dependencies), with a ``shared`` link beside it to this checkout's
-``../shared``; then the bench runs ``runs`` times from each checkout in turn (this, REV,
-REV, this, ...: each first as often), each run a child process started in that checkout, so
+``../shared``; then the bench runs ``runs`` times from each checkout in turn, the order
+turned by one each round (:func:`order`: this, A, B, then A, B, this, ...; with one REV this,
+REV, REV, this), each run a child process started in that checkout, so
 each commit measures itself with its own code, its own protocol and its own bench (the
 other commit's bench may not read this one's messages). The rows each run prints are read
 back (the table's layout has stayed the same since the bench was written) and the medians of
-the runs are printed side by side with their ratio, and the load average at the end. The
-worktree is removed afterwards, also on an error, Ctrl-C or SIGTERM.
+the runs are printed side by side with their ratio, one table per REV, and the load average
+at the end. The worktrees are removed afterwards, also on an error, Ctrl-C or SIGTERM.
 
 Limits: the other commit must have ``bench latency`` (``services`` or, before the process
 layer moved there, ``livedrummer`` as the package run with ``-m``) and accept the options
@@ -29,7 +30,7 @@ import subprocess
 import sys
 import tempfile
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -106,26 +107,36 @@ def parse(text: str) -> dict[str, dict[str, float]]:
     return out
 
 
-def run_compare(checkout: Path, rev: str, argv: list[str], runs: int) -> int:
-    """Run the bench with ``argv`` from ``rev`` and ``checkout`` alternately, ``runs`` times
-    each, echoing every run, then print the medians side by side."""
-    results: dict[str, list[dict[str, dict[str, float]]]] = {"this": [], rev: []}
-    signal.signal(signal.SIGTERM, _exit)  # the worktree is removed on the way out
-    with worktree(checkout, rev) as other:
-        places = [("this", checkout), (rev, other)]
-        for k in range(2 * runs):
-            # this, REV, REV, this, this, REV, ...: each goes first as often
-            name, where = places[(k + k // 2) % 2]
-            print(f"\n--- run {k + 1} of {2 * runs}: {name} ({where})", flush=True)
-            env = {**os.environ, "PYTHONPATH": str(where)}
-            done = subprocess.run([*bench_argv(where), *argv], cwd=where, env=env,
+def order(names: list[str], runs: int) -> list[str]:
+    """The runs in turn: ``runs`` rounds of ``names``, each round turned one further, so that
+    each name goes first (and last) as often as the others in ``len(names)`` rounds."""
+    m = len(names)
+    return [names[(r + i) % m] for r in range(runs) for i in range(m)]
+
+
+def run_compare(checkout: Path, revs: list[str], argv: list[str], runs: int) -> int:
+    """Run the bench with ``argv`` from each of ``revs`` and ``checkout`` in turn, ``runs``
+    times each, echoing every run, then print each REV's medians beside this checkout's."""
+    names = ["this", *dict.fromkeys(revs)]
+    results: dict[str, list[dict[str, dict[str, float]]]] = {n: [] for n in names}
+    signal.signal(signal.SIGTERM, _exit)  # the worktrees are removed on the way out
+    with ExitStack() as stack:
+        where = {"this": checkout}
+        for rev in names[1:]:
+            where[rev] = stack.enter_context(worktree(checkout, rev))
+        turns = order(names, runs)
+        for k, name in enumerate(turns):
+            print(f"\n--- run {k + 1} of {len(turns)}: {name} ({where[name]})", flush=True)
+            env = {**os.environ, "PYTHONPATH": str(where[name])}
+            done = subprocess.run([*bench_argv(where[name]), *argv], cwd=where[name], env=env,
                                   capture_output=True, text=True)  # fmt: skip
             print(done.stdout, end="", flush=True)
             if done.returncode != 0:
                 tail = done.stderr.strip().splitlines()[-3:]
                 print(f"    ({name}: the bench exited {done.returncode}: {' / '.join(tail)})")
             results[name].append(parse(done.stdout))
-    print_side_by_side(results, rev)
+    for rev in names[1:]:
+        print_side_by_side(results, rev)
     return 0
 
 

@@ -32,10 +32,10 @@ both on (OSC and the strips; ``--overlay`` picks which), in alternating order so
 that changes during the run weighs on both alike, and ends with the medians side by side and
 the load average: the cost of the show control, measured under the same load.
 
-Regressions: ``--compare REV`` runs the same bench (every other option as given) from commit
-``REV``, checked out in a temporary git worktree, and from this checkout, alternating
-(``--compare-runs`` times each, default 2), and ends with the medians side by side and their
-ratio (:mod:`services.bench._compare`).
+Regressions: ``--compare REV [REV ...]`` runs the same bench (every other option as given)
+from each commit ``REV``, checked out in a temporary git worktree, and from this checkout,
+alternating (``--compare-runs`` times each, default 2), and ends with each REV's medians
+beside this checkout's and their ratio (:mod:`services.bench._compare`).
 """
 
 from __future__ import annotations
@@ -300,9 +300,10 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--both", action="store_true",
                         help="measure each rate twice: without and with show control (OSC "
                         "ports and the strips), alternating, and compare the medians")  # fmt: skip
-    parser.add_argument("--compare", metavar="REV",
-                        help="also run this bench from commit REV (a temporary git worktree), "
-                        "alternating with this checkout, and print both side by side")  # fmt: skip
+    parser.add_argument("--compare", metavar="REV", nargs="+",
+                        help="also run this bench from each commit REV (a temporary git "
+                        "worktree), alternating with this checkout, and print each beside "
+                        "it")  # fmt: skip
     parser.add_argument("--compare-runs", type=int, default=2, metavar="N",
                         help="with --compare: runs of each commit (default 2)")  # fmt: skip
     args = parser.parse_args(argv)
@@ -365,14 +366,16 @@ def main(argv: list[str]) -> int:
 
 
 def _without_compare(argv: list[str]) -> list[str]:
-    """``argv`` less ``--compare REV`` and ``--compare-runs N`` (also as ``--opt=value``)."""
-    out, skip = [], False
+    """``argv`` less ``--compare REV [REV ...]`` and ``--compare-runs N`` (also as
+    ``--opt=value``)."""
+    out, skip = [], 0  # values still to skip (-1: every one up to the next option)
     for arg in argv:
-        if skip:
-            skip = False
+        if skip and not (skip < 0 and arg.startswith("-")):
+            skip -= skip > 0
         elif arg in ("--compare", "--compare-runs"):
-            skip = True
+            skip = -1 if arg == "--compare" else 1
         elif not arg.startswith(("--compare=", "--compare-runs=")):
+            skip = 0
             out.append(arg)
     return out
 
