@@ -13,7 +13,12 @@ written once:
   to the one before it (the first relative to its parent's world rotation, or to the root
   frame), by :func:`~livedrummer.body.quat.relative`, the body's one world-to-local step;
 * :func:`strike_poses` applies both to pose records, and sets the struck piece's channels as
-  at a hit (full glow at the velocity; a cymbal's wobble, a beater or a footboard at zero).
+  at a hit (full glow at the velocity; a cymbal's wobble, a beater or a footboard at zero);
+* :func:`foot_contacts` solves every foot on every piece once: a foot's contact depends on
+  nothing but the piece (the hip is fixed on the seat, the target is the footboard), so a
+  caller on a hot path (the live synth's answer to a hit) looks it up instead of solving it
+  again (:func:`strike_poses` ``feet=``); an arm's contact depends on the shoulder and chest
+  of the record it is put into, so it stays a solve (one per limb and batch).
 
 Limits: an arm keeps the shoulder position and chest rotation of the record it is given (the
 torso is not re-solved); a foot's target is its piece's footboard (or the piece itself), with
@@ -21,6 +26,8 @@ no zone within it.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -68,10 +75,38 @@ def leg_locals(leg: LegSolution) -> list[np.ndarray]:
     return to_local(None, leg.hip_q, leg.knee_q, leg.ankle_q)
 
 
+@dataclass(frozen=True)
+class FootContacts:
+    """Each foot's contact on each piece (:func:`foot_contacts`): index ``[foot, piece]``,
+    foot 0 right, 1 left; local hip (root frame), knee and ankle rotations (..., 4) and the
+    knee, ankle and toe positions (..., 3)."""
+
+    hip_q: np.ndarray
+    knee_q: np.ndarray
+    ankle_q: np.ndarray
+    knee: np.ndarray
+    ankle: np.ndarray
+    toe: np.ndarray
+
+
+def foot_contacts(rig: Rig) -> FootContacts:
+    """Both feet solved onto every piece's footboard (see the module docstring)."""
+    skel, n = rig.skeleton, len(rig.kit.pieces)
+    toe = np.array([footboard(rig, k) for k in range(n)]).reshape(n, 3)
+    parts: list[list[np.ndarray]] = []
+    for side in ("R", "L"):
+        hip = np.broadcast_to(skel.root_m + skel.offsets[LEG[side][0]], (n, 3))
+        leg = solve_leg(skel.lengths, hip, toe)
+        parts.append([*leg_locals(leg), leg.knee, leg.ankle, leg.toe])
+    return FootContacts(*(np.stack(arrays) for arrays in zip(*parts, strict=True)))
+
+
 def strike_poses(rig: Rig, base: np.ndarray, limb: int, piece: np.ndarray, zone: np.ndarray,
-                 velocity: np.ndarray, openness: np.ndarray) -> np.ndarray:  # fmt: skip
+                 velocity: np.ndarray, openness: np.ndarray, feet: FootContacts | None = None,
+                 ) -> np.ndarray:  # fmt: skip
     """``base`` (N pose records) with ``limb`` (0-3: right hand, left hand, right foot, left
-    foot) on (``piece``, ``zone``) at contact, each (a copy; see the module docstring)."""
+    foot) on (``piece``, ``zone``) at contact, each (a copy; see the module docstring);
+    ``feet``: a foot's contact looked up there instead of solved (the same numbers)."""
     rec = base.copy()
     rot, pos = rec["rotation"], rec["position"]
     n = rec.size
@@ -88,6 +123,13 @@ def strike_poses(rig: Rig, base: np.ndarray, limb: int, piece: np.ndarray, zone:
             pos[:, j] = v
     else:
         hip_j, knee_j, ankle_j, toe_j = LEG["R" if limb == 2 else "L"]
+        if feet is not None:
+            f, k = limb - 2, piece
+            for j, q in ((hip_j, feet.hip_q), (knee_j, feet.knee_q), (ankle_j, feet.ankle_q)):
+                rot[:, j] = q[f, k]
+            for j, v in ((knee_j, feet.knee), (ankle_j, feet.ankle), (toe_j, feet.toe)):
+                pos[:, j] = v[f, k]
+            return _struck(rig, rec, limb, piece, zone, velocity)
         skel = rig.skeleton
         hip = np.broadcast_to(skel.root_m + skel.offsets[hip_j], (n, 3))
         toe = np.array([footboard(rig, int(k)) for k in piece.tolist()]).reshape(n, 3)
@@ -95,6 +137,12 @@ def strike_poses(rig: Rig, base: np.ndarray, limb: int, piece: np.ndarray, zone:
         for j, q in zip((hip_j, knee_j, ankle_j), leg_locals(leg), strict=True):
             rot[:, j] = q
         pos[:, knee_j], pos[:, ankle_j], pos[:, toe_j] = leg.knee, leg.ankle, leg.toe
+    return _struck(rig, rec, limb, piece, zone, velocity)
+
+
+def _struck(rig: Rig, rec: np.ndarray, limb: int, piece: np.ndarray, zone: np.ndarray,
+            velocity: np.ndarray) -> np.ndarray:  # fmt: skip
+    """``rec`` with the struck pieces' channels as at a hit (in place; returned)."""
     kinds = [rig.kit.pieces[int(k)].kind for k in piece.tolist()]
     for k, (kind, pc, z, v) in enumerate(zip(kinds, piece.tolist(), zone.tolist(),
                                              velocity.tolist(), strict=True)):  # fmt: skip

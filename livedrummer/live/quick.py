@@ -11,11 +11,18 @@ sample is near) and the onsets that just arrived with the limbs the synthesizer 
 (decided, or provisional), and returns one pose record per onset time, to show at onset + D:
 
 * the body as sampled nearest the onset (torso, head, the other limbs), or the quick contact
-  already sent for that time (a chord whose notes came in two messages);
+  already sent for that time (a chord whose notes came in two messages); the curves are
+  sampled only when no sample exists yet (start-up): one sample of the curves costs several
+  milliseconds (10 with a cross-fade under way), more than the whole answer otherwise, so a
+  hit that finds the animation behind (a busy machine) starts from the newest sample there
+  is, however old; its limb still lands exactly on its target, the rest of the body is as
+  of that sample until the strokes replace it;
 * each striking limb put on its piece by :func:`~livedrummer.body.strike.strike_poses` (the
   body package's one strike solve, shared with the animation's contact keys): an arm from
   that sample's own shoulder and chest, so the stick tip lies on the target exactly; a foot
-  on its footboard; the struck piece's channels as at a hit.
+  on its footboard, looked up (:func:`~livedrummer.body.strike.foot_contacts`: a foot's
+  contact depends on the piece alone, so the synth solves it once at start); the struck
+  piece's channels as at a hit.
 
 The whole batch is solved at once (one IK call per limb), so a burst of notes that arrived
 together costs what one does. Nothing in the state is changed. The re-animated curves
@@ -29,11 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from livedrummer.body.rig import Rig
-from livedrummer.body.strike import strike_poses
+from livedrummer.body.strike import FootContacts, strike_poses
 from livedrummer.live.curves import CurveView, sample_curves
-
-#: a published or held sample this close to the onset stands for the body at the onset
-NEAR_S = 0.02
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,7 @@ class QuickState:
     samples_t: np.ndarray  # performance times of samples published lately and held ahead
     samples: np.ndarray  # their pose records
     struck: dict[float, np.ndarray]  # quick contacts not yet in the curves, by onset time
+    feet: FootContacts | None = None  # the feet's contacts, solved once (else solved here)
 
 
 def quick_contact(
@@ -79,14 +84,15 @@ def quick_contact(
             h = hits[sel]
             base[at[sel]] = strike_poses(
                 state.rig, base[at[sel]], code, piece[sel].astype(np.int64),
-                h["zone"].astype(np.int64), h["velocity"], h["openness"],
+                h["zone"].astype(np.int64), h["velocity"], h["openness"], state.feet,
             )  # fmt: skip
     return times, base
 
 
 def _bodies_at(state: QuickState, times: np.ndarray) -> np.ndarray | None:
     """The body at each of ``times``: the quick contact already sent for that time (a chord
-    completed), else the published or held sample nearest it, else sampled from the curves."""
+    completed), else the published or held sample nearest it, however far, else (nothing
+    sampled yet) sampled from the curves."""
     out = np.zeros(times.size, state.dtype)
     todo = np.ones(times.size, dtype=bool)
     for k, t in enumerate(times.tolist()):
@@ -96,8 +102,8 @@ def _bodies_at(state: QuickState, times: np.ndarray) -> np.ndarray | None:
         i = np.clip(np.searchsorted(state.samples_t, times), 1, state.samples_t.size - 1)
         i = np.where(np.abs(state.samples_t[i - 1] - times) < np.abs(state.samples_t[i] - times),
                      i - 1, i) if state.samples_t.size > 1 else np.zeros_like(i)  # fmt: skip
-        near = todo & (np.abs(state.samples_t[i] - times) <= NEAR_S)
-        out[near], todo[near] = state.samples[i[near]], False
+        out[todo] = state.samples[i[todo]]
+        todo[:] = False
     if todo.any():
         if state.curves.curves is None:
             return None

@@ -46,8 +46,11 @@ samples between them, and the service publishes them before re-animating.
 Answering during a re-animation. :meth:`LiveSynth.poses_until` takes an ``answer`` callable,
 called between the steps of a re-animation and of the sampling that follows (a few
 milliseconds apart at most): the service passes the function that reads its socket, so a
-hit that arrives meanwhile gets its contact out then, not after the re-animation. What a
-re-animation reads was taken before it started, and the held samples are swapped only when
+hit that arrives meanwhile gets its contact out then, not after the re-animation. A service
+with two threads passes ``lock`` instead (the synth service does:
+:mod:`services.synth.service`): held by the caller, it is let go while the curves are
+rebuilt and sampled, so the other thread answers hits then, not only between the steps. What
+a re-animation reads was taken before it started, and the held samples are swapped only when
 the new ones are complete; a batch built from curves that lack a hit answered meanwhile still
 carries that hit's quick contact.
 
@@ -78,7 +81,10 @@ the show.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -86,6 +92,7 @@ from livedrummer.body.animation import hihat_openness
 from livedrummer.body.expression import Expression, with_param
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import Rig
+from livedrummer.body.strike import foot_contacts
 from livedrummer.body.strokes import StrokeParams
 from livedrummer.live.curves import Answer, CurveSet
 from livedrummer.live.ledger import SampleLedger
@@ -125,6 +132,27 @@ class SynthParams:
             raise ValueError(f"max_notes {self.max_notes} must be >= 8")
 
 
+class Lock(Protocol):
+    """What ``poses_until(lock=...)`` needs of a lock (:class:`threading.Lock` has it)."""
+
+    def acquire(self) -> bool: ...
+
+    def release(self) -> None: ...
+
+
+@contextmanager
+def released(lock: Lock | None) -> Iterator[None]:
+    """``lock`` (held by the caller) released for the block and taken back after it."""
+    if lock is None:
+        yield
+        return
+    lock.release()
+    try:
+        yield
+    finally:
+        lock.acquire()
+
+
 @dataclass(frozen=True)
 class PoseBatch:
     """Pose samples: ``show_s`` (float64 show times) and the matching pose records, whose
@@ -160,6 +188,7 @@ class LiveSynth:
         self.curves = CurveSet(rig, p.blend_s, strokes)
         self.ledger = SampleLedger(self.dtype)
         self.style = StyleRamp(expression, p.style_ramp_s)
+        self.feet = foot_contacts(rig)  # a quick contact's feet, solved once
         self.reset()
 
     def reset(self) -> None:
@@ -208,7 +237,7 @@ class LiveSynth:
     def quick_state(self) -> QuickState:
         """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
         return QuickState(self.rig, self.dtype, self.curves.view(), *self.ledger.samples(),
-                          self.ledger.struck())  # fmt: skip
+                          self.ledger.struck(), self.feet)  # fmt: skip
 
     def take_quick(self) -> PoseBatch:
         """Quick contacts of the hits that arrived since the last call, to publish at once,
@@ -223,13 +252,17 @@ class LiveSynth:
 
     # -- output --------------------------------------------------------------------------------
 
-    def poses_until(self, now_s: float, answer: Answer | None = None) -> PoseBatch:
+    def poses_until(self, now_s: float, answer: Answer | None = None, *,
+                    lock: Lock | None = None) -> PoseBatch:  # fmt: skip
         """Commit what ``now_s`` allows and return the samples to publish: show times up to
         ``now_s + D`` (provisional) or ``now_s + D - L``. A provisional batch may start before
         the end of the previous one: it replaces the samples it covers (see the module
         docstring). ``answer``, when given, is called between the steps of a re-animation
         and of the sampling (see the module docstring); it may call :meth:`process` and
-        :meth:`take_quick`."""
+        :meth:`take_quick`. ``lock``, when given, is held by the caller and released while
+        the curves are rebuilt and sampled (the steps that take milliseconds), so that another
+        thread holding it meanwhile may call :meth:`process` and :meth:`take_quick` (see the
+        module docstring); ``answer`` is then called only while it is let go."""
         p = self.params
         self.window.advance(now_s)
         committed = now_s - p.lookahead_s  # every note up to here is decided
@@ -244,10 +277,11 @@ class LiveSynth:
         # notes re-sends it from there (with D = L its first tick may already be on screen)
         rewind = min(start, max(self._committed, committed - p.delay_s)) if p.provisional \
             else start  # fmt: skip
-        refreshed = (top > start or p.provisional) and self._refresh(rewind, committed, answer)
+        refreshed = (top > start or p.provisional) and self._refresh(rewind, committed, answer,
+                                                                      lock)  # fmt: skip
         if refreshed:
             start = rewind
-            if answer is not None:
+            if answer is not None and lock is None:  # with a lock: only while it is let go
                 answer()
         self._committed = max(self._committed, committed)
         if top <= start:
@@ -258,10 +292,10 @@ class LiveSynth:
         # answered meanwhile fills its batch from the old ones
         held = ledger.held_until()
         if refreshed:
-            ledger.hold(*self._sample_ahead(start, top + p.chunk_s, answer), replace=True)
+            ledger.hold(*self._sample_ahead(start, top + p.chunk_s, answer, lock), replace=True)
         elif held is None or held < top:
             lo = max(start, held if held is not None else start)
-            ledger.hold(*self._sample_ahead(lo, top + p.chunk_s, answer), replace=False)
+            ledger.hold(*self._sample_ahead(lo, top + p.chunk_s, answer, lock), replace=False)
         curves = self.curves.current
         contacts = curves.contacts_s if curves is not None else np.zeros(0)
         return self._batch(*ledger.publish(start, top, committed, contacts))
@@ -274,7 +308,7 @@ class LiveSynth:
         rows["time_s"] = (times - float(times[0])).astype(np.float32)
         return PoseBatch(times + self.params.delay_s, rows)
 
-    def _sample_ahead(self, lo: float, hi: float, answer: Answer | None
+    def _sample_ahead(self, lo: float, hi: float, answer: Answer | None, lock: Lock | None = None
                       ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         """Samples of the current curves in ``(lo, hi]``, on the rate grid plus every committed
         contact: one call per chunk costs about what one sample does."""
@@ -287,9 +321,11 @@ class LiveSynth:
         times = np.unique(np.concatenate([grid[grid > lo], c[(c > lo) & (c <= hi)]]))
         if times.size == 0:
             return times, np.zeros(0, self.dtype)
-        return times, self.curves.sample(times, answer)
+        with released(lock):
+            return times, self.curves.sample(times, answer)
 
-    def _refresh(self, start: float, horizon: float, answer: Answer | None) -> bool:
+    def _refresh(self, start: float, horizon: float, answer: Answer | None,
+                 lock: Lock | None = None) -> bool:  # fmt: skip
         """Rebuild the curves if the window's notes changed; True when they were rebuilt."""
         window = self.window
         window.prune(horizon)
@@ -305,7 +341,9 @@ class LiveSynth:
                     or horizon - self.curves.built_at < self.params.control_every_s):  # fmt: skip
                 return False
         openness = hihat_openness(content.sticking.onsets, content.controls, cc_open=self.cc_open)
-        self.curves.rebuild(content.sticking, content.beats_s, openness, key, content.contacts_s,
-                            content.chokes, start, horizon, answer, self.style.target,
-                            change)  # fmt: skip
+        expression = self.style.target
+        with released(lock):  # what it reads was taken above; the quick path reads its view
+            self.curves.rebuild(content.sticking, content.beats_s, openness, key,
+                                content.contacts_s, content.chokes, start, horizon, answer,
+                                expression, change)  # fmt: skip
         return True

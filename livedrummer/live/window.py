@@ -102,13 +102,14 @@ class NoteWindow:
         self.note_map = note_map
         self.sticker = OnlineSticker(rig.kit, params.lookahead_s, keep_onsets=False)
         self.predictor = HandPredictor()
-        self.beat = BeatTracker()  # the music's beat, for the torso (see _beats)
+        self._beat = BeatTracker()  # the music's beat, for the torso (see _beats)
         self.reset()
 
     def reset(self) -> None:
         self.sticker.reset()
         self.predictor.reset()
-        self.beat.reset()
+        self._beat.reset()
+        self._beat_todo: list[tuple[float, float, float]] = []  # heard, not yet tracked
         self._notes: list[Note] = []  # every note since the window start, by stream index
         self._first = 0  # stream index of self._notes[0]
         self._controls: list[np.ndarray] = []
@@ -125,10 +126,32 @@ class NoteWindow:
             self._notes.append(note)
             notes.append(note)
             self._apply(self.sticker.process(rec))
-            self.beat.process(float(rec["time_s"]), float(weights[i]), float(downbeats[i]))
+            self._beat_todo.append((float(rec["time_s"]), float(weights[i]), float(downbeats[i])))
         if recs.size:  # also while no poses are asked for (a re-animation answering a flood)
             self.prune(float(recs["time_s"].max()) - self.params.lookahead_s)
         return notes
+
+    @property
+    def beat(self) -> BeatTracker:
+        """The beat tracker, fed every onset heard so far. Onsets join it here, when it is
+        read (on the synth's tick), not on arrival: its tempo search costs up to several
+        milliseconds now and then, which a hit's answer must not wait for; fed in order, it
+        gives what it would have given on arrival."""
+        self.track_heard(self.take_heard())
+        return self._beat
+
+    def take_heard(self) -> list[tuple[float, float, float]]:
+        """The onsets heard since the last call that the beat tracker has not had yet (time,
+        weight, downbeat evidence), for :meth:`track_heard`."""
+        todo, self._beat_todo = self._beat_todo, []
+        return todo
+
+    def track_heard(self, heard: list[tuple[float, float, float]]) -> None:
+        """Feed the beat tracker what :meth:`take_heard` gave. Only the beat tracker is
+        touched: a service whose other thread adds notes meanwhile (under its lock) may call
+        this without the lock, from the one thread that reads :attr:`beat`."""
+        for time_s, weight, downbeat in heard:
+            self._beat.process(time_s, weight, downbeat)
 
     def control(self, row: np.ndarray | np.void) -> None:
         rec = np.array(row, dtype=CONTROL_DTYPE)

@@ -31,6 +31,11 @@ over every frame. ``--both`` measures every rate twice in one run, with nothing 
 both on (OSC and the strips; ``--overlay`` picks which), in alternating order so that a load
 that changes during the run weighs on both alike, and ends with the medians side by side and
 the load average: the cost of the show control, measured under the same load.
+
+Regressions: ``--compare REV [REV ...]`` runs the same bench (every other option as given)
+from each commit ``REV``, checked out in a temporary git worktree, and from this checkout,
+alternating (``--compare-runs`` times each, default 2), and ends with each REV's medians
+beside this checkout's and their ratio (:mod:`services.bench._compare`).
 """
 
 from __future__ import annotations
@@ -55,8 +60,9 @@ from livedrummer.kit.loader import load_kit
 from livedrummer.timeline.clock import MonotonicClock
 
 from ..program import program_argv
+from ._compare import run_compare
 from ._jack import dummy_jack, jack_env
-from ._paths import WORKDIR
+from ._paths import CHECKOUT, WORKDIR
 
 REPO = WORKDIR  # child processes start in the checkout (or the user's folder)
 NOTES = (38, 42)  # snare head, closed hi-hat (roland-td)
@@ -294,7 +300,19 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--both", action="store_true",
                         help="measure each rate twice: without and with show control (OSC "
                         "ports and the strips), alternating, and compare the medians")  # fmt: skip
+    parser.add_argument("--compare", metavar="REV", nargs="+",
+                        help="also run this bench from each commit REV (a temporary git "
+                        "worktree), alternating with this checkout, and print each beside "
+                        "it")  # fmt: skip
+    parser.add_argument("--compare-runs", type=int, default=2, metavar="N",
+                        help="with --compare: runs of each commit (default 2)")  # fmt: skip
     args = parser.parse_args(argv)
+    if args.compare is not None:
+        if CHECKOUT is None:
+            parser.error("--compare needs a source checkout (git), not an installed wheel")
+        if args.compare_runs < 1:
+            parser.error(f"--compare-runs {args.compare_runs}: must be at least 1")
+        return run_compare(CHECKOUT, args.compare, _without_compare(argv), args.compare_runs)
     if args.overlay:
         from livedrummer.render.overlay import parse_overlays
 
@@ -345,6 +363,21 @@ def main(argv: list[str]) -> int:
     finally:
         jack.close()
     return 0
+
+
+def _without_compare(argv: list[str]) -> list[str]:
+    """``argv`` less ``--compare REV [REV ...]`` and ``--compare-runs N`` (also as
+    ``--opt=value``)."""
+    out, skip = [], 0  # values still to skip (-1: every one up to the next option)
+    for arg in argv:
+        if skip and not (skip < 0 and arg.startswith("-")):
+            skip -= skip > 0
+        elif arg in ("--compare", "--compare-runs"):
+            skip = -1 if arg == "--compare" else 1
+        elif not arg.startswith(("--compare=", "--compare-runs=")):
+            skip = 0
+            out.append(arg)
+    return out
 
 
 def _print_run(r: dict[str, Any], label: str) -> None:

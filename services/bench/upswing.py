@@ -25,10 +25,9 @@ from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
 from livedrummer.sticking.online import stick_online
 
-from ._paths import DEFAULT_CORPUS
+from ._paths import DEFAULT_CORPUS, corpus
 from ._upswing import Upswing, upswing_visible
 
-GROOVE = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "groove"
 TIPS = {0: J["r_tip"], 1: J["l_tip"]}
 PREP_S = 0.05
 START = 1000.0
@@ -83,10 +82,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--prediction", choices=("both", "on", "off"), default="both",
                         help="with the hand predictor, without, or both (default)")  # fmt: skip
     args = parser.parse_args(argv)
-    files = sorted(GROOVE.rglob("*.mid"))
-    if not files:
-        print(f"no Groove MIDI Dataset at {GROOVE}")
-        return 1
+    files = sorted(corpus(args.corpus).rglob("*.mid"))
     beats = [f for f in files if "_beat_" in f.name]
     chosen = random.Random(args.seed).sample(beats, min(args.files, len(beats)))
     rig = build_rig(load_kit("rock5"))

@@ -8,10 +8,25 @@ publishes whatever samples the synth has for show times up to ``now + D`` (with 
 poses, the default; ``now + D - L`` without), as one POSE message (header time = the first
 sample's show time; each record's ``time_s`` is its offset from it). Each batch of onsets read
 (up to :data:`DRAIN_BATCH` messages) has its quick contacts published before anything else
-(``LiveSynth.take_quick``), and each tick passes :meth:`SynthService._answer_hits` to
-``LiveSynth.poses_until`` (``answer=``), which calls it between the steps of a re-animation:
-it reads the socket there, so a hit is answered within a step (a few ms) even while the synth
-is busy.
+(``LiveSynth.take_quick``).
+
+Two threads: nothing blocks the answer. The *answer* thread (the one ``run`` is called in)
+waits on the SUB socket and answers every hit the moment it is read: forward, the note into
+the window, its quick contact solved and published (about a millisecond). The *animation*
+thread ticks: re-animates the window and samples the strokes between the contacts
+(``LiveSynth.poses_until``, 10-50 ms when the notes changed). Both work on the synth under
+one lock, which the animation thread lets go for the long steps (``poses_until(lock=...)``:
+while the curves are rebuilt and sampled, from a copy of what they read), so a hit waits for
+at most one short book-keeping step, never for a re-animation. The GIL's switch interval
+is set to :data:`SWITCH_S` while the service runs, so the answer thread, woken by its
+socket, takes the interpreter from a busy animation thread within that long; and between
+its steps (``poses_until(answer=...)``) a re-animation waits while a hit is being answered,
+so the two share the interpreter only until the re-animation's next step. The PUB socket
+is used by both threads, only ever under the lock (a ZeroMQ socket may pass between threads
+behind a full memory barrier), so batches leave in the order they were cut. The lock lets
+the answer thread go first (:class:`~services.synth.answerlock.AnswerFirstLock`): a plain
+lock let the animation thread, taking it back between its steps, starve the answers at 100
+notes a second.
 Each onset is also forwarded on the pose socket the moment it is read, before the synth
 works on it, as a SHOWN_ONSET message stamped with its show time (onset + D): a display sounds
 it then (``display --live --sound``), a score strip can draw it. Each control (a cymbal grab,
@@ -52,6 +67,7 @@ from __future__ import annotations
 
 import logging
 import math
+import sys
 import threading
 from collections import deque
 from dataclasses import dataclass, field
@@ -89,6 +105,7 @@ from ..net import (
 )
 from ..osc import CUE, PREFIX, STATE, SYNTH_ADDRESSES, Command, OscEndpoint, state_pairs
 from ..service import OnReady, Service
+from .answerlock import AnswerFirstLock
 
 log = logging.getLogger("livedrummer.synth")
 
@@ -101,6 +118,11 @@ DRAIN_BATCH = 64  # input messages read before their quick contacts are publishe
 #: stage cue reaches a display that draws ahead of the synth (its render-ahead lead can be
 #: longer than D) before the frame that shows the bar; its style still eases in on the bar.
 BAR_LEAD_S = 0.2
+#: The interpreter's switch interval while the service runs (Python's default is 5 ms): the
+#: longest an answer waits for the animation thread to hand over the GIL.
+SWITCH_S = 0.0005
+#: How often the answer thread looks up from its socket (OSC commands, stop, ready).
+POLL_MS = 5
 
 
 @dataclass
@@ -174,6 +196,8 @@ class SynthService(Service):
         self._last_onset_s = -math.inf
         self.bar_cues = BarCues(config.cues)  # the list's bar cues, fired as bars are heard
         self._bars_from = -math.inf
+        self._lock = AnswerFirstLock()  # the synth and the PUB socket (see the module docstring)
+        self._kick = threading.Event()  # hits answered: the animation thread ticks at once
 
     def open(self) -> None:
         """Bind the pose socket, connect to the input daemon (the base binds the control)."""
@@ -195,38 +219,72 @@ class SynthService(Service):
 
     def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
         """Serve until ``stop``; ``on_ready`` is called once the first poses are published
-        (the synth is "ready" when it does its job, not when its sockets are bound)."""
-        period = 1.0 / self.config.tick_hz
-        next_tick = self.clock.now()
-        last = next_tick - period
+        (the synth is "ready" when it does its job, not when its sockets are bound). This
+        thread answers hits; a second one animates (see the module docstring)."""
+        halt = threading.Event()
+        failed: list[BaseException] = []
+
+        def animate() -> None:
+            try:
+                self._animate(stop, halt)
+            except BaseException as exc:
+                failed.append(exc)
+                halt.set()
+
+        worker = threading.Thread(target=animate, name="synth-animate", daemon=True)
+        switch = sys.getswitchinterval()
+        sys.setswitchinterval(SWITCH_S)
+        worker.start()
         try:
-            provisional = self.synth.params.provisional
-            while not stop.is_set():
-                due = self.synth.next_due_s(last)
-                wake = next_tick if due is None else min(next_tick, due)
-                # hits heard during the last tick (see _answer_hits) are re-animated at once
-                waiting = provisional and self.stats.onsets != self._ticked
-                wait_ms = 0 if waiting else max(0, math.ceil((wake - self.clock.now()) * 1000))
-                if self._sub.poll(wait_ms):
+            while not (stop.is_set() or halt.is_set()):
+                if self._sub.poll(POLL_MS):
                     self._drain()  # every hit's contact goes out at once
                 if self.osc is not None:
                     for cmd in self.osc.take():
-                        self.command(cmd)
+                        with self._lock.answering():
+                            self.command(cmd)
+                if on_ready is not None and self.stats.pose_messages:
+                    on_ready()
+                    on_ready = None
+        finally:
+            halt.set()
+            self._kick.set()
+            worker.join()
+            sys.setswitchinterval(switch)
+            self.shutdown()
+        if failed:
+            raise failed[0]
+        return 0
+
+    def _animate(self, stop: threading.Event, halt: threading.Event) -> None:
+        """The animation thread: a tick at ``tick_hz``, as soon as a note's limb is due to be
+        committed, and at once when hits have been answered (their strokes follow with their
+        provisional hands, ``SynthParams.provisional``)."""
+        period = 1.0 / self.config.tick_hz
+        next_tick = self.clock.now()
+        last = next_tick - period
+        provisional = self.synth.params.provisional
+        while not (stop.is_set() or halt.is_set()):
+            with self._lock:
+                due = self.synth.next_due_s(last)
+            wake = next_tick if due is None else min(next_tick, due)
+            if not (provisional and self.stats.onsets != self._ticked):
+                self._kick.wait(max(0.0, wake - self.clock.now()))
+            self._kick.clear()  # before the count is read: a later kick is seen next time
+            # the beat tracker's search (up to milliseconds) runs without the lock: it is this
+            # thread's alone, the answer thread only lists what it heard
+            with self._lock:
+                heard = self.synth.window.take_heard()
+            self.synth.window.track_heard(heard)
+            with self._lock:
                 now = self.clock.now()
-                # a hit's stroke follows with its provisional hand (SynthParams.provisional)
                 fresh = provisional and self.stats.onsets != self._ticked
                 if fresh or now >= next_tick or (due is not None and now >= due):
                     self._ticked = self.stats.onsets
                     self.tick(now)
                     last = now
-                    if on_ready is not None and self.stats.pose_messages:
-                        on_ready()
-                        on_ready = None
                     if now >= next_tick:
                         next_tick = max(next_tick + period, now)
-        finally:
-            self.shutdown()
-        return 0
 
     def command(self, cmd: Command) -> None:
         """One OSC command (see :mod:`services.osc`): a preset, a parameter or the state."""
@@ -281,9 +339,12 @@ class SynthService(Service):
             log.warning("synth: %s", line)
 
     def tick(self, now: float) -> None:
+        """One tick of the animation thread, the lock held: bar cues, then the samples due
+        (the lock let go while the curves are rebuilt and sampled: hits are answered then)."""
         self._fire_bar_cues(now)
-        # hits that arrive while the synth re-animates are answered between its steps
-        self._publish(self.synth.poses_until(now, answer=self._answer_hits))
+        # between its steps (the lock let go) a re-animation waits while a hit is answered
+        self._publish(self.synth.poses_until(now, answer=self._lock.wait_answered,
+                                             lock=self._lock))  # fmt: skip
         self._say(self.late.poll(now))
 
     def _fire_bar_cues(self, now: float) -> None:
@@ -307,13 +368,6 @@ class SynthService(Service):
             self._pub.send_multipart(encode(msg), copy=False)
             self._seq += 1
             self.stats.stage_cues += rows.size
-
-    def _answer_hits(self) -> None:
-        """Passed to ``LiveSynth.poses_until`` as ``answer`` (see :meth:`tick`): called
-        between the steps of a re-animation, so hits that arrived meanwhile get their
-        contact out now, not after it."""
-        if self._sub is not None and self._sub.poll(0):
-            self._drain()
 
     def _publish(self, batch: PoseBatch) -> None:
         if batch.show_s.size == 0:
@@ -345,32 +399,41 @@ class SynthService(Service):
         """Everything waiting on the SUB socket, in batches of up to :data:`DRAIN_BATCH`
         messages: the onsets of a batch go to the synth together (their contacts are solved
         at once) and their quick contacts are published before the next batch is read, so a
-        flood cannot hold them back."""
+        flood cannot hold them back. Each batch holds the synth's lock; the animation thread
+        is kicked after each batch with onsets."""
         while True:
-            onsets: list[np.ndarray] = []
-            got = 0
             read_at = self.clock.now()
-            while got < DRAIN_BATCH:
-                try:
-                    frames = self._sub.recv_multipart(zmq.NOBLOCK, copy=True)
-                except zmq.Again:
-                    break
-                got += 1
-                rows = self._receive(frames)
-                if rows is not None:
-                    self._forward(rows)  # first: a display sounds them at onset + D
-                    onsets.append(rows)
-            if onsets:
-                rows = np.concatenate(onsets)
-                self.synth.process(rows)
-                self._publish(self.synth.take_quick())
-                done = self.clock.now()
-                self.stats.answer_s.append(done - read_at)
-                # a contact published after its show time reaches every display too late
-                shown = rows["time_s"].astype(np.float64) + self.synth.params.delay_s
-                self._say(self.late.first(int(np.count_nonzero(shown < done)), done))
+            with self._lock.answering():
+                got = self._drain_batch(read_at)
             if got < DRAIN_BATCH:
                 return
+
+    def _drain_batch(self, read_at: float) -> int:
+        """One batch of :meth:`_drain` (the lock held; ``read_at``: the clock before the lock
+        was taken, where the answer's time starts): how many messages it read."""
+        onsets: list[np.ndarray] = []
+        got = 0
+        while got < DRAIN_BATCH:
+            try:
+                frames = self._sub.recv_multipart(zmq.NOBLOCK, copy=True)
+            except zmq.Again:
+                break
+            got += 1
+            rows = self._receive(frames)
+            if rows is not None:
+                self._forward(rows)  # first: a display sounds them at onset + D
+                onsets.append(rows)
+        if onsets:
+            rows = np.concatenate(onsets)
+            self.synth.process(rows)
+            self._publish(self.synth.take_quick())
+            done = self.clock.now()
+            self.stats.answer_s.append(done - read_at)
+            # a contact published after its show time reaches every display too late
+            shown = rows["time_s"].astype(np.float64) + self.synth.params.delay_s
+            self._say(self.late.first(int(np.count_nonzero(shown < done)), done))
+            self._kick.set()
+        return got
 
     def _receive(self, frames: list[bytes]) -> np.ndarray | None:
         """One message from the input stream: checked, counted, controls applied; its onset
