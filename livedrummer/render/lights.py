@@ -207,7 +207,8 @@ def with_light_param(rig: LightRig, light: str, param: str, value: float | str) 
                 new = replace(old, color=(rgb[0], rgb[1], rgb[2]))
     except ValueError as exc:
         raise LightError(f"{where}: {exc}") from None
-    return replace(rig, **{light: new})
+    changes: dict[str, Any] = {light: new}
+    return replace(rig, **changes)
 
 
 def parse_lights(table: Table, base: LightRig | None = None) -> LightRig:

@@ -23,8 +23,9 @@ from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
 from livedrummer.render.background import parse_background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
-from livedrummer.render.camera import pick_camera
+from livedrummer.render.camera import kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.lights import LightRig, look_rig
 from livedrummer.render.litshare import background_luma, hall_luma, lit_share
 
 from ..cli.common import DEMO_MAP, demo_groove, rig_for
@@ -69,11 +70,10 @@ def main(argv: list[str]) -> int:
     bare = Renderer(ctx, build_kit_mesh(kit, floor=False), BODY_SKELETON, size, samples=0,
                     avatar=avatar, background=parse_background("transparent"))  # fmt: skip
     for look in looks:
-        extra = {"lights": _look(look)} if look else {}
         r = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, avatar=avatar,
-                     fxaa=True, **extra)  # fmt: skip
+                     fxaa=True, lights=_look(look) if look else None)  # fmt: skip
         for name in args.cameras.split(","):
-            cam = _camera(kit, name, avatar)
+            cam = kit_cameras(kit, avatar.lengths if avatar is not None else None)[name]
             lit, subj, back, hall = [], [], [], []
             for t, frame in zip(times, frames, strict=True):
                 r.draw(frame, cam)
@@ -94,15 +94,5 @@ def main(argv: list[str]) -> int:
     return 0
 
 
-def _look(name: str) -> object:
-    from livedrummer.render.lights import look_rig
-
+def _look(name: str) -> LightRig:
     return look_rig(name)
-
-
-def _camera(kit: object, name: str, avatar: object) -> object:
-    try:
-        from livedrummer.render.camera import figure_cameras
-    except ImportError:
-        return pick_camera(kit, name)  # type: ignore[arg-type]
-    return figure_cameras(kit, avatar)[name]  # type: ignore[arg-type]
