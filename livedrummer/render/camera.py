@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from livedrummer.body.skeleton import SegmentLengths
 from livedrummer.errors import LivedrummerError
 from livedrummer.kit.model import Kit
 
@@ -76,35 +77,118 @@ CAMERA_NAMES: tuple[str, ...] = (
 )  # fmt: skip
 
 
-def kit_cameras(kit: Kit) -> dict[str, Camera]:
-    """The eight stored viewpoints, placed around ``kit``."""
+#: The frame's aspect the stored viewpoints are fitted to (width / height: 16:9 video).
+FRAME_ASPECT = 16.0 / 9.0
+#: Share of the frame's half-height and half-width the drummer's figure may fill.
+FILL = 0.86
+#: How far the ``front`` camera looks down past the line from the hands over the highest drum
+#: in front of them (degrees), and the least it looks down.
+FRONT_CLEAR_DEG, FRONT_MIN_DEG = 6.0, 14.0
+
+
+def figure_points(kit: Kit, lengths: SegmentLengths | None = None) -> np.ndarray:
+    """Points (N, 3) that the drummer's body reaches, seated at ``kit`` with ``lengths``
+    (the default body's without): the top of the head and the shoulders of the neutral seated
+    pose, the elbows' reach either side, the hands over the drums and the hi-hat, the feet on
+    the pedals. Cameras frame these, not the kit's bounding box."""
+    from livedrummer.body.rig import neutral_world
+    from livedrummer.body.secondary import SecondaryParams
+    from livedrummer.body.skeleton import J, build_skeleton
+
+    skel = build_skeleton(lengths, kit.seat_height_m)
+    _q, world = neutral_world(skel, SecondaryParams().lean_deg)
+    pose = world[0]
+    top = pose[J["head_top"]] + (0.0, 0.0, 0.05)  # hair over the skull's top
+    pts = [top, pose[J["r_shoulder"]], pose[J["l_shoulder"]]]
+    elbow = skel.lengths.upper_arm * 0.8
+    for side in ("r", "l"):
+        pts.append(pose[J[f"{side}_shoulder"]] + (np.sign(pose[J[f"{side}_shoulder"]][0]) * elbow,
+                                                  0.0, -skel.lengths.upper_arm))  # fmt: skip
+    for piece in kit.pieces:
+        if piece.pedal_position_m is not None:
+            pts.append(np.asarray(piece.pedal_position_m, float))
+        if not piece.kind.is_cymbal or piece.pedal_position_m is not None:
+            if piece.radius_m < 0.26:  # the drums and hi-hat the hands play; not the kick
+                pts.append(np.asarray(piece.position_m, float) + np.array([0.0, 0.0, 0.05]))
+        if piece.pedal_position_m is not None and not piece.kind.is_cymbal:
+            # the kick's resonant head, nearest the audience: its bottom edge on the floor
+            front = np.asarray(piece.position_m, float) - piece.normal * piece.depth_m
+            pts.append(front - np.array([0.0, 0.0, piece.radius_m * 0.8]))
+    return np.array(pts, float)
+
+
+def fit_distance(points: np.ndarray, target: np.ndarray, direction: np.ndarray, fov_deg: float,
+                 aspect: float = FRAME_ASPECT, fill: float = FILL) -> float:  # fmt: skip
+    """The distance from ``target`` along unit ``direction`` (towards the eye) at which every
+    point lies inside ``fill`` of the frame (vertical field ``fov_deg``, ``aspect``)."""
+    view = look_at(target + direction, target)
+    rel = points - target
+    cam = rel @ view[:3, :3].T  # right, up, back (+z towards the eye)
+    tan_v = math.tan(math.radians(fov_deg) / 2.0) * fill
+    tan_h = tan_v * aspect
+    need = np.maximum(np.abs(cam[:, 0]) / tan_h, np.abs(cam[:, 1]) / tan_v) + cam[:, 2]
+    return float(need.max())
+
+
+def front_elevation_deg(kit: Kit, points: np.ndarray) -> float:
+    """How far ``front`` looks down: enough that the hands (over the snare) are seen over the
+    highest drum between them and the audience, at least :data:`FRONT_MIN_DEG`."""
+    snares = [p for p in kit.pieces if p.kind.value == "snare"]
+    if not snares:
+        return FRONT_MIN_DEG
+    hand = np.asarray(snares[0].position_m, float) + np.array([0.0, -0.08, 0.22])
+    worst = FRONT_MIN_DEG - FRONT_CLEAR_DEG
+    for p in kit.pieces:
+        pos = np.asarray(p.position_m, float)
+        rim = pos[2] + p.radius_m * max(0.0, 1.0 - abs(p.normal[2]))  # a tilted drum's top
+        dy = pos[1] - p.radius_m * 0.5 - hand[1]
+        if p.kind.is_cymbal or dy <= 0.02 or abs(pos[0] - hand[0]) > 0.45:
+            continue
+        worst = max(worst, math.degrees(math.atan2(rim - hand[2], dy)))
+    return worst + FRONT_CLEAR_DEG
+
+
+def kit_cameras(kit: Kit, lengths: SegmentLengths | None = None) -> dict[str, Camera]:
+    """The eight stored viewpoints around ``kit``, framing the body of a drummer with
+    ``lengths`` (the default body's without) head to hands and feet (:func:`figure_points`)."""
     pts = np.array([p.position_m for p in kit.pieces]) if kit.pieces else np.zeros((1, 3))
     cx, cy = (float(v) for v in pts[:, :2].mean(axis=0))
     cz = 0.75
     c = np.array([cx, cy * 0.6, cz])
-    head = (0.0, 0.23, kit.seat_height_m + 0.82)  # just in front of the face
+    figure = figure_points(kit, lengths)
+    lo, hi = figure.min(axis=0), figure.max(axis=0)
+    centre = (lo + hi) / 2.0
+    head_z = float(hi[2]) - 0.18  # the face, below the top of the head
+    head = (0.0, 0.23, head_z)  # just in front of the face
 
     def cam(name: str, offset: tuple[float, float, float], fov: float = 40.0,
             drop: float = 0.0) -> Camera:  # fmt: skip
         at = c - (0.0, 0.0, drop)
         return Camera(name, tuple(float(v) for v in at + offset), tuple(float(v) for v in at), fov)  # type: ignore[arg-type]
 
+    def framed(name: str, azimuth_deg: float, elevation_deg: float, fov: float = 36.0) -> Camera:
+        az, el = math.radians(azimuth_deg), math.radians(elevation_deg)
+        d = np.array([math.cos(el) * math.sin(az), math.cos(el) * math.cos(az), math.sin(el)])
+        dist = fit_distance(figure, centre, d, fov)
+        eye = centre + d * dist
+        return Camera(name, tuple(float(v) for v in eye), tuple(float(v) for v in centre), fov)  # type: ignore[arg-type]
+
     cams = [
-        # front and stage frame the drummer and the kit to ~85 % of the frame's height
-        cam("stage", (1.4, 2.4, 1.35), drop=0.12),
-        cam("front", (0.0, 2.8, 0.62), drop=0.07),
+        # front and stage fill the frame with the drummer's figure, head to hands and feet
+        framed("stage", 30.0, 24.0),
+        framed("front", 0.0, front_elevation_deg(kit, figure)),
         Camera("drummer", head, (cx, 0.75, 0.62), 70.0),
         cam("overhead", (0.0, 0.2, 3.6)),
-        cam("left", (-3.2, 0.2, 0.45)),
-        cam("right", (3.2, 0.2, 0.45)),
-        cam("back", (0.0, -2.9, 1.2)),
+        framed("left", -90.0, 8.0),
+        framed("right", 90.0, 8.0),
+        framed("back", 180.0, 20.0),
         Camera("kick", (cx + 0.5, cy + 1.6, 0.32), (cx, cy * 0.5, 0.62), 55.0),
     ]
     return {c_.name: c_ for c_ in cams}
 
 
-def pick_camera(kit: Kit, name: str) -> Camera:
-    cams = kit_cameras(kit)
+def pick_camera(kit: Kit, name: str, lengths: SegmentLengths | None = None) -> Camera:
+    cams = kit_cameras(kit, lengths)
     if name not in cams:
         raise CameraError(f"unknown camera {name!r}; choose one of {', '.join(CAMERA_NAMES)}")
     return cams[name]

@@ -42,22 +42,29 @@ from livedrummer.render.scene import (
 )
 
 INSTANCE_FLOATS = 24
-MATERIAL_PLAIN, MATERIAL_FLOOR, MATERIAL_CYMBAL, MATERIAL_HEAD = 0.0, 1.0, 2.0, 3.0
+MATERIAL_PLAIN, MATERIAL_FLOOR, MATERIAL_CYMBAL, MATERIAL_HEAD, MATERIAL_SKIN = (
+    0.0,
+    1.0,
+    2.0,
+    3.0,
+    4.0,
+)
 MOTION_STATIC, MOTION_WOBBLE, MOTION_LIFT, MOTION_BEATER, MOTION_PEDAL = 0, 1, 2, 3, 4
 
-#: colour (rgb), metalness, shininess, material kind
+#: colour (sRGB-encoded rgb), metalness, shininess, material kind: lacquered shells are
+#: dielectric with a sharp clear-coat highlight, chrome and stands metal, cymbals brass
 LOOKS: dict[str, tuple[tuple[float, float, float], float, float, float]] = {
-    "shell": ((0.50, 0.04, 0.06), 0.25, 60.0, MATERIAL_PLAIN),
+    "shell": ((0.62, 0.05, 0.07), 0.0, 140.0, MATERIAL_PLAIN),
     "snare_shell": ((0.72, 0.72, 0.76), 1.0, 80.0, MATERIAL_PLAIN),
-    "head": ((0.90, 0.88, 0.82), 0.0, 18.0, MATERIAL_HEAD),
+    "head": ((0.70, 0.68, 0.62), 0.0, 18.0, MATERIAL_HEAD),
     "front_head": ((0.08, 0.08, 0.09), 0.0, 30.0, MATERIAL_HEAD),
     "chrome": ((0.80, 0.80, 0.84), 1.0, 90.0, MATERIAL_PLAIN),
     "stand": ((0.45, 0.45, 0.50), 1.0, 60.0, MATERIAL_PLAIN),
-    "bronze": ((0.86, 0.62, 0.26), 1.0, 45.0, MATERIAL_CYMBAL),
+    "bronze": ((0.90, 0.66, 0.30), 1.0, 45.0, MATERIAL_CYMBAL),
     "felt": ((0.85, 0.85, 0.80), 0.0, 8.0, MATERIAL_PLAIN),
     "pedal": ((0.25, 0.25, 0.28), 1.0, 40.0, MATERIAL_PLAIN),
     "seat": ((0.05, 0.05, 0.05), 0.0, 12.0, MATERIAL_PLAIN),
-    "floor": ((0.16, 0.14, 0.13), 0.0, 6.0, MATERIAL_FLOOR),
+    "floor": ((0.25, 0.18, 0.13), 0.0, 6.0, MATERIAL_FLOOR),
 }
 
 STAGE_RADIUS_M = 2.4

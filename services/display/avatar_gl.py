@@ -47,6 +47,17 @@ def shininess(material: Material) -> float:
     return float(4.0 + 90.0 * (1.0 - r) ** 2)
 
 
+#: words in a material's name that mark it as skin (wrapped diffuse, ``shaders/lighting.glsl``)
+SKIN_WORDS = ("skin", "face", "body", "lip", "ear", "hand", "neck")
+KIND_SKIN = 4
+
+
+def surface_kind(material: Material) -> int:
+    """The stage shader's material kind for an avatar material: skin by its name, else 0."""
+    name = material.name.lower()
+    return KIND_SKIN if any(w in name for w in SKIN_WORDS) else 0
+
+
 class SkinnedDraw:
     """One avatar's GPU buffers and its per-primitive draws (see the module docstring)."""
 
@@ -157,6 +168,8 @@ class SkinnedDraw:
             prog["u_alpha_cutoff"].value = float(mat.alpha_cutoff)
             prog["u_shading"].value = _SHADING[mat.shading]
             prog["u_shininess"].value = shininess(mat)
+            if "u_kind" in prog:
+                prog["u_kind"].value = surface_kind(mat)
             tex = self._textures[prim.material]
             prog["u_has_texture"].value = tex is not None
             if tex is not None:

@@ -54,6 +54,7 @@ from livedrummer.render.kitmesh import (
     STAGE_RADIUS_M,
     KitMesh,
 )
+from livedrummer.render.lights import DEFAULT_LOOK, LightRig, look_rig
 from livedrummer.render.scene import CH_HIGHLIGHT, SceneFrame, Skeleton, Tone, empty_channels
 from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
 
@@ -67,7 +68,7 @@ PALETTE[Tone.TROUSERS] = (0.10, 0.10, 0.12)
 PALETTE[Tone.SKIN] = (0.82, 0.60, 0.46)
 PALETTE[Tone.SHOES] = (0.85, 0.85, 0.85)
 PALETTE[Tone.HAIR] = (0.12, 0.07, 0.04)
-STICK_COLOR = (0.92, 0.78, 0.52)
+STICK_COLOR = (0.80, 0.60, 0.34)
 STICK_RADIUS_M = 0.0075
 SEGMENT_FLOATS = 15  # a xyz, b xyz, radius, colour rgba, material
 BALL_FLOATS = 12  # centre xyz radius, colour rgba, material
@@ -95,8 +96,12 @@ class Renderer:
         fxaa: bool = False,
         kit_occludes_only: bool = False,
         cache_static_shadow: bool = True,
+        lights: LightRig | None = None,
     ) -> None:
         self.ctx = ctx
+        #: the show lights (:mod:`livedrummer.render.lights`); replace it to relight the next
+        #: frame (a live OSC or cue change)
+        self.lights = lights if lights is not None else look_rig(DEFAULT_LOOK)
         # the kit drawn into depth only, before the body: the body alone is seen, hidden where
         # the kit is in front of it (a practice teacher's ghost, :mod:`.practice_view`)
         self.kit_occludes_only = kit_occludes_only
@@ -330,12 +335,9 @@ class Renderer:
         uniforms: dict[str, Any] = {
             "u_view_proj": vp.T.tobytes(),
             "u_eye": tuple(eye),
-            "u_key_pos": (float(centre[0]) - 1.6, float(centre[1]) + 3.2, 3.6),
-            "u_key_color": (1.05, 0.95, 0.82),
-            "u_rim_dir": tuple(np.array([0.35, -0.8, 0.5]) / np.linalg.norm([0.35, -0.8, 0.5])),
-            "u_rim_color": (0.45, 0.62, 1.0),
             "u_stage_centre": (float(centre[0]), float(centre[1]), 0.0),
             "u_stage_radius": STAGE_RADIUS_M,
+            **self.lights.uniforms(np.array([centre[0], centre[1], 0.6])),
         }
         key = np.array(uniforms["u_key_pos"])
         light_vp = key_light_view_projection(key, np.array([centre[0], centre[1], 0.6]))
