@@ -20,6 +20,7 @@ uniform vec3 u_ground;
 uniform float u_exposure;
 
 const vec3 HIGHLIGHT_COLOR = vec3(1.0, 0.60, 0.20);
+const vec3 GLOW_DISPLAY = vec3(0.60, 0.50, 0.35);
 
 vec3 linear_of(vec3 srgb) { return pow(srgb, vec3(2.2)); }
 
@@ -40,6 +41,10 @@ vec3 shade(vec3 pos, vec3 n, vec3 base_srgb, vec4 material, float highlight, flo
     vec3 v = normalize(u_eye - pos);
     if (kind == 2) {
         base *= 0.86 + 0.14 * sin(ring_r * 90.0);
+    }
+    if (kind == 3) {
+        // a coated head reads off-white under the wash, leaving headroom for its hit glow
+        base *= 0.62;
     }
     if (kind == 3 && material.w > 0.5) {
         base = mix(base, vec3(0.70, 0.36, 0.06), step(0.55, ring_r) * step(ring_r, 0.68));
@@ -71,4 +76,11 @@ vec3 shade(vec3 pos, vec3 n, vec3 base_srgb, vec4 material, float highlight, flo
     color += metal * base * (u_sky * 3.0 + (u_key_color + u_wash_color) * 0.12) * (0.3 + 0.7 * smoothstep(-0.2, 0.8, r.z));
     color += highlight * (HIGHLIGHT_COLOR * 2.0 + base * 0.8);
     return color;
+}
+
+// A struck piece's glow on the displayed colour, after tone mapping: added in linear light
+// alone, a glow on a surface the key and the wash already light brightly would be rolled off
+// by the filmic shoulder and barely show.
+vec3 with_glow(vec3 shown, float highlight) {
+    return min(shown + highlight * GLOW_DISPLAY, vec3(1.0));
 }

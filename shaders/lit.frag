@@ -15,5 +15,5 @@ void main() {
         n = -n;
     }
     vec3 c = shade(v_pos, n, v_color.rgb, v_material, v_color.a, v_ring);
-    f_color = vec4(display(c), 1.0);
+    f_color = vec4(with_glow(display(c), v_color.a), 1.0);
 }

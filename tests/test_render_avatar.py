@@ -254,7 +254,9 @@ def test_the_mannequin_stays_selectable(ctx: Any, scene: BodyScene) -> None:
     empty = empty_view(ctx, cam)
     drawn = [np.abs(i - empty).sum(-1) > 6 for i in images]
     assert drawn[0].sum() > 0.04 * W * H and drawn[1].sum() > 0.02 * W * H
-    assert (drawn[0] != drawn[1]).sum() > 0.01 * W * H  # two different figures
+    # two different figures: over 12 % of the figure's pixels differ (15 % with the kit-box
+    # framing, 13 % with the figure framing, which draws the whole body a little smaller)
+    assert (drawn[0] != drawn[1]).sum() > 0.12 * drawn[1].sum()
     # a frame without rotations (a test's stand-in pose) is drawn as capsules
     r = Renderer(ctx, empty_stage(), BODY_SKELETON, (W, H), samples=0)
     r.draw(dataclasses.replace(frame, rotations_q=None), cam)
