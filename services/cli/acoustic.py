@@ -39,7 +39,12 @@ def register(sub: Subparsers) -> None:
     train.add_argument("--seconds", type=float, default=12.0, help="excerpt length (default 12)")
     train.add_argument("--epochs", type=int, default=12, help="passes over the data (default 12)")
     train.add_argument("--seed", type=int, default=0)
-    train.add_argument("--corpus", type=Path, default=None, help="the Groove MIDI Dataset folder")
+    train.add_argument(
+        "--corpus",
+        type=Path,
+        default=None,
+        help="the Groove MIDI Dataset folder (default: ../shared/data/groove beside the checkout)",
+    )
     train.set_defaults(func=run_train)
 
 
