@@ -9,8 +9,11 @@ set -euo pipefail
 # window test; chromium: the practice report test loads the HTML report in a headless browser;
 # timgm6mb-soundfont: a real sampled General MIDI SoundFont, which the tests render with and
 # from which the percussion recogniser's tests and `bench transcribe` make their audio;
-# libsndfile1: soundfile (the samples of SFZ kits).
-packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3 libjack-jackd2-dev xdotool chromium timgm6mb-soundfont libsndfile1)
+# libsndfile1: soundfile (the samples of SFZ kits). fluid-soundfont-gm,
+# musescore-general-soundfont-small, hydrogen-drumkits: more drum kits for the acoustic
+# recogniser's multi-kit corpus (livedrummer acoustic train, bench transcribe
+# --leave-one-kit-out; an absent kit is skipped with a line).
+packages=(python3-venv jackd2 libegl1 libegl-mesa0 libgl1-mesa-dri libportaudio2 xvfb xauth libfluidsynth3 libjack-jackd2-dev xdotool chromium timgm6mb-soundfont libsndfile1 fluid-soundfont-gm musescore-general-soundfont-small hydrogen-drumkits)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")

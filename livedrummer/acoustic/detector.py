@@ -107,6 +107,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from livedrummer.acoustic.model import PICK_DELTA, PICK_FLOOR, HitModel, hit_features
 from livedrummer.acoustic.pieces import CLASSES
 from livedrummer.acoustic.profile import AudioProfile
 from livedrummer.acoustic.spectrum import (
@@ -383,13 +384,22 @@ class OnlineDetector:
         sr: int,
         channels: Sequence[int] | None = None,
         one_drum: bool = False,
+        model: HitModel | None = None,
     ):
         self.profile = profile
         self.sr = sr
         self.one_drum = one_drum
         self.channel_class = None if channels is None else list(channels)
+        #: A mix's classifier: the learned model (:mod:`.model`) or, when None, the profile's
+        #: templates. With a model the onsets are picked at its thresholds.
+        self.model = model
+        if model is not None and channels is None and profile.settings.lookahead != 2:
+            raise ValueError("the acoustic model needs a lookahead of 2 frames")
         #: When a list: the band rise of every mix-mode onset is appended (for learning).
         self.features: list[np.ndarray] | None = None
+        #: When a list: every mix-mode onset candidate is appended as (time_s, model
+        #: features, band rise total) (for training the model).
+        self.candidates: list[tuple[float, np.ndarray, float]] | None = None
         self.reset()
 
     @property
@@ -491,12 +501,18 @@ class OnlineDetector:
         s = self.profile.settings
         ch = self._chans[0]
         hits: list[tuple[float, int, int, float, int]] = []
-        if ch.main.is_onset(p, s.delta, s.floor):
+        if self.model is not None:
+            delta, floor = self.model.delta, self.model.floor
+        elif self.candidates is not None:  # training: the model's default picking
+            delta, floor = PICK_DELTA, PICK_FLOOR
+        else:
+            delta, floor = s.delta, s.floor
+        if ch.main.is_onset(p, delta, floor):
             allowed = None
         elif (
             ch.high is not None
             and p - ch.main.last_onset >= ch.high.combine
-            and ch.high.is_onset(p, HIGH_DELTA * s.delta, HIGH_FLOOR * s.floor)
+            and ch.high.is_onset(p, HIGH_DELTA * delta, HIGH_FLOOR * floor)
             and ch.lifted(HIGH_LIFT, high=True)  # not a steady noise's jitter
         ):
             allowed = HIGH_CLASSES
@@ -505,6 +521,8 @@ class OnlineDetector:
         rise = ch.rise()
         if self.features is not None:
             self.features.append(rise)
+        if self.model is not None or self.candidates is not None:
+            return self._decide_learned(p, time_s, rise, allowed)
         act = activations(rise, self.profile)
         if allowed is not None:  # the strongest high drum, whatever a ringing drum adds
             act[[c for c in range(len(CLASSES)) if c not in allowed]] = 0.0
@@ -528,12 +546,44 @@ class OnlineDetector:
             hits.append((time_s, cls, velocity_of(level, self.profile.levels[cls]), level, 0))
         return hits
 
+    def _decide_learned(
+        self, p: int, time_s: float, rise: np.ndarray, allowed: frozenset[int] | None
+    ) -> list[tuple[float, int, int, float, int]]:
+        """A candidate onset classified by the model (every candidate is an onset for the
+        picking, whatever the model says: training saw them so)."""
+        ch = self._chans[0]
+        if allowed is None:
+            ch.main.mark(p)
+        if ch.high is not None:
+            ch.high.mark(p)
+        feature = hit_features(np.array(ch.bands), allowed is not None)
+        level = float(rise.sum())
+        if self.candidates is not None:
+            self.candidates.append((time_s, feature, level))
+        if self.model is None:
+            return []
+        prob = self.model.probabilities(feature)
+        if allowed is not None:
+            prob[[c for c in range(len(CLASSES)) if c not in allowed]] = 0.0
+        recent = p - self._last_hit < math.ceil(SAME_DRUM_S * self.sr / HOP)
+        hits: list[tuple[float, int, int, float, int]] = []
+        for cls in np.flatnonzero((prob >= self.model.threshold) & ~recent).tolist():
+            self._last_hit[cls] = p
+            ref = float(self.model.ref_level[cls])
+            hits.append((time_s, cls, velocity_of(level, ref), level, 0))
+        return hits
+
 
 def detect(
-    audio: np.ndarray, sr: int, profile: AudioProfile, channels: Sequence[int] | None = None
+    audio: np.ndarray,
+    sr: int,
+    profile: AudioProfile,
+    channels: Sequence[int] | None = None,
+    model: HitModel | None = None,
 ) -> np.ndarray:
-    """The offline twin: every hit of ``audio`` ((n,) or (n, channels) float)."""
-    det = OnlineDetector(profile, sr, channels)
+    """The offline twin: every hit of ``audio`` ((n,) or (n, channels) float); a mix is
+    classified by ``model`` when given (else by the profile's templates)."""
+    det = OnlineDetector(profile, sr, channels, model=model)
     data = np.asarray(audio, np.float64)
     pad = np.zeros((tail_samples(profile.settings.lookahead), *data.shape[1:]))
     return det.process(np.concatenate([data, pad]))

@@ -83,6 +83,9 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--jackd-realtime", action="store_true",
                     help="--live: run the dummy JACK server with -R (real-time scheduling, "
                     "as a stage rig runs jackd)")  # fmt: skip
+    from . import _loko
+
+    _loko.add_options(ap)
     args = ap.parse_args(argv)
     if args.files is not None and args.files < 1:
         ap.error(f"--files {args.files}: expected 1 or more")
@@ -91,6 +94,8 @@ def main(argv: list[str]) -> int:
     if args.live:
         return live(args)
     root = corpus(args.corpus)
+    if args.leave_one_kit_out:
+        return _loko.run(args, root)
     profile = load_profile(args.audio_profile)
     mix_tot: dict[str, Counts] = {}
     mic_tot: dict[str, Counts] = {}

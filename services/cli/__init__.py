@@ -53,6 +53,7 @@ COMMANDS: dict[str, str] = {
     "avatars": "list the avatars --avatar NAME can pick",
     "transcribe": "transcribe a drum recording (audio file) to a MIDI file",
     "audio": "learn an acoustic kit's sound (audio profile) for transcribe and input --audio",
+    "acoustic": "train the acoustic drum recogniser's model on the drum kits installed here",
 }
 
 

@@ -126,10 +126,12 @@ def run(args: argparse.Namespace) -> int:
         from livedrummer.acoustic.profile import load_profile
 
         from ..input.audioport import AudioSource
+        from .transcribe import mix_model
 
         mapping = parse_channel_map(args.channels) if args.channels else None
+        model = mix_model(args) if mapping is None else None
         source = AudioSource(args.audio, clock, load_profile(args.audio_profile), mapping,
-                             args.performer, trace=args.trace)  # fmt: skip
+                             args.performer, trace=args.trace, model=model)  # fmt: skip
         note_map = load_note_map("general-midi")  # what its onsets' notes mean
     elif args.file is not None:
         from ..input.fileplayer import FileSource

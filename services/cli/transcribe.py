@@ -30,6 +30,21 @@ def add_audio_options(p: argparse.ArgumentParser) -> None:
         help="one microphone per drum: 1=kick,2=snare,3=hihat,... (channels from 1; drums: "
         "kick snare hihat hihat_open tom_high tom_mid tom_low crash ride); default: a mix",
     )  # fmt: skip
+    p.add_argument(
+        "--recogniser", choices=("templates", "model"), default="templates",
+        help="how a mix's hits are classified: the audio profile's templates (default), or "
+        "the learned model trained on many kits (livedrummer acoustic train; experimental: "
+        "below the templates on TimGM6mb, see issue 30's note)",
+    )  # fmt: skip
+
+
+def mix_model(args: argparse.Namespace):  # type: ignore[no-untyped-def]
+    """The learned model a mix is classified by (None: the profile's templates)."""
+    if args.recogniser == "templates":
+        return None
+    from livedrummer.acoustic.model import load_model
+
+    return load_model(None)
 
 
 def register(sub: Subparsers) -> None:
@@ -61,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
         share = 100.0 * rec.clipped / rec.samples.size
         print(f"livedrummer: warning: {args.file}: {rec.clipped:,} samples clipped "
               f"({share:.2f} %): loud hits read as full strength", file=sys.stderr)  # fmt: skip
+    model = None
     if mapping is not None:
         wanted = max(mapping) + 1
         if wanted > rec.channels:
@@ -70,7 +86,8 @@ def run(args: argparse.Namespace) -> int:
         chans = sorted(mapping)
         hits = detect(rec.samples[:, chans], SAMPLE_RATE, profile, [mapping[c] for c in chans])
     else:
-        hits = detect(rec.samples.mean(axis=1), SAMPLE_RATE, profile)
+        model = mix_model(args)
+        hits = detect(rec.samples.mean(axis=1), SAMPLE_RATE, profile, model=model)
     try:
         hits_to_midi(hits).save(args.output)
     except OSError as exc:
@@ -78,6 +95,9 @@ def run(args: argparse.Namespace) -> int:
     counts = np.bincount(hits["cls"].astype(np.int64), minlength=len(CLASSES))
     detail = ", ".join(f"{CLASSES[c]} {n}" for c, n in enumerate(counts.tolist()) if n)
     mode = "one mic per drum" if mapping else "mix"
-    print(f"{args.output}: {len(hits)} hits in {rec.duration_s:.1f} s ({mode}, profile "
-          f"{profile.name}): {detail or 'none'}")  # fmt: skip
+    how = f"profile {profile.name}"
+    if mapping is None and model is not None:
+        how = f"model {model.name}"
+    print(f"{args.output}: {len(hits)} hits in {rec.duration_s:.1f} s ({mode}, {how}): "
+          f"{detail or 'none'}")  # fmt: skip
     return 0

@@ -234,6 +234,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         source = ["--audio", args.audio]
         source += ["--channels", args.channels] if args.channels else []
         source += ["--audio-profile", args.audio_profile] if args.audio_profile else []
+        source += ["--recogniser", args.recogniser]
         map_name = "general-midi"  # the notes input --audio writes
     else:
         source = ["--midi", args.midi, "--api", args.api]

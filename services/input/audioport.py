@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from livedrummer.acoustic.detector import OnlineDetector
+from livedrummer.acoustic.model import HitModel
 from livedrummer.acoustic.profile import AudioProfile
 from livedrummer.acoustic.spectrum import HOP
 from livedrummer.acoustic.transcribe import hits_to_onsets
@@ -100,6 +101,7 @@ class AudioSource(Source):
         performer: int = 0,
         problems: Problems | None = None,
         trace: Path | None = None,
+        model: HitModel | None = None,
     ) -> None:
         super().__init__(f"audio {device}", clock, problems)
         self.device = device
@@ -109,7 +111,7 @@ class AudioSource(Source):
         self.n_channels = max(mapping) + 1 if mapping else 1
         self._pick = sorted(mapping) if mapping else None
         classes = [mapping[c] for c in sorted(mapping)] if mapping else None
-        self.detector = OnlineDetector(profile, SAMPLE_RATE, classes)
+        self.detector = OnlineDetector(profile, SAMPLE_RATE, classes, model=model)
         self._queue: queue.Queue[tuple[float, np.ndarray]] = queue.Queue(QUEUE_BLOCKS)
         self._stream: Any = None
         self._delivered = 0  # samples handed to the detector

@@ -1,0 +1,93 @@
+"""``livedrummer acoustic train``: the learned hit classifier, made again from the kits here.
+
+Renders the multi-kit corpus (:mod:`services.bench._kitcorpus`: GMD train-split grooves
+through every kit of :mod:`services.bench._kits` present, each take in its own room, EQ,
+compression and noise), collects the detector's onset candidates with their labels and fits
+the model (:mod:`livedrummer.acoustic.train`), seeded: the same kits and options give the same
+file. The bundled ``kits/audio/acoustic-model.npz`` is made by the defaults, which hold out
+TimGM6mb (the tests check the model on it); ``--hold-out none`` trains on every kit.
+A kit absent here is skipped with a line saying which package has it.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .common import Subparsers, add_command
+
+DEFAULT_HOLD_OUT = "timgm6mb"
+
+
+def register(sub: Subparsers) -> None:
+    p = add_command(sub, "acoustic", _usage)
+    actions = p.add_subparsers(dest="action", metavar="ACTION")
+    train = actions.add_parser("train", help="train the hit classifier on the kits here")
+    train.add_argument("-o", "--output", type=Path, default=None,
+                       help="model .npz to write (default: the bundled kits/audio/"
+                       "acoustic-model.npz)")  # fmt: skip
+    train.add_argument("--kits", default=None, metavar="LIST",
+                       help="kits to train on (default: every one present)")  # fmt: skip
+    train.add_argument(
+        "--hold-out",
+        default=DEFAULT_HOLD_OUT,
+        metavar="KIT",
+        help=f"a kit left out of training, or none (default {DEFAULT_HOLD_OUT})",
+    )
+    train.add_argument("--files", type=int, default=24, metavar="N",
+                       help="train-split excerpts per kit (default 24)")  # fmt: skip
+    train.add_argument("--seconds", type=float, default=12.0, help="excerpt length (default 12)")
+    train.add_argument("--epochs", type=int, default=12, help="passes over the data (default 12)")
+    train.add_argument("--seed", type=int, default=0)
+    train.add_argument(
+        "--corpus",
+        type=Path,
+        default=None,
+        help="the Groove MIDI Dataset folder (default: ../shared/data/groove beside the checkout)",
+    )
+    train.set_defaults(func=run_train)
+
+
+def _usage(args: argparse.Namespace) -> int:
+    print("usage: livedrummer acoustic train ...")
+    return 2
+
+
+def run_train(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from livedrummer.acoustic.train import fit
+    from livedrummer.errors import LivedrummerError
+    from livedrummer.resources import data_dir
+
+    from ..bench._kitcorpus import kit_candidates
+    from ..bench._kits import KIT_NAMES, available_kits
+    from ..bench._paths import DEFAULT_CORPUS, corpus
+
+    if args.files < 1 or args.seconds <= 0 or args.epochs < 1:
+        raise LivedrummerError("--files, --seconds and --epochs must be positive")
+    names = None if args.kits is None else [k.strip() for k in args.kits.split(",") if k.strip()]
+    if args.hold_out != "none" and args.hold_out not in KIT_NAMES:
+        raise LivedrummerError(f"--hold-out: unknown kit {args.hold_out!r} "
+                               f"(one of {', '.join(KIT_NAMES)}, or none)")  # fmt: skip
+    kits = [k for k in available_kits(names) if k.name != args.hold_out]
+    if not kits:
+        raise LivedrummerError("--kits: no kit to train on is present here")
+    root = corpus(args.corpus or DEFAULT_CORPUS)
+    parts = []
+    for kit in kits:
+        part = kit_candidates(kit, root, args.files, args.seconds)
+        print(f"  {kit.name}: {len(part[0])} onset candidates", flush=True)
+        parts.append(part)
+    x = np.concatenate([p[0] for p in parts])
+    y = np.concatenate([p[1] for p in parts])
+    level = np.concatenate([p[2] for p in parts])
+    name = "+".join(k.name for k in kits)
+    model = fit(x, y, level, seed=args.seed, epochs=args.epochs, name=name)
+    out = args.output or data_dir("kits") / "audio" / "acoustic-model.npz"
+    try:
+        model.save(out)
+    except OSError as exc:
+        raise LivedrummerError(f"{out}: cannot write: {exc.strerror or exc}") from None
+    print(f"{out}: trained on {name} ({len(x)} candidates)")
+    return 0
