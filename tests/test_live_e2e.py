@@ -181,11 +181,13 @@ def test_a_groove_played_on_a_jack_port_reaches_the_display(
     frames = [json.loads(line) for line in (frames_dir / "frames.jsonl").read_text().splitlines()]
     assert len(list(frames_dir.glob("frame_*.png"))) == len(frames) > FPS
     drawn = [f for f in frames if f["pose_s"] is not None]
-    # each frame drew the newest sample at or before its show time (the stream has no holes
-    # wider than 1/240 s), holding the last one when nothing newer had come
+    # each frame drew the newest sample it held at or before its show time (none held
+    # between the drawn one and the show time), holding the last one when nothing newer had
+    # come; how far behind the show time the stream ran is a timing figure, not asserted (a
+    # quick contact sent ahead can be held while the regular stream is a few ms behind)
     for f in drawn:
         assert f["pose_s"] <= f["show_s"] or f["pose_s"] == drawn[0]["pose_s"]
-        assert f["pose_s"] >= min(f["newest_s"], f["show_s"]) - 1 / 240 - 1e-6
+        assert f["next_s"] is None or f["next_s"] > f["show_s"], f
     for t in stamps[hand] + DELAY_S:
         for f in drawn:
             if t <= f["show_s"] < t + 1.0 / FPS and f["newest_s"] >= t:

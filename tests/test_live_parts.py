@@ -215,3 +215,12 @@ def test_the_window_stays_bounded_under_a_flood_and_a_moving_pedal(
         window.prune(now - wp.lookahead_s)
     assert len(window._notes) == 0
     assert len(window._controls) <= 1.5 * wp.window_s / 0.005 + 1, len(window._controls)
+
+
+def test_the_track_names_the_sample_after_the_one_it_draws() -> None:
+    track = PoseTrack(keep_s=10.0)
+    rows = np.zeros(4, [("v", np.float32)])
+    track.add(np.array([1.0, 1.004, 1.5, 2.0]), rows)  # a gap, then a quick contact ahead
+    got = track.at(1.3)
+    assert got is not None and got[0] == 1.004
+    assert track.next_after(got[0]) == 1.5 and track.next_after(2.0) is None

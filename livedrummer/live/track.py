@@ -65,6 +65,11 @@ class PoseTrack:
     def newest_s(self) -> float | None:
         return float(self._show[-1]) if self._show.size else None
 
+    def next_after(self, show_s: float) -> float | None:
+        """The show time of the first kept sample later than ``show_s`` (None: none is)."""
+        i = int(np.searchsorted(self._show, show_s, side="right"))
+        return float(self._show[i]) if i < self._show.size else None
+
     def at(self, show_s: float) -> tuple[float, np.ndarray] | None:
         """The latest sample at or before ``show_s`` (the earliest if all are later)."""
         if self._rows is None or self._show.size == 0:

@@ -383,6 +383,9 @@ class LiveDisplay(Service):
                 if got is not None:
                     pose_s, row = got
                     record["pose_s"] = pose_s
+                    # the sample after the drawn one: later than the show time unless the
+                    # frame skipped one that was due (a test's check, and a lag figure's)
+                    record["next_s"] = self.track.next_after(pose_s)
                     record["tips"] = (
                         np.asarray(row["position"])[[J["r_tip"], J["l_tip"]]].round(5).tolist()
                     )
