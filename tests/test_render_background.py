@@ -265,3 +265,20 @@ def test_the_live_headless_recording_has_the_background(tmp_path: Path) -> None:
         img = next(iter(c.decode(video=0))).to_ndarray(format="rgb24").astype(int)
     corner = img[:8, :8].reshape(-1, 3).mean(axis=0)  # the sky above the stage
     assert corner[1] > 150 and corner[0] < 80 and corner[2] < 80, corner
+
+
+def test_render_look_picks_the_show_lights(midi: Path, tmp_path: Path, capsys: Any) -> None:
+    argv = ["render", str(midi), "--size", "160x90", "--fps", "10", "--end", "0.3",
+            "--camera", "front"]  # fmt: skip
+    shown = {}
+    for look in ("concert", "neon"):
+        frames = tmp_path / look
+        assert main([*argv, "--look", look, "--frames-dir", str(frames)]) == 0
+        assert f"look {look}" in capsys.readouterr().out
+        with av.open(str(sorted(frames.glob("*.png"))[0])) as c:
+            shown[look] = next(c.decode(video=0)).to_ndarray(format="rgb24").astype(int)
+    # neon's magenta and cyan wash against concert's warm key: the kit is coloured otherwise
+    assert np.abs(shown["neon"] - shown["concert"]).mean() > 3
+    with pytest.raises(SystemExit) as bad:
+        main([*argv, "--look", "disco"])
+    assert bad.value.code == 2 and "--look" in capsys.readouterr().err

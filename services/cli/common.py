@@ -236,6 +236,14 @@ def add_background_option(parser: Any, transparent: bool = True) -> None:
     )  # fmt: skip
 
 
+def add_look_option(parser: Any) -> None:
+    """``--look NAME``: the show lights' theme (:data:`livedrummer.render.lights.LOOKS`)."""
+    from livedrummer.render.lights import DEFAULT_LOOK, LOOKS
+
+    parser.add_argument("--look", choices=tuple(LOOKS), default=DEFAULT_LOOK,
+                        help=f"the show lights' theme (default: {DEFAULT_LOOK})")  # fmt: skip
+
+
 def background_of(args: argparse.Namespace, window: bool = False) -> Background:
     """The checked, decoded ``--background`` of ``args`` (one line on a bad value)."""
     from livedrummer.render.background import BackgroundError

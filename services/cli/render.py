@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 from livedrummer.errors import LivedrummerError
 from livedrummer.render.camera import CAMERA_NAMES
+from livedrummer.render.lights import look_rig
 from livedrummer.timeline.span import Position, parse_position, span_seconds
 
 from .common import (
@@ -38,6 +39,7 @@ from .common import (
     add_channel_option,
     add_command,
     add_kit_option,
+    add_look_option,
     add_motion_options,
     add_renamed,
     avatar_of,
@@ -106,6 +108,7 @@ def register(sub: Subparsers) -> None:
                    help="render every drummer of a stage file on one stage instead of FILE "
                    "(default: none)")  # fmt: skip
     add_background_option(p)
+    add_look_option(p)
 
 
 def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap,
@@ -270,7 +273,7 @@ def run(args: argparse.Namespace) -> int:
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=samples, fxaa=fxaa, progress=bar,
         overlays=overlays, soundfont=args.soundfont, avatar=avatar, background=background,
-        span=span, staging=staging,
+        span=span, staging=staging, lights=look_rig(args.look),
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
@@ -281,7 +284,7 @@ def run(args: argparse.Namespace) -> int:
         f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"
         f"{', drum track 48 kHz stereo' if out is not None else ''}"
         f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}"
-        f"{', background ' + args.background if args.background else ''}; "
+        f"{', background ' + args.background if args.background else ''}, look {args.look}; "
         f"{report.realtime:.2f}x real time"
     )
     return 0
@@ -330,10 +333,12 @@ def run_stage(args: argparse.Namespace) -> int:
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export_stage(drummers, out=out, frames_dir=args.frames_dir, settings=settings,
                           camera=args.camera, tail_s=args.tail, progress=bar,
-                          background=background, span=span)  # fmt: skip
+                          background=background, span=span,
+                          lights=look_rig(args.look))  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
           f"{f' (from {span[0]:.2f} s to {span[1]:.2f} s)' if span else ''}, "
           f"{len(drummers)} drummers ({stage.formation.shape}), {size[0]}x{size[1]} @ "
-          f"{args.fps} fps, camera {args.camera}; {report.realtime:.2f}x real time")  # fmt: skip
+          f"{args.fps} fps, camera {args.camera}, look {args.look}; "
+          f"{report.realtime:.2f}x real time")  # fmt: skip
     return 0

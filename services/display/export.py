@@ -46,6 +46,7 @@ from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import Camera, pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.lights import LightRig
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.timeline.performance import Performance
@@ -102,6 +103,7 @@ def export(
     background: Background | None = None,
     fxaa: bool = False,
     staging: Callable[[float], tuple[Camera, float]] | None = None,
+    lights: LightRig | None = None,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
@@ -149,7 +151,7 @@ def export(
         ctx = headless_context()
         renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
                             samples=samples, avatar=avatar, background=background,
-                            fxaa=fxaa)  # fmt: skip
+                            fxaa=fxaa, lights=lights)  # fmt: skip
         alpha = background is not None and background.transparent
         gpu_yuv = i420_ok(settings.size) and not alpha
         strips = overlay_image(settings.size, overlays, OverlayModels(body, first_s + n / fps))

@@ -48,6 +48,7 @@ from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import Camera, pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.lights import LightRig
 from livedrummer.render.scene import SceneFrame
 from livedrummer.stage.formation import Placement
 from livedrummer.stage.layout import cell_neighbours, fit_group_camera, footprint, group_points
@@ -94,7 +95,8 @@ class StagePainter:
     drummer's floor is cut to its cell (:func:`livedrummer.stage.layout.cell_neighbours`)."""
 
     def __init__(self, ctx: Any, drummers: Sequence[Spot], size: tuple[int, int], camera: str,
-                 target: Any = None, background: Background | None = None) -> None:  # fmt: skip
+                 target: Any = None, background: Background | None = None,
+                 lights: LightRig | None = None) -> None:  # fmt: skip
         self.ctx = ctx
         self.size = size
         w, h = size
@@ -109,7 +111,7 @@ class StagePainter:
         for d in drummers:
             renderer = Renderer(ctx, build_kit_mesh(d.kit), BODY_SKELETON, size, samples=0,
                                 offscreen=False, avatar=d.avatar,
-                                background=background)  # fmt: skip
+                                background=background, lights=lights)  # fmt: skip
             self.passes.append((renderer, local_camera(world, d.placement)))
         cells = cell_neighbours([d.placement for d in drummers],
                                 [r.pool_centre() for r, _c in self.passes])  # fmt: skip
@@ -186,6 +188,7 @@ def export_stage(
     progress: Progress | None = None,
     background: Background | None = None,
     span: tuple[float, float] | None = None,
+    lights: LightRig | None = None,
 ) -> ExportReport:
     """Render the stage to ``out`` (MP4 with the summed drum track) and/or PNGs, in front of
     ``background`` (transparent: alpha 0 where no drummer, kit or floor is nearest).
@@ -218,7 +221,8 @@ def export_stage(
     done = False
     try:
         ctx = headless_context()
-        painter = StagePainter(ctx, drummers, settings.size, camera, background=background)
+        painter = StagePainter(ctx, drummers, settings.size, camera, background=background,
+                               lights=lights)  # fmt: skip
         frames = [d.body.frames(times) for d in drummers]
         for i in range(n):
             painter.draw([next(f) for f in frames])
