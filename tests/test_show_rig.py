@@ -238,6 +238,7 @@ def test_a_late_avatar_is_reported_live_and_in_the_summary(tmp_path: Path,
     assert log.exists() and not list((tmp_path / "f").glob("*.png"))
     assert f"up: input, synth and display running; frame log in {log}" in run.stdout
     assert f"restarts); frame log in {log}" in run.stderr  # up: stopped (N restarts); ...
+    assert f"frame log in {log}, " in run.stderr and "frames into" not in run.stderr  # display
 
 
 def write_rig(path: Path, port_base: int) -> Path:

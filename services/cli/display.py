@@ -306,7 +306,11 @@ def run_live(args: argparse.Namespace) -> int:
         if sound is not None:
             sound.close()
     s = display.summary()
-    where = f" into {args.frames_dir}" if args.frames_dir else ""
+    where = ""
+    if args.frames_dir:  # with --no-png the folder holds the frame log alone
+        pngs = not getattr(args, "no_png", False)
+        log = f"{args.frames_dir}/frames.jsonl"
+        where = f" into {args.frames_dir}" if pngs else f", frame log in {log}"
     print(f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "
           f"{s['missing']} pose messages lost", file=sys.stderr)  # fmt: skip
     if sound is not None and sound.stats is not None:
