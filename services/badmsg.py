@@ -9,7 +9,8 @@ into a short *kind* (:func:`kind_of`), counts it, and logs a warning the first t
 is seen on that socket (then it only counts, so a peer spraying garbage cannot flood the log).
 ``summary()`` gives the counts for a service's status and on-exit log line.
 
-Kinds, from the ``field`` a :class:`~livedrummer.protocol.WireError` names:
+Kinds (:func:`kind_of`, kept with the intake in :mod:`livedrummer.protocol.intake`), from the
+``field`` a :class:`~livedrummer.protocol.WireError` names:
 
     version    the header's version byte is not ours
     header     header frame of the wrong size (truncated, random bytes), bad magic, unknown
@@ -33,30 +34,9 @@ import threading
 from collections import Counter
 
 from livedrummer.errors import ProtocolError
+from livedrummer.protocol.intake import KINDS, kind_of
 
-KINDS = ("version", "header", "oversized", "size", "frames", "payload", "unexpected")
-
-_HEADER_FIELDS = frozenset(
-    ("header", "magic", "kind", "flags", "performer", "stream", "seq", "send_time_s")
-)
-
-
-def kind_of(exc: ProtocolError) -> str:
-    """The short kind of a decode error (see the module docstring)."""
-    name = getattr(exc, "field", "")
-    if not isinstance(name, str):
-        return "payload"
-    if name == "version":
-        return "version"
-    if name == "max_payload":
-        return "oversized"
-    if name == "payload_len":
-        return "size"
-    if name == "frames" or name.startswith("frame "):
-        return "frames"
-    if name in _HEADER_FIELDS:
-        return "header"
-    return "payload"
+__all__ = ["KINDS", "BadMessages", "kind_of"]
 
 
 class BadMessages:

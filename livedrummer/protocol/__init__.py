@@ -81,8 +81,10 @@ and authentication/encryption are a socket option (CURVE), not part of this form
 Modules, one concept each: :mod:`~livedrummer.protocol.spec` (the table, constants and
 :class:`WireError`), :mod:`~livedrummer.protocol.poseformat`, :mod:`~livedrummer.protocol.bodies`
 (the message and its bodies), :mod:`~livedrummer.protocol.rows` (row checks),
-:mod:`~livedrummer.protocol.codec` (encode/decode) and :mod:`~livedrummer.protocol.sequence`
-(loss seen from sequence numbers). Import from the package: its names are the wire's API.
+:mod:`~livedrummer.protocol.codec` (encode/decode), :mod:`~livedrummer.protocol.sequence`
+(the one policy for gaps, restarts and duplicates seen in sequence numbers) and
+:mod:`~livedrummer.protocol.intake` (a subscriber's decode, filter and observe steps).
+Import from the package: its names are the wire's API.
 """
 
 from __future__ import annotations
@@ -90,6 +92,7 @@ from __future__ import annotations
 from livedrummer.errors import ProtocolError
 from livedrummer.protocol.bodies import Body, Gap, Hello, Message, Pose
 from livedrummer.protocol.codec import decode, encode
+from livedrummer.protocol.intake import Dropped, StreamIntake, Taken, kind_of
 from livedrummer.protocol.poseformat import PoseFormat
 from livedrummer.protocol.rows import check_controls, check_onsets, check_stage_cues
 from livedrummer.protocol.sequence import SeqReport, SeqStats, SeqStatus, SequenceTracker
@@ -129,6 +132,7 @@ __all__ = [
     "PROTOCOL_VERSION",
     "SPECS",
     "Body",
+    "Dropped",
     "Flag",
     "Gap",
     "GapReason",
@@ -144,11 +148,14 @@ __all__ = [
     "SeqStatus",
     "SequenceTracker",
     "Stream",
+    "StreamIntake",
+    "Taken",
     "WireError",
     "check_controls",
     "check_onsets",
     "check_stage_cues",
     "decode",
     "encode",
+    "kind_of",
     "topic",
 ]

@@ -19,14 +19,17 @@ back), hand the image to a sink (PNG files, a window). ``frames.jsonl`` records,
 its render time, its show time, the show time of the pose drawn and of the newest pose
 received by then, so a test or a bench can check contacts and latency without pixels.
 
-Bad input. The SUB socket takes every message that starts with the protocol magic (so a
-synth of another protocol version is seen and counted, not filtered into silence); a message
-that fails to decode, or a valid one that is not a POSE (or a SHOWN_ONSET or SHOWN_CONTROL,
-the onsets and controls the synth forwards: counted, sequence-checked and left to the sound
-process, which subscribes to them on its own socket, :mod:`~services.display.live_sound`), is
-dropped and counted per kind in
-``bad`` (:class:`~services.badmsg.BadMessages`, logged once per kind, totals logged when the
-loop ends and in ``summary()``), and the next one is read.
+Bad input. The stream is read by a :class:`~services.display.pose_stream.PoseStream` (the
+stage display's too), on the one :class:`~services.stream_rx.StreamReceiver`: the SUB socket
+takes every message that starts with the protocol magic (so a synth of another protocol
+version is seen and counted, not filtered into silence); a message that fails to decode, or a
+valid one that is not a POSE (or a SHOWN_ONSET or SHOWN_CONTROL, the onsets and controls the
+synth forwards: counted, sequence-checked and left to the sound process, which subscribes to
+them on its own socket, :mod:`~services.display.live_sound`), is dropped and counted per kind
+in ``bad`` (:class:`~services.badmsg.BadMessages`, logged once per kind, totals logged when
+the loop ends and in ``summary()``), and the next one is read. Sequence numbers follow the
+one policy of :mod:`livedrummer.protocol.sequence`: a gap is counted in ``missing``, a
+restarted synth is taken, a duplicate is dropped.
 
 Limits: the pose format is taken from the kit given to the display (the synth's READY also
 carries it; a mismatch is refused by hash, frame by frame); one performer. Frames go to a
@@ -88,28 +91,18 @@ import zmq
 from livedrummer.avatar.model import Avatar
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
-from livedrummer.errors import ProtocolError
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.live.behind import BehindCounter
 from livedrummer.live.track import PoseTrack
-from livedrummer.protocol import (
-    Hello,
-    Kind,
-    Message,
-    Pose,
-    PoseFormat,
-    SeqStatus,
-    SequenceTracker,
-    decode,
-)
+from livedrummer.protocol import Hello, Kind
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import frame_from_pose
 from livedrummer.render.live_overlay import LiveStrips
 
-from ..badmsg import BadMessages
-from ..net import Security, connect, socket, subscribe_protocol
+from ..net import Security
 from ..service import OnReady, Service
+from .pose_stream import PoseStream
 from .record import LiveRecorder
 from .showctl import DisplayShow, replay_stage
 from .surface import HeadlessSurface, WindowSurface
@@ -269,12 +262,11 @@ class LiveDisplay(Service):
         self.clock: FrameClock = clock
         self.kit = kit
         self.config = config
-        self.format = PoseFormat.from_dtype(pose_dtype(len(kit.pieces)))
-        self.track = PoseTrack()
-        self.tracker = SequenceTracker()
+        self.stream = PoseStream(kit, "display pose stream", log)
+        self.format = self.stream.format
+        self.track = self.stream.track
         self.stats = LiveStats()
-        self.bad = BadMessages("display pose stream", log)
-        self._sub: Any = None
+        self.bad = self.stream.bad
         self._last_show = -math.inf  # show time of the last frame drawn
         self._spool: IO[bytes] | None = None  # pose messages of a deferred recording
         self.late = BehindCounter("pose messages arrived after every frame they cover",
@@ -289,9 +281,7 @@ class LiveDisplay(Service):
 
     def open(self) -> None:
         """Connect to the synth's poses (the base binds the control socket, if one is asked)."""
-        self._sub = socket(self.ctx, zmq.SUB)
-        subscribe_protocol(self._sub)
-        connect(self._sub, self.config.sub, "sub endpoint", self.config.security)
+        self.stream.connect(self.ctx, self.config.sub, "sub endpoint", self.config.security)
         self.endpoints["sub"] = self.config.sub
         port = self.config.osc_port
         if port is not None or self.config.cues:
@@ -304,10 +294,7 @@ class LiveDisplay(Service):
         if self.show is not None:
             self.show.close()
             self.show = None
-        if self._sub is not None:
-            self._sub.close(0)
-            self._sub = None
-        self.bad.log_summary()
+        self.stream.close()
 
     def hello(self) -> Hello:
         avatar = "" if self.config.avatar is None else self.config.avatar.digest
@@ -358,7 +345,7 @@ class LiveDisplay(Service):
             show_end = math.inf
             while not stop.is_set() and (cfg.frames is None or self.stats.frames < cfg.frames):
                 wait_ms = max(0, int((next_frame - self.clock.now()) * 1000))
-                if self._sub.poll(wait_ms):
+                if self.stream.rx.poll(wait_ms):
                     self._drain()
                 now = self.clock.now()
                 if now >= end:
@@ -516,62 +503,37 @@ class LiveDisplay(Service):
         return recorder
 
     def _drain(self) -> None:
-        while True:
-            try:
-                frames = self._sub.recv_multipart(zmq.NOBLOCK)
-            except zmq.Again:
-                return
-            try:
-                msg = decode(frames, self.format)
-            except ProtocolError as exc:
-                self.stats.bad += 1
-                self.bad.drop(exc)
-                continue
+        """Everything waiting on the pose stream (:class:`~.pose_stream.PoseStream`): poses
+        into the track, and the onsets, controls and stage cues the synth forwards."""
+        batch = self.stream.drain()
+        for msg in batch.forwarded:
             if msg.kind is Kind.STAGE_CUE:  # a bar cue's camera and blackout (showctl)
-                self._observe(msg)
                 if self.show is None:
-                    self.stats.bad += 1
-                    self.bad.unexpected("STAGE_CUE (no stage here: give --cues or --osc)")
+                    self.stream.unexpected("STAGE_CUE (no stage here: give --cues or --osc)")
                 else:
                     self.show.schedule(msg.rows)
-                continue
-            if msg.kind is Kind.SHOWN_ONSET:  # onsets the synth forwards (sounded apart)
-                self._observe(msg)
+            elif msg.kind is Kind.SHOWN_ONSET:  # onsets the synth forwards (sounded apart)
                 self.stats.shown_onsets += msg.rows.size
                 if self._spool is not None and self.config.overlays:
                     self._onset_log.append((self.clock.now(), msg.rows.copy()))
                 elif self._strips_fed:
                     self.strips.add_onsets(msg.rows)
-                continue
-            if msg.kind is Kind.SHOWN_CONTROL:  # grabs and the pedal (sounded apart)
-                self._observe(msg)
+            elif msg.kind is Kind.SHOWN_CONTROL:  # grabs and the pedal (sounded apart)
                 self.stats.shown_controls += msg.rows.size
-                continue
-            if not isinstance(msg.body, Pose):
-                self.stats.bad += 1
-                self.bad.unexpected(msg.kind.name)
-                continue
-            self._observe(msg)
-            rows = msg.body.rows
-            show = msg.body.time_s + rows["time_s"].astype(np.float64)
+        for show, rows in batch.poses:
             # a message whose every sample is for a frame already drawn came too late to be
             # seen (re-animations also resend recent past samples; those are not counted)
             late = int(show.size > 0 and float(show.max()) < self._last_show)
             self._say(self.late.first(late, self.clock.now()))
-            self.track.add(show, rows)
             if self._strips_fed and self._spool is None:
                 self.strips.add_poses(show, rows["position"])
             if self._spool is not None:
                 self._spool.write(SPOOL_HEAD.pack(self.clock.now(), rows.size))
                 self._spool.write(np.ascontiguousarray(show, np.float64).tobytes())
                 self._spool.write(np.ascontiguousarray(rows).tobytes())
-            self.stats.pose_messages += 1
-            self.stats.pose_samples += rows.size
-
-    def _observe(self, msg: Message) -> None:
-        report = self.tracker.observe_message(msg)
-        if report.status is SeqStatus.GAP:
-            self.stats.missing += report.missing
+        got = self.stream.stats
+        self.stats.pose_messages, self.stats.pose_samples = got.pose_messages, got.pose_samples
+        self.stats.missing, self.stats.bad = got.missing, got.bad
 
     def _say(self, line: str | None) -> None:
         if line is not None:

@@ -19,11 +19,13 @@ synth's) into a cut (:class:`~livedrummer.audio.cuts.CutReader`: a cymbal grab, 
 pedal closing), held and placed the same way: the mixer applies it on the sample heard at its
 show time, and the ringing cymbal or hi-hat stops when the picture's does.
 
-One loop, no Python in the audio thread: wait on the socket for up to a millisecond, read
-what came, look at the FIFO, top it up. :class:`LiveSound` starts and stops the process from
-the display; it waits for the output to open and, where there is none, says so in one line and
-the display runs silent. At the end the process reports its counts (onsets, late, underruns,
-clipped samples, bad messages) and the parent logs them.
+One loop, no Python in the audio thread: wait on the socket (the one
+:class:`~services.stream_rx.StreamReceiver`, its sequence numbers not read: the subscription
+takes two kinds of the stream only) for up to a millisecond, read what came, look at the
+FIFO, top it up. :class:`LiveSound` starts and stops the process from the display; it waits
+for the output to open and, where there is none, says so in one line and the display runs
+silent. At the end the process reports its counts (onsets, late, underruns, clipped samples,
+bad messages) and the parent logs them.
 
 Limits: a remote synth's
 CURVE keys are passed to the subscriber as the display has them.
@@ -42,10 +44,10 @@ from typing import Any
 import numpy as np
 import zmq
 
-from livedrummer.errors import ProtocolError
-from livedrummer.protocol import Kind, decode, topic
+from livedrummer.protocol import Kind, topic
 
-from ..net import Security, connect, socket
+from ..net import Security
+from ..stream_rx import StreamReceiver
 from .output_latency import output_latency_s, output_period
 
 log = logging.getLogger("livedrummer.display")
@@ -54,6 +56,7 @@ BUFFER_S = 0.01  # asked of PortAudio as the output latency: the FIFO kept full
 MIN_WRITE = 64  # samples free before a write
 POLL_MS = 1
 RATE = 48_000
+_SOUND_KINDS = (Kind.SHOWN_ONSET, Kind.SHOWN_CONTROL)
 
 
 @dataclass(frozen=True)
@@ -121,7 +124,8 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
     stats = SoundStats()
     mixer: LiveMixer | None = None
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    sub = socket(ctx, zmq.SUB)
+    # kinds filtered by the subscription: the numbers of the poses between them are not seen
+    rx = StreamReceiver("sound stream", log, _SOUND_KINDS, sequenced=False)
     try:
         kit = load_kit(config.kit)
         cuts = CutReader(load_note_map(config.note_map), kit)
@@ -138,9 +142,8 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
             mixer = LiveMixer(kit, RATE)
         # subscribed once the kit is loaded (a SoundFont takes a while): what came meanwhile
         # would queue and be read late
-        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_ONSET))
-        sub.setsockopt(zmq.SUBSCRIBE, topic(Kind.SHOWN_CONTROL))
-        connect(sub, config.sub, "sound sub", config.security)
+        rx.connect(ctx, config.sub, "sound sub", config.security,
+                   topics=[topic(k) for k in _SOUND_KINDS])  # fmt: skip
         cap = _capacity(stream)
         clock = StreamClock(RATE, output_latency_s(stream), period=output_period(stream))
         stats.latency_ms = clock.latency_s * 1000
@@ -149,9 +152,9 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
         report.put(("ready", None))
         pending: list[Pending] = []  # read, not yet placed: (show time, onset row or cut)
         while not stop.is_set():
-            if sub.poll(POLL_MS):
+            if rx.poll(POLL_MS):
                 clock.look(time.monotonic(), written, cap - stream.write_available)
-                _read(sub, cuts, clock, written, pending, stats)
+                _read(rx, cuts, clock, written, pending, stats)
             now = time.monotonic()  # read before the FIFO (StreamClock.look)
             free = stream.write_available
             clock.look(now, written, cap - free)
@@ -164,7 +167,7 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
     finally:
         if mixer is not None:
             mixer.close()
-        sub.close(0)
+        rx.close()
         ctx.term()
         stream.stop()
         stream.close()
@@ -174,28 +177,20 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
 Pending = tuple[float, Any]  # (show time s, an onset row or a cut (piece, show time s))
 
 
-def _read(sub: Any, cuts: Any, clock: Any, written: int, pending: list[Pending],
+def _read(rx: StreamReceiver, cuts: Any, clock: Any, written: int, pending: list[Pending],
           stats: SoundStats) -> None:  # fmt: skip
-    """Every message waiting: its onsets, and its controls read into cuts, onto ``pending``
+    """What is waiting: its onsets, and its controls read into cuts, onto ``pending``
     (placed as late as the FIFO allows, :func:`_place`: the clock is freshest then)."""
-    while True:
-        try:
-            frames = sub.recv_multipart(zmq.NOBLOCK)
-        except zmq.Again:
-            return
-        try:
-            msg = decode(frames)
-            rows = msg.rows
-        except ProtocolError:
-            stats.bad += 1
-            continue
+    batch = rx.drain()
+    stats.bad += batch.bad
+    for msg in batch.messages:
         if msg.kind is Kind.SHOWN_CONTROL:
-            for row in rows:
+            for row in msg.rows:
                 cut = cuts.take(row)  # in arrival order: the pedal's state
                 if cut is not None:
                     pending.append((cut[1], cut))
             continue
-        for row in rows:
+        for row in msg.rows:
             show = float(row["time_s"])
             stats.lead_ms.append((clock.sample_for(show) - written) / RATE * 1000)
             pending.append((show, row))

@@ -57,6 +57,7 @@ from livedrummer.render.practice_hud import PracticePanel, panel_image
 
 from ..badmsg import BadMessages
 from ..net import connect, socket
+from ..stream_rx import DRAIN_BUDGET, waiting
 from .renderer import Renderer
 
 log = logging.getLogger("livedrummer.display")
@@ -90,11 +91,7 @@ class PracticeView:
 
     def poll(self) -> None:
         """Apply every message waiting; a bad one is counted and dropped."""
-        while True:
-            try:
-                data = self._sub.recv(zmq.NOBLOCK)
-            except zmq.Again:
-                return
+        for data in waiting(self._sub, DRAIN_BUDGET, multipart=False):
             try:
                 msg = json.loads(data)
                 if not isinstance(msg, dict):

@@ -2,10 +2,10 @@
 
 Streams. ``up --stage`` runs one synth per performer; this display subscribes to each of them
 on its own SUB socket and keeps, per performer, its own
-:class:`~livedrummer.live.track.PoseTrack`, its own
-:class:`~livedrummer.protocol.SequenceTracker` (each stream numbers its messages on its own,
-so a gap on one performer's stream is that stream's loss, counted for it, and a restart of
-one performer's synth is seen on its stream alone) and its own counts.
+:class:`~services.display.pose_stream.PoseStream` (the live display's too: the receiver, a
+:class:`~livedrummer.live.track.PoseTrack` and the counts): each stream numbers its messages
+on its own, so a gap on one performer's stream is that stream's loss, counted for it, and a
+restart of one performer's synth is seen on its stream alone.
 The POSE header carries the performer id: a message whose id is not the one the stream was
 opened for (a synth started with the wrong ``--performer``, or a miswired endpoint) is dropped
 and counted as bad on that stream, never drawn on another drummer.
@@ -46,34 +46,20 @@ import numpy as np
 import zmq
 
 from livedrummer.avatar.model import Avatar
-from livedrummer.body.pose import pose_dtype
-from livedrummer.errors import ProtocolError
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
-from livedrummer.live.track import PoseTrack
-from livedrummer.protocol import (
-    Kind,
-    Message,
-    Pose,
-    PoseFormat,
-    SeqStatus,
-    SequenceTracker,
-    decode,
-)
 from livedrummer.render.body_scene import frame_from_pose
 from livedrummer.stage.formation import Placement
 
-from ..badmsg import BadMessages
-from ..net import Security, connect, socket, subscribe_protocol
+from ..net import Security
 from ..service import OnReady, Service
 from .live import FrameClock
+from .pose_stream import PoseStream
 from .stage_export import StagePainter
 from .video import VideoSettings, VideoWriter
 from .window import WindowOptions
 
 log = logging.getLogger("livedrummer.display")
-_FORWARDED = (Kind.SHOWN_ONSET, Kind.SHOWN_CONTROL, Kind.STAGE_CUE)  # no poses, not bad:
-# the stage display sounds nothing and has no camera cues, but they share the synth's numbers
 GLOW_LIT = 0.1  # a piece glowing above this was struck within about 0.3 s (a contact)
 
 
@@ -106,68 +92,12 @@ class StageConfig:
     control: str | None = None
 
 
-@dataclass
-class StreamStats:
-    pose_messages: int = 0
-    pose_samples: int = 0
-    missing: int = 0
-    bad: int = 0
-    restarts: int = 0  # its synth started again (sequence back to 0)
-    lit_frames: int = 0  # frames that drew one of its pieces lit
-
-
-class _Stream:
-    """One performer's pose stream: socket, track, sequence numbers, counts."""
+class _Stream(PoseStream):
+    """One performer's pose stream: its :class:`PoseStream` and who it is."""
 
     def __init__(self, who: StagePerformer) -> None:
+        super().__init__(who.kit, f"display pose stream of {who.label}", log, who.performer)
         self.who = who
-        self.format = PoseFormat.from_dtype(pose_dtype(len(who.kit.pieces)))
-        self.track = PoseTrack()
-        self.tracker = SequenceTracker()
-        self.stats = StreamStats()
-        self.bad = BadMessages(f"display pose stream of {who.label}", log)
-        self.sock: Any = None
-
-    def _observe(self, msg: Message) -> None:
-        """One message of this performer's stream: its sequence number seen."""
-        report = self.tracker.observe_message(msg)
-        if report.status is SeqStatus.GAP:
-            self.stats.missing += report.missing
-        elif report.status in (SeqStatus.RESTART, SeqStatus.DUPLICATE):
-            # One synth on one connection never repeats a number: an older one means it
-            # restarted and we reconnected after its first messages (its own tracker).
-            self.stats.restarts += 1
-            self.tracker.reset()
-            self.tracker.observe_message(msg)
-
-    def drain(self) -> None:
-        while True:
-            try:
-                frames = self.sock.recv_multipart(zmq.NOBLOCK)
-            except zmq.Again:
-                return
-            try:
-                msg = decode(frames, self.format)
-            except ProtocolError as exc:
-                self.stats.bad += 1
-                self.bad.drop(exc)
-                continue
-            if msg.performer != self.who.performer:
-                self.stats.bad += 1
-                self.bad.unexpected(f"{msg.kind.name} of performer {msg.performer}")
-                continue
-            if msg.kind in _FORWARDED:
-                self._observe(msg)
-                continue
-            if not isinstance(msg.body, Pose):
-                self.stats.bad += 1
-                self.bad.unexpected(msg.kind.name)
-                continue
-            self._observe(msg)
-            rows = msg.body.rows
-            self.track.add(msg.body.time_s + rows["time_s"].astype(np.float64), rows)
-            self.stats.pose_messages += 1
-            self.stats.pose_samples += rows.size
 
 
 class _Recorder:
@@ -242,17 +172,12 @@ class StageDisplay(Service):
 
     def open(self) -> None:
         for k, s in enumerate(self.streams):
-            s.sock = socket(self.ctx, zmq.SUB)
-            subscribe_protocol(s.sock)
-            connect(s.sock, s.who.sub, f"sub endpoint of {s.who.label}", self.config.security)
+            s.connect(self.ctx, s.who.sub, f"sub endpoint of {s.who.label}", self.config.security)
             self.endpoints[f"sub{k}"] = s.who.sub
 
     def release(self) -> None:
         for s in self.streams:
-            if s.sock is not None:
-                s.sock.close(0)
-                s.sock = None
-            s.bad.log_summary()
+            s.close()
 
     def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
         cfg = self.config
@@ -263,7 +188,7 @@ class StageDisplay(Service):
         log_file: IO[str] | None = None
         poller = zmq.Poller()
         for s in self.streams:
-            poller.register(s.sock, zmq.POLLIN)
+            poller.register(s.rx.sock, zmq.POLLIN)
         try:
             performers = [s.who for s in self.streams]
             if cfg.window is not None:
@@ -340,7 +265,7 @@ class StageDisplay(Service):
 
     def _drain(self) -> None:
         for s in self.streams:
-            s.drain()
+            s.drain()  # the forwarded onsets, controls and cues: the stage sounds none
 
     def _frame(self, show: float) -> tuple[dict[str, Any], list[Any]]:
         """Each performer's pose at ``show``: the frames.jsonl record and the scene frames."""

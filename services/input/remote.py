@@ -1,6 +1,8 @@
 """Remote source: another site's input daemon, for a remote jam.
 
-Subscribes (SUB) to the remote daemon's event stream and turns its ONSET/CONTROL messages
+Subscribes (SUB, the one :class:`~services.stream_rx.StreamReceiver`: sequence numbers by the
+policy of :mod:`livedrummer.protocol.sequence`) to the remote daemon's event stream and turns
+its ONSET/CONTROL messages
 back into events, restamped with the local shared clock at arrival: the remote clock is
 another machine's, and the local pipeline must see the hit when it arrives here. Every
 message is validated by :func:`livedrummer.protocol.decode`; bad ones are dropped, counted
@@ -52,7 +54,6 @@ from livedrummer.protocol import (
     Kind,
     Message,
     SeqStatus,
-    SequenceTracker,
     Stream,
     decode,
     encode,
@@ -60,8 +61,8 @@ from livedrummer.protocol import (
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import Control, ControlKind, Onset
 
-from ..badmsg import BadMessages
-from ..net import Security, check_endpoint, connect, socket, subscribe_protocol
+from ..net import Security, check_endpoint, connect, socket
+from ..stream_rx import StreamReceiver
 from .base import Event, Problems, Source
 
 log = logging.getLogger("livedrummer.input")
@@ -93,11 +94,11 @@ class RemoteSource(Source):
         self.control = None if control is None else check_endpoint(control, "remote control")
         self.ctx = ctx
         self.security = security
-        self.tracker = SequenceTracker()
-        self.bad = BadMessages(f"remote {endpoint}", log)
+        self.rx = StreamReceiver(f"remote {endpoint}", log, EVENT_KINDS)
+        self.tracker = self.rx.tracker
+        self.bad = self.rx.bad
         self.sync = ClockSync()
         self.buffer = buffer if buffer is not None else JitterBuffer()
-        self._sock: Any = None
         self._probe: Any = None  # DEALER on the remote control socket
         self._probe_sent: float | None = None
         self._probes = 0
@@ -107,14 +108,10 @@ class RemoteSource(Source):
         self._reported: float | None = None
 
     def open(self) -> None:
-        sock = socket(self.ctx, zmq.SUB)
         try:
-            subscribe_protocol(sock)
-            connect(sock, self.endpoint, "remote endpoint", self.security)
+            self.rx.connect(self.ctx, self.endpoint, "remote endpoint", self.security)
         except (ProtocolError, KeyFileError) as exc:
-            sock.close(0)
             raise MidiInputError(str(exc)) from exc
-        self._sock = sock
         self.is_open = True
 
     # ------------------------------------------------------------ clock exchanges
@@ -197,13 +194,13 @@ class RemoteSource(Source):
         if self.control is not None:
             wake = min(wake, self._next_probe)
         poller = zmq.Poller()
-        poller.register(self._sock, zmq.POLLIN)
+        poller.register(self.rx.sock, zmq.POLLIN)
         if self._probe is not None:
             poller.register(self._probe, zmq.POLLIN)
         ready = dict(poller.poll(max(0, int((wake - now) * 1000))))
         if self._probe is not None and self._probe in ready:
             self._take_answer()
-        out: list[Event] = self._receive() if self._sock in ready else []
+        out: list[Event] = self._receive() if self.rx.sock in ready else []
         if not self.sync.ready:
             return out
         for event in out:  # timed on the sender's clock: held until their playout time
@@ -226,28 +223,16 @@ class RemoteSource(Source):
 
     def _receive(self) -> list[Event]:
         out: list[Event] = []
-        for _ in range(MAX_BATCH):
-            try:
-                frames = self._sock.recv_multipart(zmq.NOBLOCK)
-            except zmq.Again:
-                break
-            now = self.clock.now()
-            try:
-                msg = decode(frames)
-            except ProtocolError as exc:
-                self.bad.drop(exc)
-                self.problems.counts["bad remote message"] += 1
-                continue
-            if msg.kind not in EVENT_KINDS:
-                self.bad.unexpected(msg.kind.name)
-                self.problems.counts["bad remote message"] += 1
-                continue
+        batch = self.rx.drain(MAX_BATCH)
+        now = self.clock.now()
+        self.problems.counts["bad remote message"] += batch.bad
+        if batch.duplicates:
+            self.problems.report("duplicate remote message",
+                                 f"{self.name}: {batch.duplicates} dropped")  # fmt: skip
+        for taken in batch.taken:
+            msg, seq = taken.msg, taken.seq
             if self.sync.ready:
                 self.buffer.observe(now - self.sync.to_local(msg.send_time_s), now)
-            seq = self.tracker.observe_message(msg)
-            if seq.status is SeqStatus.DUPLICATE:
-                self.problems.report("duplicate remote message", f"{self.name}: seq {msg.seq}")
-                continue
             if seq.status is SeqStatus.GAP:
                 out.append(Gap(seq.missing, now, now, GapReason.UPSTREAM))
                 self.problems.report("remote gap", f"{self.name}: {seq.missing} messages lost")
@@ -270,10 +255,10 @@ class RemoteSource(Source):
         return out
 
     def close(self) -> None:
-        for sock in (self._sock, self._probe):
-            if sock is not None:
-                sock.close(0)
-        self._sock = self._probe = None
+        self.rx.close()
+        if self._probe is not None:
+            self._probe.close(0)
+        self._probe = None
         self._probe_sent = None
         self._held.clear()
         self.is_open = False

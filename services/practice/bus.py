@@ -9,9 +9,11 @@ the shared clock, unchanged, so a hit is judged at the same time as when the rig
 itself. The rig connects before it starts the daemon, and the daemon waits for its subscribers
 (``input --wait-subscribers``), so no hit is published before the rig listens.
 
-Bad input: a message that does not decode, or is not an onset, control, gap or heartbeat, is
-counted and logged (:class:`~services.badmsg.BadMessages`), never fatal; a gap in the sequence
-numbers (hits lost on the way) is counted in :attr:`OnsetBus.missing`.
+Bad input: the stream is read by the one :class:`~services.stream_rx.StreamReceiver`; a
+message that does not decode, or is not an onset, control, gap or heartbeat, is counted and
+logged (:class:`~services.badmsg.BadMessages`), never fatal; a gap in the sequence numbers
+(hits lost on the way) is counted in :attr:`OnsetBus.missing` and logged, a restarted daemon
+is taken and a duplicate dropped (:mod:`livedrummer.protocol.sequence`).
 
 Limits: the daemon decodes notes with its ``--map`` (the rig passes its ``--take-map``), so the
 rig cannot list the notes that map does not know (``decode_stats`` is None; the daemon logs
@@ -26,12 +28,10 @@ from typing import Any
 import numpy as np
 import zmq
 
-from livedrummer.errors import ProtocolError
-from livedrummer.protocol import Kind, SeqStatus, SequenceTracker, decode
+from livedrummer.protocol import Kind
 from livedrummer.timeline.events import Onset
 
-from ..badmsg import BadMessages
-from ..net import connect, socket, subscribe_protocol
+from ..stream_rx import StreamReceiver
 
 log = logging.getLogger("livedrummer.practice")
 _KINDS = (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT)
@@ -42,13 +42,11 @@ class OnsetBus:
 
     def __init__(self, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str) -> None:
         self.endpoint = endpoint
-        self.bad = BadMessages("practice: input stream", log)
-        self.tracker = SequenceTracker()
+        self.rx = StreamReceiver("practice: input stream", log, _KINDS)
+        self.bad = self.rx.bad
         self.missing = 0
         self.onsets = 0
-        self._sub = socket(ctx, zmq.SUB)
-        subscribe_protocol(self._sub)
-        connect(self._sub, endpoint, "input endpoint")
+        self.rx.connect(ctx, endpoint, "input endpoint")
 
     def open(self) -> None:
         """Connected already (see the module docstring)."""
@@ -56,32 +54,18 @@ class OnsetBus:
     def read(self, timeout_s: float) -> list[Onset]:
         """The hits that arrived, waiting up to ``timeout_s`` for the first."""
         out: list[Onset] = []
-        if not self._sub.poll(int(timeout_s * 1000)):
+        if not self.rx.poll(int(timeout_s * 1000)):
             return out
-        while True:
-            try:
-                frames = self._sub.recv_multipart(zmq.NOBLOCK)
-            except zmq.Again:
-                return out
-            try:
-                msg = decode(frames)
-            except ProtocolError as exc:
-                self.bad.drop(exc)
-                continue
-            if msg.kind not in _KINDS:
-                self.bad.unexpected(msg.kind.name)
-                continue
-            report = self.tracker.observe_message(msg)
-            if report.status is SeqStatus.GAP:
-                self.missing += report.missing
-                log.warning("practice: %d input messages lost", report.missing)
+        batch = self.rx.drain()
+        self.missing += batch.missing
+        for msg in batch.messages:
             if msg.kind is Kind.ONSET and isinstance(msg.body, np.ndarray):
                 out.extend(Onset.from_record(row) for row in msg.body)
                 self.onsets += len(msg.body)
+        return out
 
     def close(self) -> None:
-        self._sub.close(0)
-        self.bad.log_summary()
+        self.rx.close()
 
     def decode_stats(self) -> Any:
         return None

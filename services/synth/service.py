@@ -33,7 +33,9 @@ it then (``display --live --sound``), a score strip can draw it. Each control (a
 the hi-hat pedal) is forwarded likewise as SHOWN_CONTROL, so the display's sound stops a
 grabbed cymbal or a closing hi-hat at the show time the picture's stops (an ensemble copy's
 ``vary`` shift is not applied to controls: a grab stays where it was played).
-Sequence numbers of the input stream are tracked, so a gap upstream is counted and logged. The
+The input stream is read by the one :class:`~services.stream_rx.StreamReceiver`: its sequence
+numbers follow :mod:`livedrummer.protocol.sequence` (a gap upstream is counted in ``missing``
+and logged, a restarted input daemon is taken, a duplicate dropped). The
 service base (:mod:`services.service`) runs the control socket (a second thread answering HELLO
 with READY; the READY carries the pose format, which a display checks against its own), start-up
 and shutdown; the synth tells a launcher or systemd it is ready once its first poses are
@@ -76,7 +78,6 @@ from typing import Any
 import numpy as np
 import zmq
 
-from livedrummer.errors import ProtocolError
 from livedrummer.live.behind import BehindCounter
 from livedrummer.live.cues import BarCues, Cue, stage_cue_rows
 from livedrummer.live.synth import LiveSynth, PoseBatch
@@ -86,25 +87,16 @@ from livedrummer.protocol import (
     Message,
     Pose,
     PoseFormat,
-    SeqStatus,
-    SequenceTracker,
     Stream,
-    decode,
     encode,
 )
 from livedrummer.stage.variation import Variation, vary_live
 from livedrummer.timeline.clock import Clock
 
-from ..badmsg import BadMessages
-from ..net import (
-    Security,
-    bind,
-    connect,
-    socket,
-    subscribe_protocol,
-)
+from ..net import Security, bind, socket
 from ..osc import CUE, PREFIX, STATE, SYNTH_ADDRESSES, Command, OscEndpoint, state_pairs
 from ..service import OnReady, Service
+from ..stream_rx import StreamReceiver
 from .answerlock import AnswerFirstLock
 
 log = logging.getLogger("livedrummer.synth")
@@ -180,9 +172,8 @@ class SynthService(Service):
         self.config = config
         self.format = PoseFormat.from_dtype(synth.dtype)
         self.stats = SynthStats()
-        self.tracker = SequenceTracker()
-        self.bad_events = BadMessages("synth input stream", log)
-        self._sub: Any = None
+        self.rx = StreamReceiver("synth input stream", log, _EVENT_KINDS)
+        self.bad_events = self.rx.bad
         self._pub: Any = None
         self._seq = 0
         self.late = BehindCounter(
@@ -203,10 +194,8 @@ class SynthService(Service):
         """Bind the pose socket, connect to the input daemon (the base binds the control)."""
         cfg = self.config
         self._pub = socket(self.ctx, zmq.PUB)
-        self._sub = socket(self.ctx, zmq.SUB)
         self.endpoints["pub"] = bind(self._pub, cfg.pub, "pub endpoint", cfg.security)
-        subscribe_protocol(self._sub)
-        connect(self._sub, cfg.sub, "sub endpoint", cfg.security)
+        self.rx.connect(self.ctx, cfg.sub, "sub endpoint", cfg.security)
         self.endpoints["sub"] = cfg.sub
         if cfg.osc_port is not None:
             self.osc = OscEndpoint(cfg.osc_port, SYNTH_ADDRESSES, "synth", log, cfg.osc_allow)
@@ -237,7 +226,7 @@ class SynthService(Service):
         worker.start()
         try:
             while not (stop.is_set() or halt.is_set()):
-                if self._sub.poll(POLL_MS):
+                if self.rx.poll(POLL_MS):
                     self._drain()  # every hit's contact goes out at once
                 if self.osc is not None:
                     for cmd in self.osc.take():
@@ -412,14 +401,11 @@ class SynthService(Service):
         """One batch of :meth:`_drain` (the lock held; ``read_at``: the clock before the lock
         was taken, where the answer's time starts): how many messages it read."""
         onsets: list[np.ndarray] = []
-        got = 0
-        while got < DRAIN_BATCH:
-            try:
-                frames = self._sub.recv_multipart(zmq.NOBLOCK, copy=True)
-            except zmq.Again:
-                break
-            got += 1
-            rows = self._receive(frames)
+        batch = self.rx.drain(DRAIN_BATCH)
+        self.stats.missing += batch.missing
+        self.stats.bad += batch.bad
+        for msg in batch.messages:
+            rows = self._receive(msg)
             if rows is not None:
                 self._forward(rows)  # first: a display sounds them at onset + D
                 onsets.append(rows)
@@ -433,31 +419,12 @@ class SynthService(Service):
             shown = rows["time_s"].astype(np.float64) + self.synth.params.delay_s
             self._say(self.late.first(int(np.count_nonzero(shown < done)), done))
             self._kick.set()
-        return got
+        return batch.read
 
-    def _receive(self, frames: list[bytes]) -> np.ndarray | None:
-        """One message from the input stream: checked, counted, controls applied; its onset
+    def _receive(self, msg: Message) -> np.ndarray | None:
+        """One message the receiver took from the input stream (checked, numbered: a gap or
+        a restarted input daemon is counted and logged there): controls applied; its onset
         rows returned (None for anything else)."""
-        try:
-            msg = decode(frames)
-        except ProtocolError as exc:
-            self.stats.bad += 1
-            self.bad_events.drop(exc)
-            return None
-        if msg.kind not in _EVENT_KINDS:
-            self.stats.bad += 1
-            self.bad_events.unexpected(msg.kind.name)
-            return None
-        report = self.tracker.observe_message(msg)
-        if report.status is SeqStatus.GAP:
-            self.stats.missing += report.missing
-            log.warning("input stream: %d messages lost before #%d", report.missing, msg.seq)
-        elif report.status is SeqStatus.DUPLICATE:
-            # One publisher on one connection never repeats a number: an older one means
-            # the input daemon restarted and we reconnected after its first messages.
-            log.warning("input stream restarted at #%d (its first messages missed)", msg.seq)
-            self.tracker.reset()
-            self.tracker.observe_message(msg)
         if self.stats.first_seq is None:
             self.stats.first_seq = msg.seq
         self.stats.last_seq = msg.seq
@@ -485,11 +452,10 @@ class SynthService(Service):
         if self.osc is not None:
             self.osc.stop()
             self.osc = None
-        for s in (self._sub, self._pub):
-            if s is not None:
-                s.close(0)
-        self._sub = self._pub = None
-        self.bad_events.log_summary()
+        self.rx.close()
+        if self._pub is not None:
+            self._pub.close(0)
+        self._pub = None
 
     def summary(self) -> dict[str, Any]:
         s = self.stats
