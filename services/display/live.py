@@ -264,7 +264,6 @@ class LiveDisplay(Service):
         self.config = config
         self.stream = PoseStream(kit, "display pose stream", log)
         self.format = self.stream.format
-        self.track = self.stream.track
         self.stats = LiveStats()
         self.bad = self.stream.bad
         self._last_show = -math.inf  # show time of the last frame drawn
@@ -278,6 +277,15 @@ class LiveDisplay(Service):
         self.strips = LiveStrips(kit)  # fed only where strips may be drawn (see run)
         self._strips_fed = False
         self._onset_log: list[tuple[float, np.ndarray]] = []  # a deferred recording's onsets
+
+    @property
+    def track(self) -> PoseTrack:
+        """The poses received, at their show times (the stream's)."""
+        return self.stream.track
+
+    @track.setter
+    def track(self, track: PoseTrack) -> None:
+        self.stream.track = track
 
     def open(self) -> None:
         """Connect to the synth's poses (the base binds the control socket, if one is asked)."""

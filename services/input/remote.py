@@ -225,7 +225,8 @@ class RemoteSource(Source):
         out: list[Event] = []
         batch = self.rx.drain(MAX_BATCH)
         now = self.clock.now()
-        self.problems.counts["bad remote message"] += batch.bad
+        if batch.bad:
+            self.problems.counts["bad remote message"] += batch.bad
         if batch.duplicates:
             self.problems.report("duplicate remote message",
                                  f"{self.name}: {batch.duplicates} dropped")  # fmt: skip
