@@ -23,8 +23,8 @@ message taken) and the newest send time taken:
                :data:`REORDER_WINDOW` of expected: an old number again or one out of order
                (two paths to one receiver, a misconfigured relay). Drop it and count it;
                a number counted missing stays missing even if it turns up late
-    restart    (again) seq more than :data:`REORDER_WINDOW` behind, whatever its send time:
-               no reorder is that deep, so the sender must have started again
+    restart    also when seq is more than :data:`REORDER_WINDOW` behind, whatever its send
+               time: no reorder is that deep, so the sender must have started again
 
 This follows the ZeroMQ guide's Clone client (an update whose number is not above the one it
 holds is discarded), and adds what a stream without snapshots needs: a restart is seen in the
