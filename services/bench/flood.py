@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import fcntl
 import json
+import logging
 import os
 import signal
 import struct
@@ -48,6 +49,7 @@ from livedrummer.timeline.clock import MonotonicClock
 
 from ..journal import load_journal
 from ..program import program_argv
+from ..stream_rx import StreamReceiver
 from ._paths import WORKDIR
 
 REPO = WORKDIR  # child processes start in the checkout (or the user's folder)
@@ -102,13 +104,10 @@ class Listener:
     """Subscriber thread: every message, sequence numbers, flood onset count, probe times."""
 
     def __init__(self, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str) -> None:
-        self.sock = ctx.socket(zmq.SUB)
-        self.sock.setsockopt(zmq.LINGER, 0)
-        self.sock.setsockopt(zmq.RCVHWM, 0)
-        self.sock.setsockopt(zmq.SUBSCRIBE, p.MAGIC)
-        self.sock.connect(endpoint)
+        self.rx = StreamReceiver("flood listener", logging.getLogger("livedrummer.bench"),
+                                 list(p.Kind))  # fmt: skip
+        self.rx.connect(ctx, endpoint, "flood listener", hwm=0)
         self.clock = MonotonicClock()
-        self.tracker = p.SequenceTracker()
         self.flood = 0
         self.last_flood_s = float("nan")
         self.probes: dict[int, float] = {}  # probe velocity -> received time (latest)
@@ -117,18 +116,13 @@ class Listener:
         self.thread = threading.Thread(target=self._run, name="flood-listener", daemon=True)
 
     def _run(self) -> None:
-        sock = self.sock
+        rx = self.rx
         while not self.stop.is_set():
-            if not sock.poll(50):
+            if not rx.poll(50):
                 continue
-            while True:
-                try:
-                    frames = sock.recv_multipart(zmq.NOBLOCK)
-                except zmq.Again:
-                    break
-                now = self.clock.now()
-                msg = p.decode(frames)
-                self.tracker.observe_message(msg)
+            batch = rx.drain(16)  # small batches: one arrival time stands for 16 at most
+            now = self.clock.now()
+            for msg in batch.messages:
                 if msg.kind is p.Kind.GAP:
                     self.gaps += 1
                 if msg.kind is not p.Kind.ONSET:
@@ -143,7 +137,7 @@ class Listener:
                     self.probes[vel] = now
 
     def missing(self) -> int:
-        return sum(s.missing for s in self.tracker.stats.values())
+        return self.rx.counts.missing
 
 
 def probe(master: int, listener: Listener, clock: MonotonicClock, k: int) -> float:
@@ -280,7 +274,7 @@ def run_flood(
         if listener is not None:
             listener.stop.set()
             listener.thread.join(5)
-            listener.sock.close(0)
+            listener.rx.close()
         ctx.term()
         os.close(master)
         os.close(slave)
