@@ -22,7 +22,6 @@ Bounds are generous (a loaded 2-core machine); the recovery figures are in
 from __future__ import annotations
 
 import os
-import random
 import signal
 import subprocess
 import sys
@@ -33,6 +32,7 @@ import zmq
 
 from livedrummer import protocol as p
 from services.bench._faultrig import INDEX, REPO, Rig
+from services.bench._ports import free_port_base
 from services.cli import main
 from services.journal import list_sessions, load_journal
 from services.net import Security, connect
@@ -42,7 +42,7 @@ REFUSED_WAIT_MS = 1000
 
 
 def port_base() -> int:
-    return random.Random().randrange(20_000, 40_000, 20)
+    return free_port_base()
 
 
 def journal_indices(home: Path) -> tuple[list[int], list[bool]]:

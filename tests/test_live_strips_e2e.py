@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import os
-import random
 import shutil
 import subprocess
 import sys
@@ -18,6 +17,7 @@ import pytest
 from livedrummer.render.font5x7 import GLYPH_H
 from livedrummer.render.overlay import HISTORY_S, LOOKAHEAD_S
 from livedrummer.render.overlay_raster import BACKGROUND, strip_heights
+from services.bench._ports import free_port, free_port_base
 
 W, H = 640, 360
 
@@ -29,7 +29,7 @@ def _rgb(path: Path) -> np.ndarray:
 
 
 def test_up_overlay_draws_scrolling_score_and_angle_strips(tmp_path: Path) -> None:
-    base = random.Random().randrange(20_000, 40_000, 20)
+    base = free_port_base()
     frames = tmp_path / "frames"
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
     env.pop("DISPLAY", None)
@@ -96,7 +96,7 @@ def test_keys_o_and_g_show_the_strips_in_a_live_window(tmp_path: Path) -> None:
     py = sys.executable
     shots = [tmp_path / f"shot{i}.npy" for i in range(3)]
     press = "xdotool search --sync --name '^livedrummer' key"
-    script = (f"{py} -m services display --live --sub tcp://127.0.0.1:{random.randrange(30_000, 40_000)} "
+    script = (f"{py} -m services display --live --sub tcp://127.0.0.1:{free_port()} "
               f"--size {W}x{H} --aa 0 --seconds 8 --clock monotonic & sleep 4; "
               f"{py} {grab} {shots[0]}; {press} o; sleep 1; {py} {grab} {shots[1]}; "
               f"{press} g; sleep 1; {py} {grab} {shots[2]}; wait")  # fmt: skip

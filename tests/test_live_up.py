@@ -7,7 +7,6 @@ so the display writes headless frames. Skipped where no headless OpenGL context 
 from __future__ import annotations
 
 import os
-import random
 import signal
 import subprocess
 import sys
@@ -15,6 +14,7 @@ import time
 from pathlib import Path
 
 from services.bench._faultrig import children
+from services.bench._ports import free_port_base
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -23,7 +23,7 @@ def launch(tmp: Path, *extra: str) -> subprocess.Popen[str]:
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp / "home")}
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
-    base = random.Random().randrange(20_000, 40_000, 20)
+    base = free_port_base()
     return subprocess.Popen(
         [sys.executable, "-m", "services", "up", "--demo", "--port-base", str(base),
          "--frames-dir", str(tmp / "frames"), *extra],
@@ -93,7 +93,7 @@ def test_up_records_the_show_with_its_drum_track_on_show_time(gl_ok: None, tmp_p
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
-    base = random.Random().randrange(20_000, 40_000, 20)
+    base = free_port_base()
     proc = subprocess.Popen(
         [sys.executable, "-m", "services", "up", "--demo", "--port-base", str(base),
          "--frames-dir", str(tmp_path / "frames"), "--seconds", "6", "--video", str(video),

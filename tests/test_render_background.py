@@ -28,6 +28,7 @@ from livedrummer.render.background import (
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import Camera, kit_cameras
 from livedrummer.render.kitmesh import STAGE_RADIUS_M, build_kit_mesh
+from services.bench._ports import free_port_base
 from services.cli import main
 from services.display.background import load_background
 from services.display.context import DisplayError, headless_context
@@ -242,11 +243,10 @@ def test_transparent_pngs_and_bad_values(midi: Path, tmp_path: Path, capsys: Any
 def test_the_live_headless_recording_has_the_background(tmp_path: Path) -> None:
     """``up --headless`` passes --background to its display: chroma green behind the stage."""
     import os
-    import random
     import subprocess
     import sys
 
-    base = random.Random().randrange(20_000, 40_000, 20)
+    base = free_port_base()
     frames = tmp_path / "frames"
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
     env.pop("DISPLAY", None)

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 
+from services.bench._ports import free_port_base
+
 LIVEDRUMMER = [
     sys.executable,
     "-c",
@@ -66,9 +68,8 @@ def test_live_window_refuses_recording_options(tmp_path: Path) -> None:
 
 @pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
 def test_up_opens_the_live_window_where_there_is_a_screen(tmp_path: Path) -> None:
-    import random
 
-    base = random.Random().randrange(20_000, 40_000, 20)
+    base = free_port_base()
     run = subprocess.run(
         ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", *LIVEDRUMMER, "up", "--demo",
          "--seconds", "4", "--port-base", str(base), "--size", "320x180"],

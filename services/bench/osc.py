@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import random
 import socket
 import statistics
 import subprocess
@@ -24,6 +23,7 @@ from pathlib import Path
 
 from ..osc import encode
 from ..program import program_argv
+from ._ports import free_port_base
 
 
 def _wait_frames(path: Path, deadline: float) -> list[dict[str, object]]:
@@ -45,7 +45,7 @@ def main(argv: list[str]) -> int:
     probe.bind(("127.0.0.1", 0))
     port = int(probe.getsockname()[1])
     probe.close()
-    base = random.Random().randrange(20_000, 40_000, 20)
+    base = free_port_base()
     with tempfile.TemporaryDirectory(prefix="livedrummer-bench-osc-") as tmp:
         out = Path(tmp) / "frames"
         proc = subprocess.Popen(

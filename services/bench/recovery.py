@@ -48,6 +48,7 @@ from livedrummer.timeline.clock import MonotonicClock
 from ..input.base import Source
 from ..input.daemon import DaemonConfig, InputDaemon
 from ._hogs import hog_levels, hogs
+from ._ports import free_port_base
 
 PROBE_EVERY_S = 0.005
 #: Pose messages a killed synth had sent arrive within this; a restart takes far longer.
@@ -189,7 +190,6 @@ def kills(
     running: per service the time from the kill to the pipeline working again (see
     :func:`_working_again`), the supervisor's own death-to-ready figure and its back-off;
     and the display's stale-pose time per synth kill."""
-    import random
 
     from ._faultrig import Rig
 
@@ -197,7 +197,7 @@ def kills(
     ready: dict[str, list[float]] = {"input": [], "synth": [], "display": []}
     backoff: dict[str, list[float]] = {"input": [], "synth": [], "display": []}
     stale: list[float] = []
-    with Rig(tmp, random.Random().randrange(20_000, 40_000, 20)) as rig:
+    with Rig(tmp, free_port_base()) as rig:
         rig.start()
         rig.pump(lambda: len(rig.bus) >= 20, 20)
         with hogs(n_hogs):
