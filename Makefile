@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test test-narrow lint bench clean
+.PHONY: setup demo test test-narrow lint bench docs clean
 
 setup: $(STAMP)
 
@@ -33,5 +33,11 @@ test-narrow: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/livedrummer bench ingest
 
+# The documentation site, into site/ (git-ignored). The CLI and wire-protocol pages are
+# generated from the argparse parsers and livedrummer/protocol/spec.py by a MkDocs hook
+# (deploy/docs_hooks.py), so they cannot go stale.
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --site-dir site
+
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf site $(VENV) .pytest_cache .mypy_cache .ruff_cache

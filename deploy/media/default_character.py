@@ -1,4 +1,4 @@
-"""Render deploy/media/default-character.png, the README's picture of the built-in drummer.
+"""Render docs/assets/default-character.png, the picture of the built-in drummer in the docs.
 
 The demo groove (Roland map, rock5 kit) performed by the body model, 2.05 s in, seen from the
 ``front`` camera at 720x405 with 4x multisampling. Run from the repository root:
@@ -20,7 +20,7 @@ from services.display.context import headless_context
 from services.display.png import write_png
 from services.display.renderer import Renderer
 
-OUT = Path(__file__).resolve().parent / "default-character.png"
+OUT = Path(__file__).resolve().parents[2] / "docs" / "assets" / "default-character.png"
 
 
 def main() -> None:
