@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import os
 import re
 import struct
 import textwrap
@@ -287,12 +288,53 @@ def _subparsers(parser: argparse.ArgumentParser) -> list[tuple[str, str, argpars
     return found
 
 
+class _Captured(Exception):  # noqa: N818 (not an error: it carries a parser out of main)
+    def __init__(self, parser: argparse.ArgumentParser) -> None:
+        super().__init__(parser.prog)
+        self.parser = parser
+
+
+_PROBE = "--livedrummer-docs-probe"
+
+
+def _bench_parsers() -> list[tuple[str, str, argparse.ArgumentParser]]:
+    """Each benchmark's parser. A benchmark builds it inside ``main(argv)`` and parses first
+    thing; ``parse_args`` is intercepted for a probe argument, so the parser comes back and
+    nothing is measured. A benchmark that returned instead would have run: that stops the build.
+    """
+    import importlib
+
+    from services.cli.bench import available
+
+    found = []
+    original = argparse.ArgumentParser.parse_args
+
+    def probe(self: argparse.ArgumentParser, args: Any = None, namespace: Any = None) -> Any:
+        if args == [_PROBE]:
+            raise _Captured(self)
+        return original(self, args, namespace)
+
+    argparse.ArgumentParser.parse_args = probe  # type: ignore[method-assign]
+    try:
+        for name in available():
+            module = importlib.import_module(f"services.bench.{name}")
+            try:
+                module.main([_PROBE])
+            except _Captured as got:
+                found.append((name, "", got.parser))
+            else:
+                raise ValueError(f"services/bench/{name}.py: main() did not parse its argv first")
+    finally:
+        argparse.ArgumentParser.parse_args = original  # type: ignore[method-assign]
+    return found
+
+
 def _parser_markdown(path: str, summary: str, parser: argparse.ArgumentParser) -> list[str]:
-    depth = min(path.count(" ") + 1, 4)
+    depth = min(path.count(" ") + 1, 5)
     out = [f"{'#' * (depth + 1)} {path}", ""]
-    text = parser.description or summary
+    text = (parser.description or summary).strip().split("\n\n")[0]
     if text:
-        out += [_cell(text), ""]
+        out += [_cell(_inline(text)), ""]
     usage = parser.format_usage().strip()
     out += ["```text", usage.removeprefix("usage: "), "```", ""]
     formatter = parser._get_formatter()
@@ -307,7 +349,10 @@ def _parser_markdown(path: str, summary: str, parser: argparse.ArgumentParser) -
         rows.append(f"| `{invocation}` | {_cell(helptext)} |")
     if rows:
         out += ["| argument | what it does |", "|---|---|", *rows, ""]
-    for name, sub_summary, sub in _subparsers(parser):
+    subs = _subparsers(parser)
+    if path == "livedrummer bench":
+        subs = _bench_parsers()
+    for name, sub_summary, sub in subs:
         out += _parser_markdown(f"{path} {name}", sub_summary, sub)
     return out
 
@@ -316,7 +361,18 @@ def cli_markdown() -> str:
     """The CLI reference: every subcommand and option of ``livedrummer``, from its parsers."""
     from services.cli import build_parser
 
-    parser = build_parser(None)
+    columns = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "100"  # usage lines wrapped the same on every machine
+    try:
+        return _cli_page(build_parser(None))
+    finally:
+        if columns is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = columns
+
+
+def _cli_page(parser: argparse.ArgumentParser) -> str:
     out = [
         "# Command-line reference",
         "",

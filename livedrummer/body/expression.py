@@ -15,7 +15,7 @@ arm curves (anticipation below 0, follow-through above).
 
 One table, :data:`PARAMS`, names every parameter with its range, default, unit and meaning:
 the TOML keys of a preset, the live parameters (``/livedrummer/param/NAME``), their checks
-(:func:`with_param`) and the README's table (:func:`params_markdown`) all come from it.
+(:func:`with_param`) and the documentation's table (:func:`params_markdown`) all come from it.
 Presets live in ``kits/presets/*.toml`` (one ``[expression]`` table, every key optional,
 unknown keys are errors; the shares also as arrays ``amplitude_shares`` and
 ``frequency_shares``) and are loaded with :func:`load_expression`.
@@ -178,7 +178,7 @@ def with_param(e: Expression, name: str, value: float) -> Expression:
 
 
 def params_markdown() -> str:
-    """The README's table of parameters (a test keeps the README equal to it)."""
+    """The parameter table of the documentation's presets page (``deploy/docs_hooks.py``)."""
     lines = ["| parameter | range | default | unit | what it does |",
              "| --- | --- | --- | --- | --- |"]  # fmt: skip
     for p in PARAMS:
