@@ -1,6 +1,6 @@
 """OSC show control: a UDP endpoint per service, and ``up``'s one public port in front of them.
 
-Addresses (the README's table):
+Addresses (the table of docs/reference/osc.md):
 
 ==============================  ==================  =========================================
 ``/livedrummer/preset``         name                the synth plays that expression preset

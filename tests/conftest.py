@@ -103,7 +103,7 @@ def jack_default_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iter
 
 @pytest.fixture
 def jack_rig_server(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Iterator[str]:
-    """The same as the README's JACK settings for a rig ask: realtime and synchronous (``-R
+    """The same as JACK settings for a rig (docs/guide/rig.md) ask: realtime and synchronous (``-R
     -S``). The tests that count every note through JACK run here: in the asynchronous mode a
     cycle a client's JACK thread misses (a stalled virtual machine misses some even at
     realtime priority) loses that cycle's MIDI, by JACK's design (``livedrummer bench

@@ -2,7 +2,7 @@
 
 Audio comes from :mod:`services.bench._drumaudio` (FluidSynth, a room, noise, one-mic stems
 with crosstalk; seeded). The accuracy floors are on a held-out (test-split) file and sit below
-what ``livedrummer bench transcribe`` measures (README); the online detector is checked
+what ``livedrummer bench transcribe`` measures (docs/benchmarks/acoustic.md); the online detector is checked
 against its offline twin by feeding random block sizes.
 """
 

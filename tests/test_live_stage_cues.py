@@ -151,7 +151,7 @@ def test_up_cuts_the_camera_and_blacks_out_on_the_bars_the_tracker_counts(
 
 def test_bench_latency_measures_with_and_without_show_control(gl_ok: None) -> None:
     """``bench latency --both``: each rate with nothing and with OSC ports and both strips on,
-    and a table of the medians side by side (figures, not asserted: the README quotes them)."""
+    and a table of the medians side by side (figures, not asserted: docs/reference/osc.md quotes them)."""
     import subprocess
     import sys
 

@@ -129,7 +129,7 @@ def wait_port(name: str, timeout_s: float = 20.0) -> str:
 
 def test_live_pass_equals_score_of_its_take(jack_rig_server: str, groove_dir: Path,
                                             tmp_path: Path) -> None:  # fmt: skip
-    """The JACK server runs realtime (``-R``, as the README asks of a rig): without it, CPU
+    """The JACK server runs realtime (``-R``, as docs/guide/rig.md asks of a rig): without it, CPU
     hogs beside the test stall JACK's cycle by up to 0.7 s (jackd logs the xruns), the player's
     notes reach the rig in late batches, their driver stamps late with them, and the planted
     result is gone; a rig has the same need of its JACK server."""

@@ -1,6 +1,6 @@
 """Hits against a MIDI ground truth: onset F-measure per class and overall, counted one way.
 
-How we count (the figures in the README come from this function):
+How we count (the figures in docs/benchmarks/acoustic.md come from this function):
 
 - A detected hit matches a true note of the **same class** within ``±tolerance_s`` (25 ms);
   matching is one-to-one, greedy in order of time distance (closest pairs first).

@@ -16,10 +16,11 @@ driver on a loaded machine does not stall and catch up, it slips: a cycle that r
 moves every later sample late for good (5 slips a second, of 1 to 45 ms, on the shared
 2-core machine at load 7). A median follows a slip only when half its window has seen it,
 so for a quarter of a second after each one every sound came late by the slip: onsets
-placed 18 ms off at p90 (:mod:`services.bench.audio`'s figures before and after are in the
-README). The highest estimate follows a slip at the next look and within a tenth of a second
-one that moves the other way. (``period``, the device's period in samples where it is known,
-is kept for the caller's figures; the sawtooth's top needs no correction by it.)
+placed 18 ms off at p90 (:mod:`services.bench.audio`'s figures before and after are in
+docs/benchmarks/sound.md). The highest estimate follows a slip at the next look and within a
+tenth of a second one that moves the other way. (``period``, the device's period in samples
+where it is known, is kept for the caller's figures; the sawtooth's top needs no correction by
+it.)
 :meth:`StreamClock.sample_for` turns a show time into the stream's sample index.
 
 Limits: exact to the latency the device reports (for JACK the playback ports' latency,

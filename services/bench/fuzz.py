@@ -1,6 +1,6 @@
 """Fuzz benchmark: noise through the serial parser, mutated corpus files through the reader.
 
-Prints the figures of the README's reliability section, all from one seed:
+Prints the figures of docs/benchmarks/reliability.md, all from one seed:
 
 * serial: bytes of noise with valid messages in it (:func:`bench._fuzz.noisy_serial_stream`)
   fed to :class:`~livedrummer.midi.stream.MidiStreamParser` in random chunks; the parse rate,

@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         RigProfile.load(rig)  # a broken profile is one line now, not a unit failing at boot
     else:
         print(f"deploy: note: {rig} does not exist yet; write it before starting the unit "
-              "(see the README's 'Run the rig at boot')", file=sys.stderr)  # fmt: skip
+              "(see 'Run the rig at boot' in docs/guide/rig.md)", file=sys.stderr)  # fmt: skip
     text = unit_text(rig, program_argv())
     if args.print:
         print(text, end="")

@@ -37,7 +37,7 @@ of one core) and adds up to :data:`POLL_S` to the time from arrival to publicati
 the stamp. JACK's stamp is the time the process callback ran in the cycle the note came in
 (within one period, 2.7 ms at 128 frames / 48 kHz, of the sender's write), and that thread
 is itself late when the CPU is; realtime scheduling (``jackd -R``, the rig's default) and
-``-S`` keep it on time: see the README's JACK settings.
+``-S`` keep it on time: see the JACK settings in docs/guide/rig.md.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ does) to connect to; where none matches, a virtual output port of that name is o
 DAW to connect to. The input daemon's thread calls :meth:`MidiThru.send` for every message
 the moment it takes it from rtmidi's queue, before decoding it, so the thru adds the poll
 interval (0.5 ms) and a Python call to what the kit's own latency is; ``bench`` figures are in
-the README. A send that fails (the port went away) is counted and logged once; the daemon
+docs/guide/sound.md. A send that fails (the port went away) is counted and logged once; the daemon
 carries on.
 """
 
