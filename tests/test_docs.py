@@ -94,6 +94,8 @@ def test_the_wire_page_is_the_spec(site: Path) -> None:
     assert f"Protocol version {PROTOCOL_VERSION}" in " ".join(text.split())
     for kind in Kind:
         assert re.search(rf"\b{int(kind)}\s+{kind.name}\b", text), kind.name
+    # the example's bytes, as the codec wrote them at build time: magic, version, kind ONSET
+    assert f"4c 44 52 4d {PROTOCOL_VERSION:02x} {int(Kind.ONSET):02x}" in text
 
 
 def test_the_presets_page_lists_every_parameter(site: Path) -> None:
