@@ -120,3 +120,12 @@ def test_the_readme_is_short_and_its_links_into_docs_exist() -> None:
     assert len(links) >= 10
     for link in links:
         assert (REPO / link).is_file(), link
+
+
+def test_the_osc_page_names_every_address_served() -> None:
+    from services.osc import DISPLAY_ADDRESSES, STATE, SYNTH_ADDRESSES
+
+    page = (REPO / "docs" / "reference" / "osc.md").read_text(encoding="utf-8")
+    documented = set(re.findall(r"^\| `(/livedrummer/[^`]*)`", page, re.M))
+    served = {a.replace("param/", "param/NAME") for a in (*SYNTH_ADDRESSES, *DISPLAY_ADDRESSES)}
+    assert documented == served | {STATE}
