@@ -14,6 +14,10 @@ teacher (``--teacher ghost``, ``ahead[:SECONDS]`` or ``off``;
 ``--no-window`` is the terminal-only rig (the rig opens the port itself; for scripts). With no
 screen and none of these, the rig is terminal-only and says so in one line.
 
+Settings: the take's map (``--take-map``), the kit, the avatar and D are resolved once
+(:func:`show_settings`) for the rig's own loop, the recording's drum track and the three
+processes, which are given them as one file (``--settings``, :mod:`.settings`).
+
 Endpoints: TCP ports ``--port-base`` .. +3 on loopback (the input's stream and control, the
 synth's poses and control); the readout's port is the system's pick.
 

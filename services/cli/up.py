@@ -13,6 +13,15 @@ onsets (the session's journal, a temporary one for ``--demo``) mixed with the bu
 ``--soundfont FILE.sf2``'s) at onset + D (:mod:`services.display.record`), so picture and
 sound line up as the audience would see them.
 
+Settings resolved once. Before anything starts, ``up`` resolves what its processes must agree
+on (:func:`resolve`): the note map the source's notes mean (``--keys`` plays and ``--audio``
+writes General MIDI notes; a kit's map is ``--map``, default roland-td), the kit, the avatar
+and its fitting, the delay D and lookahead L (``0 <= L <= D``, checked there), and the sound.
+They go into one JSON file in the rig's temporary folder
+(:class:`~livedrummer.live.settings.ShowSettings`), and every child is started with
+``--settings FILE`` instead of the separate flags; the recording's drum track is mixed from the
+same object. Each child reports them in its ready line (``docs/config.md``).
+
 Security. ``--curve-secret RIG.key_secret`` makes every stream of the rig CURVE: the input
 daemon and the synth bind as CURVE servers with that key pair, and the synth and the display
 connect to them as clients with the same pair (the server key is read from the same file), so

@@ -11,6 +11,10 @@ said ready, a dead service restarted alone, all stopped on Ctrl-C, ``--seconds``
 window closes; ``--headless``, ``--frames-dir``, ``--video``, ``--wait``, ``--curve-secret``
 mean what they mean for ``up``.
 
+Settings. Each performer's note map, kit and avatar, with the rig's D and L, are resolved
+once (:func:`performer_settings`; a map ``auto`` becomes the one its source's notes mean) into
+a settings file its input daemon and its synths are given (``--settings``, :mod:`.settings`).
+
 Why one synth per performer (not one synth for all). Isolation: a flood of notes or a crash
 in one performer's synth delays or stops no other performer's drummer; each is restarted
 alone by the supervisor while the others keep playing; and the operating system spreads the
