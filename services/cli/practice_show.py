@@ -113,11 +113,10 @@ def check_show(args: argparse.Namespace, mode: str) -> None:
 def show_settings(args: argparse.Namespace) -> ShowSettings:
     """The rig's settings, resolved once for the practice loop, its input daemon, synth and
     display (:mod:`.settings`): the take's map (``--take-map``), the kit, the avatar, D =
-    :data:`SHOW_DELAY_MS` with the synth's default lookahead; the display sounds nothing."""
+    :data:`SHOW_DELAY_MS` with the synth's default lookahead; the display sounds nothing.
+    The practice loop loads the map (one line when it is bad) before anything starts."""
     from livedrummer.live.settings import AvatarChoice, Delay, ShowSettings, spec_path
-    from livedrummer.midi.notemap import load_note_map
 
-    load_note_map(args.take_map)  # a bad map is one line before anything starts
     bone_map = None if args.bone_map is None else str(args.bone_map)
     return ShowSettings(
         note_map=spec_path(args.take_map) or args.take_map,

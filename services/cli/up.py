@@ -226,11 +226,10 @@ def recorded(args: argparse.Namespace) -> bool:
 def resolve(args: argparse.Namespace) -> ShowSettings:
     """The show's settings, resolved once here for every process (:mod:`.settings`): the
     map the source's notes mean (``--keys`` plays General MIDI notes, ``--audio`` writes them;
-    a kit's is ``--map``, default roland-td), the kit, avatar, D and L, and the sound. A bad
-    map or an L beyond D is one line before anything starts."""
+    a kit's is ``--map``, default roland-td), the kit, avatar, D and L, and the sound. An L
+    beyond D is one line here; :func:`check_before_start` loads the map."""
     from livedrummer.errors import ConfigError
     from livedrummer.live.settings import AvatarChoice, Delay, ShowSettings, Sound, spec_path
-    from livedrummer.midi.notemap import load_note_map
 
     if args.audio:
         if args.map not in (None, AUDIO_MAP):
@@ -240,7 +239,6 @@ def resolve(args: argparse.Namespace) -> ShowSettings:
         note_map = args.map or AUDIO_MAP
     else:
         note_map = args.map or DEMO_MAP
-    load_note_map(note_map)
     delay = Delay.from_ms(args.lookahead_ms, args.delay_ms, ("--lookahead-ms", "--delay-ms"))
     bone_map = None if args.bone_map is None else str(args.bone_map)
     kit_file = None if args.soundfont is None else str(args.soundfont)
@@ -427,8 +425,9 @@ def run(args: argparse.Namespace) -> int:
 
 def check_before_start(args: argparse.Namespace, settings: ShowSettings) -> None:
     """Every option and the source checked here, in the options' units, before any process
-    (the map, D and L were checked as ``settings`` were resolved)."""
+    (D and L were checked as ``settings`` were resolved; the map is loaded here, once)."""
     from livedrummer.errors import ConfigError
+    from livedrummer.midi.notemap import load_note_map
 
     from .render import parse_size
 
@@ -441,6 +440,7 @@ def check_before_start(args: argparse.Namespace, settings: ShowSettings) -> None
         raise ConfigError(f"--camera {args.camera!r}: expected one of {', '.join(CAMERA_NAMES)}")
     if not 0 < args.port_base <= 65535 - 11:
         raise ConfigError(f"--port-base: expected 1..65524 (got {args.port_base})")
+    note_map = load_note_map(settings.note_map)  # a bad map is one line, not a failing child
     if args.demo or args.wait or args.keys:
         return
     if args.audio:
@@ -455,10 +455,9 @@ def check_before_start(args: argparse.Namespace, settings: ShowSettings) -> None
         AudioSource(args.audio, MonotonicClock(), profile, mapping).check()
         return
     from livedrummer.midi.decode import MessageDecoder
-    from livedrummer.midi.notemap import load_note_map
     from livedrummer.timeline.clock import MonotonicClock
 
-    kit_source(args, MonotonicClock(), MessageDecoder(load_note_map(settings.note_map)))
+    kit_source(args, MonotonicClock(), MessageDecoder(note_map))
 
 
 def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
