@@ -133,3 +133,15 @@ def test_a_flag_given_beside_a_settings_file_is_refused(tmp_path: Path) -> None:
         f"--settings {path}: --kit, --delay-ms given beside it; the file holds them "
         "(give one or the other)"
     ), proc.stderr
+
+
+def test_an_audio_input_refuses_settings_with_another_map_than_it_writes(tmp_path: Path) -> None:
+    path = ShowSettings("roland-td").save(tmp_path / "s.json")
+    proc = subprocess.run([sys.executable, "-m", "services", "input", "--audio", "system",
+                           "--settings", str(path), "--no-journal"], capture_output=True,
+                          text=True, cwd=REPO, timeout=60)  # fmt: skip
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip().splitlines() == [
+        f"livedrummer: error: --settings {path}: note_map 'roland-td': --audio writes "
+        "general-midi notes"
+    ], proc.stderr
