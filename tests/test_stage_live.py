@@ -398,10 +398,13 @@ def test_a_stage_performers_map_is_resolved_once_for_its_input_and_synths(
     folder.mkdir()
     specs = stage_specs(args, stage, Delay(0.020, 0.060), folder)
     given: dict[str, set[str]] = {}
+    synths: list[str] = []
     for spec in specs:
         if spec.name == "display":
-            assert "--settings" not in spec.argv  # it reads the stage file
+            shown = spec.argv[spec.argv.index("--settings") + 1].split(",")
             continue
+        if spec.name.startswith("synth-"):
+            synths.append(spec.argv[spec.argv.index("--settings") + 1])
         assert not {"--map", "--kit", "--avatar", "--delay-ms"} & set(spec.argv), spec.argv
         performer = spec.name.split("-", 1)[1].split(".")[0]
         given.setdefault(performer, set()).add(spec.argv[spec.argv.index("--settings") + 1])
@@ -411,3 +414,5 @@ def test_a_stage_performers_map_is_resolved_once_for_its_input_and_synths(
     assert (played["file"].note_map, played["file"].kit) == (best, "rock5")
     assert (played["kit"].note_map, played["kit"].kit) == ("roland-td", "rock5-left")
     assert {s.delay for s in played.values()} == {Delay(0.020, 0.060)}
+    # the stage display draws each drummer (in --sub's order) with its synth's settings
+    assert shown == synths and len(shown) == 4, (shown, synths)

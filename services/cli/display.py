@@ -153,11 +153,10 @@ def register(sub: Subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_aa(args.aa)
-    if args.settings is not None and (not args.live or args.stage is not None):
+    if args.settings is not None and not args.live:
         from livedrummer.errors import ConfigError
 
-        raise ConfigError("--settings: a live display's settings (display --live, without "
-                          "--stage, which reads each performer's from the stage file)")  # fmt: skip
+        raise ConfigError("--settings: the settings of a live display (display --live)")
     if args.live and args.stage is not None:
         from .stage_display import run_stage_live
 

@@ -77,6 +77,7 @@ def stage_specs(
     me = program_argv()
     specs: list[ServiceSpec] = []
     subs: list[str] = []
+    settings: list[str] = []  # each drummer's file, for the display too
     for k, performer, _spot in live:
         ep, near = _endpoints(args, k)
         name = performer.id if performer.copy == 0 else f"{performer.id}.{performer.copy}"
@@ -94,8 +95,10 @@ def stage_specs(
             *(["--preset", performer.preset] if performer.preset else []),
             *curve["synth"]]))  # fmt: skip
         subs.append(near["syn_pub"])
+        settings.append(str(given))
     display = [*me, "display", "--live", "--stage", str(stage_file.resolve()),
-               "--sub", ",".join(subs), "--camera", args.camera, "--fps", str(args.fps),
+               "--sub", ",".join(subs), "--settings", ",".join(settings),
+               "--camera", args.camera, "--fps", str(args.fps),
                "--size", frame_size(args), *curve["display"]]  # fmt: skip
     if windowed(args):
         display += ["--monitor", str(args.monitor)]
