@@ -68,6 +68,7 @@ from .common import (
     osc_allow,
     style_argv,
 )
+from .input import AUDIO_MAP
 from .keys import add_curve_options
 from .settings import write_settings
 
@@ -79,7 +80,7 @@ if TYPE_CHECKING:
 RECORD_GRACE_S = 60.0  # how long past --seconds a set-length recording may take to finish
 SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscribe_protocol)
 OSC_SYNTH, OSC_DISPLAY = 12, 13  # their loopback OSC ports (UDP), from --port-base
-AUDIO_MAP = "general-midi"  # the notes --audio writes and --keys plays
+KEYS_MAP = "general-midi"  # the notes the window's drum keys play (display/keysend.py)
 
 
 def register(sub: Subparsers) -> None:
@@ -236,7 +237,7 @@ def resolve(args: argparse.Namespace) -> ShowSettings:
             raise ConfigError(f"--map {args.map}: --audio writes {AUDIO_MAP} notes; drop --map")
         note_map = AUDIO_MAP
     elif args.keys:  # the window plays GM drum notes into its port (display/keysend.py)
-        note_map = args.map or AUDIO_MAP
+        note_map = args.map or KEYS_MAP
     else:
         note_map = args.map or DEMO_MAP
     delay = Delay.from_ms(args.lookahead_ms, args.delay_ms, ("--lookahead-ms", "--delay-ms"))
