@@ -32,7 +32,7 @@ import json
 import logging
 import signal
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from types import FrameType
 from typing import Any, Protocol
 
@@ -167,10 +167,15 @@ class Service:
             self.bad_control.log_summary()
 
 
-def serve(service: Service, notify_detail: Callable[[dict[str, str]], str] | None = None) -> int:
+def serve(
+    service: Service,
+    notify_detail: Callable[[dict[str, str]], str] | None = None,
+    facts: Mapping[str, object] | None = None,
+) -> int:
     """Run ``service`` as this process: signals, endpoints line, readiness, context end.
 
-    Prints ``{"service": NAME, **endpoints}`` on stdout once bound, tells a launcher or
+    Prints ``{"service": NAME, **endpoints, **facts}`` on stdout once bound (``facts``: what
+    else a launcher reads there, such as the settings the service plays with), tells a launcher or
     systemd the service is ready when the service says so (``notify_detail(endpoints)`` is the
     detail sent, by default the first endpoint), stops on SIGTERM/SIGINT and terminates the
     ZeroMQ context whatever happens. Returns the service's exit status.
@@ -184,7 +189,7 @@ def serve(service: Service, notify_detail: Callable[[dict[str, str]], str] | Non
     signal.signal(signal.SIGINT, on_signal)
     try:
         endpoints = service.start()
-        print(json.dumps({"service": service.name, **endpoints}), flush=True)
+        print(json.dumps({"service": service.name, **endpoints, **(facts or {})}), flush=True)
         detail = (
             notify_detail(endpoints)
             if notify_detail is not None

@@ -222,15 +222,23 @@ def test_render_draws_the_avatar(files: dict[str, Path], tmp_path: Path) -> None
     assert (diff > 60).mean() > 0.02
 
 
-def test_up_gives_the_avatar_to_the_synth_and_the_display(files: dict[str, Path]) -> None:
+def test_up_gives_the_avatar_to_the_synth_and_the_display(
+    files: dict[str, Path], tmp_path: Path
+) -> None:
+    from livedrummer.live.settings import ShowSettings
     from services.cli import build_parser
-    from services.cli.up import specs
+    from services.cli.settings import write_settings
+    from services.cli.up import resolve, specs
 
     argv = ["up", "--demo", "--headless", "--avatar", str(files["vrm1.vrm"])]
-    by_name = {s.name: s.argv for s in specs(build_parser(argv).parse_args(argv))}
-    for name in ("synth", "display"):
+    args = build_parser(argv).parse_args(argv)
+    given = write_settings(resolve(args), tmp_path)
+    by_name = {s.name: s.argv for s in specs(args, given)}
+    for name in ("synth", "display"):  # the avatar is in the settings file each is given
         words = by_name[name]
-        assert words[words.index("--avatar") + 1] == str(files["vrm1.vrm"]), name
+        settings = ShowSettings.load(Path(words[words.index("--settings") + 1]))
+        assert settings.avatar.spec == str(files["vrm1.vrm"].resolve()), name
+        assert "--avatar" not in words, name
     display = by_name["display"]
     synth = by_name["synth"]
     # the display asks the synth's control socket which avatar it plays

@@ -6,12 +6,15 @@ so the display writes headless frames. Skipped where no headless OpenGL context 
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+import pytest
 
 from services.bench._faultrig import children
 from services.bench._ports import free_port_base
@@ -144,3 +147,45 @@ def test_up_records_the_show_with_its_drum_track_on_show_time(gl_ok: None, tmp_p
     best = int(lags[int(np.argmax(score))])
     assert abs(best) < 1000 / 25, f"drum track {best} ms off the show"
     assert max(score) > 3 * float(np.median(score)), "the hits are not where the track rises"
+
+
+@pytest.mark.parametrize("source", [["--keys", "--api", "jack"], ["--audio", "system"]],
+                         ids=["keys", "audio"])  # fmt: skip
+def test_up_gives_every_child_the_one_map_and_delay_it_resolved(
+    gl_ok: None, jack_server: str, tmp_path: Path, source: list[str]
+) -> None:
+    # --keys and --audio play General MIDI notes: the map up checks its source with, gives
+    # its children and mixes a recording with, read back from each child's ready line
+    env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
+    env.pop("DISPLAY", None)
+    env.pop("WAYLAND_DISPLAY", None)
+    proc = subprocess.run(
+        [sys.executable, "-m", "services", "up", *source, "--headless", "--no-journal",
+         "--port-base", str(free_port_base()), "--frames-dir", str(tmp_path / "frames"),
+         "--delay-ms", "45", "--lookahead-ms", "20", "--seconds", "3"],
+        capture_output=True, text=True, env=env, cwd=REPO, timeout=120,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    ready = {}
+    for line in proc.stdout.splitlines():
+        if line.startswith("{"):
+            said = json.loads(line)
+            ready[said["service"]] = said["settings"]
+    assert set(ready) == {"input", "synth", "display"}, proc.stdout
+    for name, settings in ready.items():
+        assert settings["map"] == "general-midi", name
+        assert settings["kit"] == "rock5", name
+        assert (settings["delay_ms"], settings["lookahead_ms"]) == (45.0, 20.0), name
+    assert len({s["digest"] for s in ready.values()}) == 1, ready
+
+
+def test_up_refuses_a_map_that_audio_does_not_write(tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "services", "up", "--audio", "system", "--map", "roland-td"],
+        capture_output=True, text=True, cwd=REPO, timeout=60,
+        env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")},
+    )  # fmt: skip
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip().splitlines() == [
+        "livedrummer: error: --map roland-td: --audio writes general-midi notes; drop --map"
+    ], proc.stderr

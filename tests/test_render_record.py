@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import subprocess
@@ -81,6 +80,7 @@ def test_a_bad_video_path_is_one_error(tmp_path: Path) -> None:
 def test_up_videos_drum_track_stops_a_crash_the_journal_says_was_grabbed(
     sound: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
+    from livedrummer.live.settings import Delay, ShowSettings, Sound
     from services.cli.up import add_drum_track
 
     soundfont = None
@@ -108,9 +108,9 @@ def test_up_videos_drum_track_stops_a_crash_the_journal_says_was_grabbed(
     journal.append_onsets(hit, show0 + 0.25, 0)
     journal.append_controls(grab, show0 + 0.75, 0)
     journal.close()
-    args = argparse.Namespace(video=video, delay_ms=30.0, kit="rock5", map="general-midi",
-                              soundfont=soundfont)  # fmt: skip
-    add_drum_track(args, sessions, started=0.0)
+    settings = ShowSettings("general-midi", "rock5", delay=Delay(delay_s=0.030),
+                            sound=Sound(kit_file=None if soundfont is None else str(soundfont)))  # fmt: skip
+    add_drum_track(settings, video, sessions, started=0.0)
     assert "1 hits in its drum track" in capsys.readouterr().out
     with av.open(str(video)) as c:
         a = c.streams.audio[0]

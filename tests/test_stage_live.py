@@ -24,6 +24,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -366,3 +367,52 @@ def test_the_stage_display_draws_in_a_window_under_xvfb(tmp_path: Path) -> None:
                            capture_output=True, text=True, timeout=60)  # fmt: skip
     assert short.returncode == 2 and "1 endpoints for 2 live performers" in short.stderr
     assert short.stderr.strip().count("\n") == 0
+
+
+def test_a_stage_performers_map_is_resolved_once_for_its_input_and_synths(
+    tmp_path: Path, write_midi: Callable[..., Path]
+) -> None:
+    # a file source whose notes General MIDI knows and the Roland map does not: map auto was
+    # the file's best map in the input daemon and roland-td in the synth
+    import mido
+
+    from livedrummer.live.settings import Delay, ShowSettings
+    from livedrummer.midi.notemap import bundled_note_maps
+    from livedrummer.midi.smf import read_midi_file
+    from services.cli import build_parser
+    from services.cli.up_stage import stage_specs
+
+    notes = [35, 60, 61, 62, 63, 64, 38, 42] * 4
+    groove = write_midi([m for n in notes for m in (mido.Message("note_on", channel=9, note=n,
+                         velocity=100, time=120), mido.Message("note_off", channel=9, note=n,
+                         time=0))], name="congas.mid")  # fmt: skip
+    best = read_midi_file(groove, bundled_note_maps()).map_name
+    assert best != "roland-td"
+    stage = tmp_path / "stage.toml"
+    stage.write_text('[ensemble]\ncopies = 2\n\n[[performer]]\nid = "file"\n'
+                     f'source = "file:{groove.name}"\n\n[[performer]]\nid = "kit"\n'
+                     'source = "virtual:pads"\nkit = "rock5-left"\n')  # fmt: skip
+    argv = ["up", "--stage", str(stage), "--headless", "--delay-ms", "60", "--lookahead-ms", "20"]
+    args = build_parser(argv).parse_args(argv)
+    folder = tmp_path / "settings"
+    folder.mkdir()
+    specs = stage_specs(args, stage, Delay(0.020, 0.060), folder)
+    given: dict[str, set[str]] = {}
+    synths: list[str] = []
+    for spec in specs:
+        if spec.name == "display":
+            shown = spec.argv[spec.argv.index("--settings") + 1].split(",")
+            continue
+        if spec.name.startswith("synth-"):
+            synths.append(spec.argv[spec.argv.index("--settings") + 1])
+        assert not {"--map", "--kit", "--avatar", "--delay-ms"} & set(spec.argv), spec.argv
+        performer = spec.name.split("-", 1)[1].split(".")[0]
+        given.setdefault(performer, set()).add(spec.argv[spec.argv.index("--settings") + 1])
+    # one file per performer, for its input daemon and both copies' synths
+    assert set(given) == {"file", "kit"} and all(len(v) == 1 for v in given.values()), given
+    played = {who: ShowSettings.load(Path(next(iter(f)))) for who, f in given.items()}
+    assert (played["file"].note_map, played["file"].kit) == (best, "rock5")
+    assert (played["kit"].note_map, played["kit"].kit) == ("roland-td", "rock5-left")
+    assert {s.delay for s in played.values()} == {Delay(0.020, 0.060)}
+    # the stage display draws each drummer (in --sub's order) with its synth's settings
+    assert shown == synths and len(shown) == 4, (shown, synths)

@@ -97,6 +97,7 @@ from livedrummer.body.strokes import StrokeParams
 from livedrummer.live.curves import Answer, CurveSet
 from livedrummer.live.ledger import SampleLedger
 from livedrummer.live.quick import QuickState, quick_contact
+from livedrummer.live.settings import check_delay
 from livedrummer.live.style import StyleRamp
 from livedrummer.live.window import NoteWindow, WindowParams
 from livedrummer.midi.notemap import NoteMap
@@ -121,11 +122,7 @@ class SynthParams:
     style_ramp_s: float = 0.5  # a change of expression is eased in over this long (style.py)
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.lookahead_s <= self.delay_s:
-            raise ValueError(
-                f"need 0 <= lookahead ({self.lookahead_s}) <= delay ({self.delay_s}): a note must "
-                "be decided before its contact is shown"
-            )
+        check_delay(self.lookahead_s, self.delay_s)  # the one check of 0 <= L <= D
         if not self.rate_hz > 0 or not self.window_s > 0:
             raise ValueError(f"rate {self.rate_hz} and window {self.window_s} must be > 0")
         if self.max_notes < 8:

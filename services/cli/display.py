@@ -49,6 +49,7 @@ from .common import (
 )
 from .keys import add_curve_options, security_from_args
 from .render import body_scene, parse_size
+from .settings import add_settings_option, played_by, settings_of
 
 if TYPE_CHECKING:
     from ..display.audio_out import TrackPlayer
@@ -147,10 +148,15 @@ def register(sub: Subparsers) -> None:
                       help="draw each frame for when it is begun, not when it is done")  # fmt: skip
     add_osc_options(p, "--live: camera, camera/cut, blackout, state")
     add_curve_options(p, server=False, client=True)
+    add_settings_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
     check_aa(args.aa)
+    if args.settings is not None and not args.live:
+        from livedrummer.errors import ConfigError
+
+        raise ConfigError("--settings: the settings of a live display (display --live)")
     if args.live and args.stage is not None:
         from .stage_display import run_stage_live
 
@@ -213,7 +219,6 @@ def run_live(args: argparse.Namespace) -> int:
     import zmq
 
     from livedrummer.errors import ConfigError
-    from livedrummer.kit.loader import load_kit
     from livedrummer.live.calibration import Calibration
     from livedrummer.render.overlay import parse_overlays
 
@@ -226,6 +231,10 @@ def run_live(args: argparse.Namespace) -> int:
     )
     from ..service import serve
 
+    # --settings FILE (from up): kit, avatar and sound as resolved there; a practice display's
+    # --map is its teacher's reference, not the kit's
+    settings = settings_of(args, note_map=args.map or DEMO_MAP,
+                           skip=("map",) if args.practice is not None else ())  # fmt: skip
     window = None
     overlays = parse_overlays(args.overlay)
     background = background_of(args, window=True)  # live video has no alpha: opaque only
@@ -244,7 +253,7 @@ def run_live(args: argparse.Namespace) -> int:
     if not 0 < args.fps <= 1000:
         raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps})")
     calibration = Calibration.load()
-    kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
+    kit, avatar = played_by(settings)
     clock: FrameClock
     if args.clock == "audio":
         clock = AudioFrameClock(calibration.audio_ms / 1000.0)
@@ -279,29 +288,30 @@ def run_live(args: argparse.Namespace) -> int:
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
     display = LiveDisplay(kit, config, clock, ctx)
     sound = None
-    if args.sound:
+    if settings.sound.on:
         from ..display.live_sound import LiveSound, SoundConfig
 
         sfz = sf2 = None
-        if args.soundfont is not None:  # an SFZ kit (--sfz) or a SoundFont (--soundfont)
+        kit_file = settings.sound.kit_file
+        if kit_file is not None:  # an SFZ kit (--sfz) or a SoundFont (--soundfont)
             from livedrummer.audio.kitfile import check_kit_file, is_sfz
 
-            check_kit_file(args.soundfont)
-            if is_sfz(args.soundfont):
-                sfz = str(args.soundfont)
+            check_kit_file(Path(kit_file))
+            if is_sfz(Path(kit_file)):
+                sfz = kit_file
             else:
-                sf2 = str(args.soundfont)
+                sf2 = kit_file
         from livedrummer.midi.notemap import load_note_map
 
-        note_map = args.map or DEMO_MAP
-        load_note_map(note_map)  # a bad --map is one line here, not a silent sound process
-        sound = LiveSound(SoundConfig(args.sub, args.audio_device, args.kit,
+        load_note_map(settings.note_map)  # a bad map is one line here, not a silent sound
+        sound = LiveSound(SoundConfig(args.sub, settings.sound.device, settings.kit,
                                       security_from_args(args), sfz=sfz, soundfont=sf2,
-                                      note_map=note_map))  # fmt: skip
+                                      note_map=settings.note_map))  # fmt: skip
         if not sound.start():
             sound = None
     try:
-        code = serve(display, lambda endpoints: endpoints["sub"])
+        code = serve(display, lambda endpoints: endpoints["sub"],
+                     {"settings": settings.summary()})  # fmt: skip
     finally:
         if sound is not None:
             sound.close()

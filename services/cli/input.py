@@ -14,6 +14,9 @@ from pathlib import Path
 
 from .common import DEMO_MAP, Subparsers, add_api_option, add_channel_option, add_command
 from .keys import add_curve_options, security_from_args
+from .settings import add_settings_option, settings_of
+
+AUDIO_MAP = "general-midi"  # the notes an --audio source writes
 
 
 def register(sub: Subparsers) -> None:
@@ -72,6 +75,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--fsync-interval", type=float, default=1.0, metavar="S",
                    help="fsync the journal at most every S s (0: every batch)")  # fmt: skip
     add_curve_options(p, server=True, client=True)
+    add_settings_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -99,7 +103,16 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError(f"--realtime: {exc}") from None
     clock = MonotonicClock()
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    if args.map != "auto":
+    settings = None
+    if args.settings is not None:  # up resolved the map: taken as it is
+        settings = settings_of(args, note_map="")
+        if args.audio is not None and settings.note_map != AUDIO_MAP:
+            raise ConfigError(f"--settings {args.settings}: note_map {settings.note_map!r}: "
+                              f"--audio writes {AUDIO_MAP} notes")  # fmt: skip
+        note_map = load_note_map(settings.note_map)
+    elif args.audio is not None:
+        note_map = load_note_map(AUDIO_MAP)  # what its onsets' notes mean
+    elif args.map != "auto":
         note_map = load_note_map(args.map)
     elif args.file is not None:  # the file's own best map, said in one line as render says it
         from .common import read_performance
@@ -132,7 +145,6 @@ def run(args: argparse.Namespace) -> int:
         model = mix_model(args) if mapping is None else None
         source = AudioSource(args.audio, clock, load_profile(args.audio_profile), mapping,
                              args.performer, trace=args.trace, model=model)  # fmt: skip
-        note_map = load_note_map("general-midi")  # what its onsets' notes mean
     elif args.file is not None:
         from ..input.fileplayer import FileSource
 
@@ -182,7 +194,10 @@ def run(args: argparse.Namespace) -> int:
     )
     daemon = InputDaemon(source, config, clock, ctx)
     try:
-        code = serve(daemon, lambda endpoints: endpoints["pub"])
+        if settings is None:  # what the ready line reports: the map this daemon decodes with
+            chosen = args.map if args.map != "auto" and args.audio is None else note_map.name
+            settings = settings_of(args, note_map=chosen)
+        code = serve(daemon, lambda endpoints: endpoints["pub"], {"settings": settings.summary()})
     finally:
         if thru is not None:
             thru.close()

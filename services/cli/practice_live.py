@@ -159,7 +159,7 @@ def run_live(args: argparse.Namespace) -> int:
     from ..practice.take import on_take_grid
     from .common import kit_source, read_performance
     from .practice import judge_settings, pass_setup, summary_lines
-    from .practice_show import Show, check_show, show_mode
+    from .practice_show import Show, check_show, show_mode, show_settings
 
     window_ms, pieces, level = judge_settings(args)
     ref, _ = read_performance(args, args.reference)
@@ -186,7 +186,8 @@ def run_live(args: argparse.Namespace) -> int:
         raise ConfigError(f"--passes {passes_max}: expected 1..1000")
     base_bpm = first_bpm(ref.grid, seg)
     window_s = window_ms / 1e3
-    note_map = load_note_map(args.take_map)
+    settings = show_settings(args)  # the loop, and the drummers' processes, use these
+    note_map = load_note_map(settings.note_map)
     clock = MonotonicClock()
     mode = show_mode(args)
     check_show(args, mode)
@@ -199,7 +200,7 @@ def run_live(args: argparse.Namespace) -> int:
         shown = "in a window" if mode == "window" else f"off screen into {args.frames_dir}/"
         print(f"practice: the drummers {shown} (teacher {args.teacher})", file=sys.stderr,
               flush=True)  # fmt: skip
-        show = Show(args, mode)
+        show = Show(args, mode, settings)
         source = show.bus
     input_s = Calibration.load().input_ms / 1e3
     player = None
@@ -400,7 +401,7 @@ def run_live(args: argparse.Namespace) -> int:
     if show is not None and args.video is not None:
         from .practice_show import add_drum_track
 
-        wrote = add_drum_track(args, np.array(heard, dtype=ONSET_DTYPE), clicked)
+        wrote = add_drum_track(settings, args, np.array(heard, dtype=ONSET_DTYPE), clicked)
         print(wrote, file=sys.stderr if args.json else sys.stdout, flush=True)
     for p, result, matching in reports:  # after the session: a report takes seconds to draw
         from .practice_out import write_take_report

@@ -14,6 +14,10 @@ teacher (``--teacher ghost``, ``ahead[:SECONDS]`` or ``off``;
 ``--no-window`` is the terminal-only rig (the rig opens the port itself; for scripts). With no
 screen and none of these, the rig is terminal-only and says so in one line.
 
+Settings: the take's map (``--take-map``), the kit, the avatar and D are resolved once
+(:func:`show_settings`) for the rig's own loop, the recording's drum track and the three
+processes, which are given them as one file (``--settings``, :mod:`.settings`).
+
 Endpoints: TCP ports ``--port-base`` .. +3 on loopback (the input's stream and control, the
 synth's poses and control); the readout's port is the system's pick.
 
@@ -32,8 +36,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .common import add_avatar_option, add_kit_option, has_screen
+from .settings import write_settings
 
 if TYPE_CHECKING:
+    from livedrummer.live.settings import ShowSettings
+
     from ..supervisor import Supervisor
 
 SHOW_SUBSCRIBERS = 2  # the synth and the rig subscribe to the input daemon's stream
@@ -103,15 +110,31 @@ def check_show(args: argparse.Namespace, mode: str) -> None:
     avatar_of(args)
 
 
+def show_settings(args: argparse.Namespace) -> ShowSettings:
+    """The rig's settings, resolved once for the practice loop, its input daemon, synth and
+    display (:mod:`.settings`): the take's map (``--take-map``), the kit, the avatar, D =
+    :data:`SHOW_DELAY_MS` with the synth's default lookahead; the display sounds nothing.
+    The practice loop loads the map (one line when it is bad) before anything starts."""
+    from livedrummer.live.settings import AvatarChoice, Delay, ShowSettings, spec_path
+
+    bone_map = None if args.bone_map is None else str(args.bone_map)
+    return ShowSettings(
+        note_map=spec_path(args.take_map) or args.take_map,
+        kit=spec_path(args.kit) or args.kit,
+        avatar=AvatarChoice(spec_path(args.avatar), spec_path(bone_map), args.fit),
+        delay=Delay(delay_s=SHOW_DELAY_MS / 1000.0),
+    )
+
+
 def frame_size(args: argparse.Namespace, mode: str) -> str:
     return str(args.size or ("1280x720" if mode == "window" else "640x360"))
 
 
-def specs(args: argparse.Namespace, mode: str, readout: str) -> list[Any]:
-    """The input, synth and display of the rig (see the module docstring)."""
+def specs(args: argparse.Namespace, mode: str, readout: str, settings: Path) -> list[Any]:
+    """The input, synth and display of the rig (see the module docstring), each given the
+    ``settings`` file (:func:`show_settings`)."""
     from ..program import program_argv
     from ..supervisor import ServiceSpec
-    from .common import avatar_argv
 
     base = args.port_base
     ep = [f"tcp://127.0.0.1:{base + k}" for k in range(4)]
@@ -122,15 +145,14 @@ def specs(args: argparse.Namespace, mode: str, readout: str) -> list[Any]:
         source = ["--virtual", args.virtual, "--api", args.api]
     else:
         source = ["--midi", args.midi, "--api", args.api]
-    input_argv = [*me, "input", *source, "--map", args.take_map, "--pub", ep[0],
+    given = ["--settings", str(settings)]
+    input_argv = [*me, "input", *source, *given, "--pub", ep[0],
                   "--control", ep[1], "--wait-subscribers", str(SHOW_SUBSCRIBERS),
                   "--no-journal"]  # fmt: skip
-    synth_argv = [*me, "synth", "--sub", ep[0], "--pub", ep[2], "--control", ep[3],
-                  "--kit", args.kit, "--map", args.take_map, "--delay-ms", str(SHOW_DELAY_MS),
-                  *avatar_argv(args)]  # fmt: skip
-    display_argv = [*me, "display", "--live", "--sub", ep[2], "--kit", args.kit,
+    synth_argv = [*me, "synth", "--sub", ep[0], "--pub", ep[2], "--control", ep[3], *given]
+    display_argv = [*me, "display", "--live", "--sub", ep[2], *given,
                     "--fps", str(args.fps), "--size", frame_size(args, mode),
-                    *avatar_argv(args), "--practice", readout, "--teacher", args.teacher,
+                    "--practice", readout, "--teacher", args.teacher,
                     str(args.reference), "--map", args.map]  # fmt: skip
     display_argv += ["--channel", args.channel] if args.channel is not None else []
     if mode == "window":
@@ -147,8 +169,10 @@ def specs(args: argparse.Namespace, mode: str, readout: str) -> list[Any]:
     ]
 
 
-def add_drum_track(args: argparse.Namespace, hits: Any, clicks: list[tuple[Any, Any]]) -> str:
-    """Mux the drum track into ``args.video`` (see the module docstring); a line saying so."""
+def add_drum_track(settings: ShowSettings, args: argparse.Namespace, hits: Any,
+                   clicks: list[tuple[Any, Any]]) -> str:  # fmt: skip
+    """Mux the drum track into ``args.video`` (see the module docstring), with the kit, map
+    and D the rig's processes were given (``settings``); a line saying so."""
     import numpy as np
 
     from livedrummer.kit.loader import load_kit
@@ -160,12 +184,13 @@ def add_drum_track(args: argparse.Namespace, hits: Any, clicks: list[tuple[Any, 
     timing = Timing.load(args.video)
     times = np.concatenate([t for t, _ in clicks] or [np.zeros(0)])
     accents = np.concatenate([a for _, a in clicks] or [np.zeros(0, bool)])
-    track = practice_track(hits, times, accents, timing, delay_s=SHOW_DELAY_MS / 1000.0,
-                           kit=load_kit(args.kit), note_map=load_note_map(args.take_map),
+    delay_s = settings.delay.delay_s
+    track = practice_track(hits, times, accents, timing, delay_s=delay_s,
+                           kit=load_kit(settings.kit), note_map=load_note_map(settings.note_map),
                            click_sound=args.click_sound, click_level=args.click_level)  # fmt: skip
     mux_audio(args.video, track)
     duration = timing.frames / timing.fps
-    shown = hits["time_s"].astype(np.float64) + SHOW_DELAY_MS / 1000.0 - timing.show0_s
+    shown = hits["time_s"].astype(np.float64) + delay_s - timing.show0_s
     heard = int(np.count_nonzero((shown >= 0.0) & (shown < duration)))
     return (f"practice: wrote {args.video} ({duration:.1f} s, {heard} hits and the click in "
             f"its drum track)")  # fmt: skip
@@ -174,7 +199,9 @@ def add_drum_track(args: argparse.Namespace, hits: Any, clicks: list[tuple[Any, 
 class Show:
     """The running drummers: the supervisor, the rig's onset subscription and readout stream."""
 
-    def __init__(self, args: argparse.Namespace, mode: str) -> None:
+    def __init__(self, args: argparse.Namespace, mode: str, settings: ShowSettings) -> None:
+        import tempfile
+
         import zmq
 
         from ..practice.bus import OnsetBus
@@ -185,7 +212,9 @@ class Show:
         self.ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
         self.readout = ReadoutOut(self.ctx)
         self.bus = OnsetBus(self.ctx, f"tcp://127.0.0.1:{args.port_base}")
-        self.sup: Supervisor = Supervisor(specs(args, mode, self.readout.endpoint))
+        self._folder = tempfile.TemporaryDirectory(prefix="livedrummer-practice-")
+        given = write_settings(settings, Path(self._folder.name))
+        self.sup: Supervisor = Supervisor(specs(args, mode, self.readout.endpoint, given))
         if mode == "headless":
             args.frames_dir.mkdir(parents=True, exist_ok=True)
 
@@ -202,3 +231,4 @@ class Show:
         self.sup.stop()
         self.readout.close()
         self.ctx.destroy(0)
+        self._folder.cleanup()

@@ -2,22 +2,27 @@
 
 The stage file says who stands where on which kit; ``--sub`` lists the pose endpoints of the
 performers that play live (those with a ``source``), one per performer in the file's order
-(``up --stage`` passes them). The display is :class:`services.display.stage_live.StageDisplay`.
+(``up --stage`` passes them). With ``--settings F1,F2,...`` (one per ``--sub``, as ``up
+--stage`` resolved each performer's, :mod:`.settings`) each drummer's kit, avatar and fitting
+come from its file; without, from the stage file, fitted as each synth fits them (``--fit
+auto``). The display is :class:`services.display.stage_live.StageDisplay`.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from livedrummer.avatar.model import Avatar
+    from livedrummer.kit.model import Kit
+
     from ..display.live import FrameClock
 
 
 def run_stage_live(args: argparse.Namespace) -> int:
     from livedrummer.errors import ConfigError
-    from livedrummer.kit.loader import load_kit
     from livedrummer.live.calibration import Calibration
     from livedrummer.stage.stagefile import load_stage
 
@@ -51,20 +56,14 @@ def run_stage_live(args: argparse.Namespace) -> int:
         window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
                                monitor=args.monitor, camera=args.camera, samples=0,
                                vsync=False)  # fmt: skip
-    from livedrummer.avatar.fit import fit_avatar
-
-    avatars = {}
-    if any(p.avatar for _, p, _ in live):
-        from livedrummer.avatar.loader import load_avatar
-
-        avatars = {p.id: load_avatar(p.avatar) for _, p, _ in live if p.avatar is not None}
-    kits = {p.kit: load_kit(p.kit) for _, p, _ in live}
-    # each performer's synth fits its avatar to its kit (--fit auto): the same here
-    fits = {p.id: fit_avatar(kits[p.kit], avatars[p.id]) for _, p, _ in live if p.id in avatars}
-    performers = [StagePerformer(p.id if p.copy == 0 else f"{p.id}.{p.copy}", k, sub,
-                                 fits[p.id].kit if p.id in fits else kits[p.kit], spot,
-                                 fits[p.id].avatar if p.id in fits else None)
-                  for (k, p, spot), sub in zip(live, subs, strict=True)]  # fmt: skip
+    if args.settings is not None:
+        played = _played_as_given(args, len(live))
+    else:
+        played = _played_from_stage(live)
+    performers = [
+        StagePerformer(p.id if p.copy == 0 else f"{p.id}.{p.copy}", k, sub, kit, spot, avatar)
+        for (k, p, spot), sub, (kit, avatar) in zip(live, subs, played, strict=True)
+    ]
     calibration = Calibration.load()
     config = StageConfig(
         fps=args.fps, size=parse_size(args.size), camera=args.camera, frames=args.max_frames,
@@ -86,6 +85,44 @@ def run_stage_live(args: argparse.Namespace) -> int:
                      for name, v in s["performers"].items())  # fmt: skip
     print(f"display: {s['frames']} stage frames{where}; {each}", file=sys.stderr)
     return code
+
+
+def _played_as_given(args: argparse.Namespace, count: int) -> list[tuple[Kit, Avatar | None]]:
+    """Each drummer's kit and avatar from its settings file (``--settings``, one per
+    ``--sub``); copies of a performer share one file, loaded once."""
+    from pathlib import Path
+
+    from livedrummer.errors import ConfigError
+    from livedrummer.live.settings import ShowSettings
+
+    from .settings import played_by
+
+    files = [f.strip() for f in str(args.settings).split(",") if f.strip()]
+    if len(files) != count:
+        raise ConfigError(f"--settings: {len(files)} files for {count} live performers of "
+                          f"{args.stage}: give one each, in --sub's order")  # fmt: skip
+    done: dict[str, tuple[Kit, Avatar | None]] = {}
+    for f in files:
+        if f not in done:
+            done[f] = played_by(ShowSettings.load(Path(f)))
+    return [done[f] for f in files]
+
+
+def _played_from_stage(live: list[Any]) -> list[tuple[Kit, Avatar | None]]:
+    """Each drummer's kit and avatar as the stage file names them, fitted as its synth fits
+    them (``--fit auto``)."""
+    from livedrummer.avatar.fit import fit_avatar
+    from livedrummer.kit.loader import load_kit
+
+    avatars = {}
+    if any(p.avatar for _, p, _ in live):
+        from livedrummer.avatar.loader import load_avatar
+
+        avatars = {p.id: load_avatar(p.avatar) for _, p, _ in live if p.avatar is not None}
+    kits = {p.kit: load_kit(p.kit) for _, p, _ in live}
+    fits = {p.id: fit_avatar(kits[p.kit], avatars[p.id]) for _, p, _ in live if p.id in avatars}
+    return [(fits[p.id].kit, fits[p.id].avatar) if p.id in fits else (kits[p.kit], None)
+            for _, p, _ in live]  # fmt: skip
 
 
 def _clock(args: argparse.Namespace, windowed: bool, audio_ms: float) -> FrameClock:

@@ -19,15 +19,15 @@ from .common import (
     add_kit_option,
     add_osc_options,
     add_style_options,
-    avatar_of,
     cues_of,
-    fitted,
     osc_allow,
     rig_for,
 )
 from .keys import add_curve_options, security_from_args
+from .settings import add_settings_option, played_by, settings_of
 
 if TYPE_CHECKING:
+    from livedrummer.live.settings import Delay
     from livedrummer.stage.variation import Variation
 
 log = logging.getLogger("livedrummer.synth")
@@ -65,6 +65,7 @@ def register(sub: Subparsers) -> None:
     add_style_options(p)
     add_osc_options(p, "preset, param, state")
     add_curve_options(p, server=True, client=True)
+    add_settings_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -74,7 +75,6 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.body.expression import load_expression
     from livedrummer.body.strokes import StrokeParams
     from livedrummer.errors import ConfigError
-    from livedrummer.kit.loader import load_kit
     from livedrummer.live.calibration import Calibration
     from livedrummer.live.synth import LiveSynth, SynthParams
     from livedrummer.midi.notemap import load_note_map
@@ -83,31 +83,27 @@ def run(args: argparse.Namespace) -> int:
     from ..service import serve
     from ..synth.service import SynthConfig, SynthService
 
-    if not 0 <= args.lookahead_ms <= args.delay_ms:
-        raise ConfigError(
-            f"--lookahead-ms {args.lookahead_ms:g} must be between 0 and "
-            f"--delay-ms {args.delay_ms:g} (a note is decided before it shows)"
-        )
-    try:
+    settings = settings_of(args, note_map=args.map)  # --settings FILE, or these flags
+    try:  # the delay was checked with the settings; the rate is the synth's own
         params = SynthParams(
-            lookahead_s=args.lookahead_ms / 1000.0,
-            delay_s=args.delay_ms / 1000.0,
+            lookahead_s=settings.delay.lookahead_s,
+            delay_s=settings.delay.delay_s,
             rate_hz=args.rate,
             predict=not args.no_predict,
             provisional=not args.no_provisional,
         )
     except ValueError as exc:
-        raise ConfigError(f"--lookahead-ms/--delay-ms/--rate: {exc}") from None
+        raise ConfigError(f"--rate: {exc}") from None
     if not 0 < args.tick_hz <= 1000:
         raise ConfigError(f"--tick-hz: expected 0 < hz <= 1000 (got {args.tick_hz})")
-    note_map = load_note_map(args.map)
+    note_map = load_note_map(settings.note_map)
     cc_open = np.array([note_map.openness(v) for v in range(128)])
-    kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
+    kit, avatar = played_by(settings)
     rig = rig_for(kit, avatar)
     expression = load_expression(args.preset) if args.preset else None
     synth = LiveSynth(rig, params, strokes=StrokeParams(model=args.strokes), cc_open=cc_open,
                       note_map=note_map, expression=expression)  # fmt: skip
-    vary = vary_of(args)
+    vary = vary_of(args, settings.delay)
     calibration = Calibration.load()
     config = SynthConfig(
         sub=args.sub, pub=args.pub, control=args.control, performer=args.performer,
@@ -118,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)
-    code = serve(service, lambda endpoints: endpoints["pub"])
+    code = serve(service, lambda endpoints: endpoints["pub"], {"settings": settings.summary()})
     s = service.summary()
     p50, p99 = ("-" if v is None else v for v in s["answer_ms"])
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "
@@ -130,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
     return code
 
 
-def vary_of(args: argparse.Namespace) -> Variation | None:
+def vary_of(args: argparse.Namespace, delay: Delay) -> Variation | None:
     """The copy's live variation from ``--vary``, its delay capped at D - L (``bounded``)."""
     from livedrummer.errors import ConfigError
     from livedrummer.stage.variation import Variation, bounded
@@ -143,7 +139,7 @@ def vary_of(args: argparse.Namespace) -> Variation | None:
         raise ConfigError(f"--vary-amplitude {args.vary_amplitude:g}: expected 0 <= R < 1")
     wanted = Variation(warp_s=args.vary_ms / 1000.0, amplitude=args.vary_amplitude,
                        seed=args.vary)  # fmt: skip
-    vary = bounded(wanted, args.delay_ms / 1000.0, args.lookahead_ms / 1000.0)
+    vary = bounded(wanted, delay.delay_s, delay.lookahead_s)
     if vary.warp_s < wanted.warp_s:
         log.warning("--vary-ms %g capped at %g ms: D - L (--delay-ms minus --lookahead-ms)",
                     args.vary_ms, vary.warp_s * 1000)  # fmt: skip

@@ -13,6 +13,15 @@ onsets (the session's journal, a temporary one for ``--demo``) mixed with the bu
 ``--soundfont FILE.sf2``'s) at onset + D (:mod:`services.display.record`), so picture and
 sound line up as the audience would see them.
 
+Settings resolved once. Before anything starts, ``up`` resolves what its processes must agree
+on (:func:`resolve`): the note map the source's notes mean (``--keys`` plays and ``--audio``
+writes General MIDI notes; a kit's map is ``--map``, default roland-td), the kit, the avatar
+and its fitting, the delay D and lookahead L (``0 <= L <= D``, checked there), and the sound.
+They go into one JSON file in the rig's temporary folder
+(:class:`~livedrummer.live.settings.ShowSettings`), and every child is started with
+``--settings FILE`` instead of the separate flags; the recording's drum track is mixed from the
+same object. Each child reports them in its ready line (``docs/config.md``).
+
 Security. ``--curve-secret RIG.key_secret`` makes every stream of the rig CURVE: the input
 daemon and the synth bind as CURVE servers with that key pair, and the synth and the display
 connect to them as clients with the same pair (the server key is read from the same file), so
@@ -50,7 +59,6 @@ from .common import (
     add_osc_options,
     add_renamed,
     add_style_options,
-    avatar_argv,
     avatar_of,
     background_of,
     cues_of,
@@ -60,14 +68,19 @@ from .common import (
     osc_allow,
     style_argv,
 )
+from .input import AUDIO_MAP
 from .keys import add_curve_options
+from .settings import write_settings
 
 if TYPE_CHECKING:
+    from livedrummer.live.settings import ShowSettings
+
     from ..supervisor import Supervisor
 
 RECORD_GRACE_S = 60.0  # how long past --seconds a set-length recording may take to finish
 SYNTH_TOPICS = 1  # the synth subscribes once, to the protocol magic (net.subscribe_protocol)
 OSC_SYNTH, OSC_DISPLAY = 12, 13  # their loopback OSC ports (UDP), from --port-base
+KEYS_MAP = "general-midi"  # the notes the window's drum keys play (display/keysend.py)
 
 
 def register(sub: Subparsers) -> None:
@@ -211,7 +224,36 @@ def recorded(args: argparse.Namespace) -> bool:
     return args.video is not None and args.seconds is not None
 
 
-def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # type: ignore[type-arg]
+def resolve(args: argparse.Namespace) -> ShowSettings:
+    """The show's settings, resolved once here for every process (:mod:`.settings`): the
+    map the source's notes mean (``--keys`` plays General MIDI notes, ``--audio`` writes them;
+    a kit's is ``--map``, default roland-td), the kit, avatar, D and L, and the sound. An L
+    beyond D is one line here; :func:`check_before_start` loads the map."""
+    from livedrummer.errors import ConfigError
+    from livedrummer.live.settings import AvatarChoice, Delay, ShowSettings, Sound, spec_path
+
+    if args.audio:
+        if args.map not in (None, AUDIO_MAP):
+            raise ConfigError(f"--map {args.map}: --audio writes {AUDIO_MAP} notes; drop --map")
+        note_map = AUDIO_MAP
+    elif args.keys:  # the window plays GM drum notes into its port (display/keysend.py)
+        note_map = args.map or KEYS_MAP
+    else:
+        note_map = args.map or DEMO_MAP
+    delay = Delay.from_ms(args.lookahead_ms, args.delay_ms, ("--lookahead-ms", "--delay-ms"))
+    bone_map = None if args.bone_map is None else str(args.bone_map)
+    kit_file = None if args.soundfont is None else str(args.soundfont)
+    return ShowSettings(
+        note_map=spec_path(note_map) or note_map,
+        kit=spec_path(args.kit) or args.kit,
+        avatar=AvatarChoice(spec_path(args.avatar), spec_path(bone_map), args.fit),
+        delay=delay,
+        sound=Sound(args.sound, spec_path(kit_file), args.audio_device),
+    )
+
+
+def specs(args: argparse.Namespace, settings: Path, sessions: Path | None = None) -> list:  # type: ignore[type-arg]
+    """The rig's services in start order; each is given the resolved ``settings`` file."""
     from ..supervisor import ServiceSpec
 
     base = args.port_base
@@ -220,14 +262,13 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     # Clients reach the servers through loopback unless they serve on one given address.
     near = {name: e.replace("tcp://0.0.0.0:", "tcp://127.0.0.1:") for name, e in ep.items()}
     curve = curve_argv(args)
-    map_name = args.map or DEMO_MAP
+    given = ["--settings", str(settings)]  # map, kit, avatar, D, L and sound: resolve(args)
     me = program_argv()
     source: list[str]
     if args.demo:
         source = ["--file", str(demo_groove()), "--loop"]
     elif args.keys:  # the window plays GM drum notes into this port (display/keysend.py)
         source = ["--virtual", KEYS_PORT, "--api", args.api]
-        map_name = args.map or "general-midi"
     elif args.serial:
         source = ["--serial", args.serial, "--baud", str(args.baud)]
     elif args.audio:
@@ -235,7 +276,6 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         source += ["--channels", args.channels] if args.channels else []
         source += ["--audio-profile", args.audio_profile] if args.audio_profile else []
         source += ["--recogniser", args.recogniser]
-        map_name = "general-midi"  # the notes input --audio writes
     else:
         source = ["--midi", args.midi, "--api", args.api]
     if sessions is not None:
@@ -245,17 +285,14 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     # The input service waits for its device: one that vanishes mid-show (and the service
     # restarted meanwhile) must be waited for, not refused; up checked it once at start.
     source += [] if args.demo or args.keys else ["--wait"]
-    input_argv = [*me, "input", *source, "--map", map_name, "--pub", ep["in_pub"],
+    input_argv = [*me, "input", *source, *given, "--pub", ep["in_pub"],
                   "--control", ep["in_ctl"], "--wait-subscribers", str(SYNTH_TOPICS),
                   *journal, *curve["input"]]  # fmt: skip
     synth_argv = [*me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
-                  "--control", ep["syn_ctl"], "--kit", args.kit, "--map", map_name,
-                  "--lookahead-ms", str(args.lookahead_ms),
-                  "--delay-ms", str(args.delay_ms), *avatar_argv(args), *style_argv(args),
+                  "--control", ep["syn_ctl"], *given, *style_argv(args),
                   *curve["synth"]]  # fmt: skip
-    display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], "--kit", args.kit,
-                    "--camera", args.camera,
-                    "--fps", str(args.fps), "--size", frame_size(args), *avatar_argv(args),
+    display_argv = [*me, "display", "--live", "--sub", near["syn_pub"], *given,
+                    "--camera", args.camera, "--fps", str(args.fps), "--size", frame_size(args),
                     "--synth-control", near["syn_ctl"], *curve["display"]]  # fmt: skip
     if args.osc is not None or args.control is not None:  # up's OSC port forwards here
         synth_argv += ["--osc", str(base + OSC_SYNTH)]
@@ -267,11 +304,6 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
     display_argv += ["--background", args.background] if args.background else []
     display_argv += ["--overlay", args.overlay] if args.overlay else []
     display_argv += ["--keys-port", KEYS_PORT] if args.keys else []
-    display_argv += ["--sound", "--map", map_name] if args.sound else []
-    if args.sound and args.soundfont is not None:  # the live sound plays the kit file too
-        kind = "--sfz" if args.soundfont.suffix.lower() == ".sfz" else "--soundfont"
-        display_argv += [kind, str(args.soundfont)]
-    display_argv += ["--audio-device", args.audio_device] if args.audio_device else []
     if windowed(args):
         display_argv += ["--aa", "0", "--monitor", str(args.monitor)]
         display_argv += ["--fullscreen"] if args.fullscreen else []
@@ -339,7 +371,8 @@ def run(args: argparse.Namespace) -> int:
         from livedrummer.body.expression import load_expression
 
         load_expression(args.preset)
-    check_before_start(args)
+    settings = resolve(args)
+    check_before_start(args, settings)
     allow = osc_allow(args)
     cues_of(args)  # a bad cue list is one line before anything starts
     mapping = None
@@ -378,21 +411,24 @@ def run(args: argparse.Namespace) -> int:
             bridge = ControllerBridge(args.control_midi, mapping, router.port, args.api).start()
             print(f"up: controller {args.control_midi} steers the show ({args.control})",
                   flush=True)  # fmt: skip
+        given = write_settings(settings, Path(tmp))
         try:
-            code = _supervise(args, Supervisor(specs(args, sessions)))
+            code = _supervise(args, Supervisor(specs(args, given, sessions)))
         finally:
             if bridge is not None:
                 bridge.stop()
             if router is not None:
                 router.stop()
         if code == 0 and args.video is not None and sessions is not None:
-            add_drum_track(args, sessions, started)
+            add_drum_track(settings, args.video, sessions, started)
     return code
 
 
-def check_before_start(args: argparse.Namespace) -> None:
-    """Every option and the source checked here, in the options' units, before any process."""
+def check_before_start(args: argparse.Namespace, settings: ShowSettings) -> None:
+    """Every option and the source checked here, in the options' units, before any process
+    (D and L were checked as ``settings`` were resolved; the map is loaded here, once)."""
     from livedrummer.errors import ConfigError
+    from livedrummer.midi.notemap import load_note_map
 
     from .render import parse_size
 
@@ -403,13 +439,9 @@ def check_before_start(args: argparse.Namespace) -> None:
 
     if args.camera not in CAMERA_NAMES:
         raise ConfigError(f"--camera {args.camera!r}: expected one of {', '.join(CAMERA_NAMES)}")
-    if not 0 <= args.lookahead_ms <= args.delay_ms:
-        raise ConfigError(
-            f"--lookahead-ms {args.lookahead_ms:g} must be between 0 and "
-            f"--delay-ms {args.delay_ms:g} (a note is decided before it shows)"
-        )
     if not 0 < args.port_base <= 65535 - 11:
         raise ConfigError(f"--port-base: expected 1..65524 (got {args.port_base})")
+    note_map = load_note_map(settings.note_map)  # a bad map is one line, not a failing child
     if args.demo or args.wait or args.keys:
         return
     if args.audio:
@@ -424,10 +456,9 @@ def check_before_start(args: argparse.Namespace) -> None:
         AudioSource(args.audio, MonotonicClock(), profile, mapping).check()
         return
     from livedrummer.midi.decode import MessageDecoder
-    from livedrummer.midi.notemap import load_note_map
     from livedrummer.timeline.clock import MonotonicClock
 
-    kit_source(args, MonotonicClock(), MessageDecoder(load_note_map(args.map or DEMO_MAP)))
+    kit_source(args, MonotonicClock(), MessageDecoder(note_map))
 
 
 def _supervise(args: argparse.Namespace, sup: Supervisor) -> int:
@@ -474,9 +505,10 @@ def shown_where(args: argparse.Namespace) -> str:
     return f"frame log in {args.frames_dir / 'frames.jsonl'}{video}"
 
 
-def add_drum_track(args: argparse.Namespace, sessions: Path, started: float) -> None:
+def add_drum_track(settings: ShowSettings, video: Path, sessions: Path, started: float) -> None:
     """Mix the journaled onsets at onset + D, their chokes applied, into the recording (see the
-    module docstring)."""
+    module docstring): D, the kit, the map and the kit file are the ``settings`` the rig's
+    processes were given, so the drum track is what the display sounded and drew."""
     import numpy as np
 
     from livedrummer.kit.loader import load_kit
@@ -487,19 +519,21 @@ def add_drum_track(args: argparse.Namespace, sessions: Path, started: float) -> 
     from ..display.record import Timing, mux_audio, recording_track
     from ..journal import load_journal
 
-    timing = Timing.load(args.video)
+    timing = Timing.load(video)
+    delay_s = settings.delay.delay_s
+    kit_file = None if settings.sound.kit_file is None else Path(settings.sound.kit_file)
     journals = [load_journal(path) for path in sorted(sessions.glob(f"*{SUFFIX}"))
                 if path.stat().st_mtime >= started - 1.0]  # fmt: skip
     onsets = np.concatenate([j.onsets for j in journals] or [np.zeros(0, ONSET_DTYPE)])
     controls = np.concatenate([j.controls for j in journals] or [np.zeros(0, CONTROL_DTYPE)])
-    track = recording_track(onsets, controls, timing, delay_s=args.delay_ms / 1000.0,
-                            kit=load_kit(args.kit), note_map=load_note_map(args.map or DEMO_MAP),
-                            soundfont=args.soundfont)  # fmt: skip
-    mux_audio(args.video, track)
+    track = recording_track(onsets, controls, timing, delay_s=delay_s,
+                            kit=load_kit(settings.kit), note_map=load_note_map(settings.note_map),
+                            soundfont=kit_file)  # fmt: skip
+    mux_audio(video, track)
     duration = timing.frames / timing.fps
     # the rig keeps playing while the display draws a set-length recording: count the hits
     # the video holds, not every one journaled
-    sounded = onsets["time_s"].astype(np.float64) + args.delay_ms / 1000.0 - timing.show0_s
+    sounded = onsets["time_s"].astype(np.float64) + delay_s - timing.show0_s
     heard = int(np.count_nonzero((sounded >= 0.0) & (sounded < duration)))
-    print(f"up: wrote {args.video.resolve()} ({duration:.1f} s, {timing.frames} frames, "
+    print(f"up: wrote {video.resolve()} ({duration:.1f} s, {timing.frames} frames, "
           f"{heard} hits in its drum track)", flush=True)  # fmt: skip

@@ -11,6 +11,10 @@ said ready, a dead service restarted alone, all stopped on Ctrl-C, ``--seconds``
 window closes; ``--headless``, ``--frames-dir``, ``--video``, ``--wait``, ``--curve-secret``
 mean what they mean for ``up``.
 
+Settings. Each performer's note map, kit and avatar, with the rig's D and L, are resolved
+once (:func:`performer_settings`; a map ``auto`` becomes the one its source's notes mean) into
+a settings file its input daemon and its synths are given (``--settings``, :mod:`.settings`).
+
 Why one synth per performer (not one synth for all). Isolation: a flood of notes or a crash
 in one performer's synth delays or stops no other performer's drummer; each is restarted
 alone by the supervisor while the others keep playing; and the operating system spreads the
@@ -38,12 +42,14 @@ are checked for syntax before starting, but a missing MIDI port is found by its 
 from __future__ import annotations
 
 import argparse
+import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..program import program_argv
 
 if TYPE_CHECKING:
+    from livedrummer.live.settings import Delay, ShowSettings
     from livedrummer.stage.stagefile import Performer
     from livedrummer.stage.variation import Variation
 
@@ -52,12 +58,15 @@ if TYPE_CHECKING:
 PORTS_PER_PERFORMER = 20
 
 
-def stage_specs(args: argparse.Namespace, stage_file: Path) -> list[ServiceSpec]:
-    """The services of a live stage, in start order (see the module docstring)."""
+def stage_specs(
+    args: argparse.Namespace, stage_file: Path, delay: Delay, folder: Path
+) -> list[ServiceSpec]:
+    """The services of a live stage, in start order (see the module docstring); each
+    performer's settings resolved once (:func:`performer_settings`) into a file in ``folder``
+    that its input daemon and its synths are given."""
     from livedrummer.stage.stagefile import load_stage
 
     from ..supervisor import ServiceSpec
-    from .common import DEMO_MAP
     from .staging import check_room
     from .up import curve_argv, frame_size, recorded, windowed
 
@@ -68,24 +77,28 @@ def stage_specs(args: argparse.Namespace, stage_file: Path) -> list[ServiceSpec]
     me = program_argv()
     specs: list[ServiceSpec] = []
     subs: list[str] = []
+    settings: list[str] = []  # each drummer's file, for the display too
     for k, performer, _spot in live:
         ep, near = _endpoints(args, k)
         name = performer.id if performer.copy == 0 else f"{performer.id}.{performer.copy}"
+        given = folder / f"settings-{k - performer.copy}.json"  # a copy plays its performer's
         if performer.copy > 0:  # an ensemble copy: its own synth on its performer's input
             near["in_pub"] = _endpoints(args, k - performer.copy)[1]["in_pub"]
         else:
-            specs.append(_input(args, stage_file, k, performer, ep, curve["input"], stage.copies))
-        synth_map = DEMO_MAP if performer.map == "auto" else performer.map
+            performer_settings(performer, stage_file, delay).save(given)
+            specs.append(_input(args, stage_file, k, performer, ep, curve["input"], stage.copies,
+                                given))  # fmt: skip
         specs.append(ServiceSpec(f"synth-{name}", [
             *me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
-            "--control", ep["syn_ctl"], "--kit", performer.kit, "--map", synth_map,
-            "--lookahead-ms", str(args.lookahead_ms), "--delay-ms", str(args.delay_ms),
-            "--performer", str(k), *_avatar(performer), *_vary(stage.variation(k)),
+            "--control", ep["syn_ctl"], "--settings", str(given),
+            "--performer", str(k), *_vary(stage.variation(k)),
             *(["--preset", performer.preset] if performer.preset else []),
             *curve["synth"]]))  # fmt: skip
         subs.append(near["syn_pub"])
+        settings.append(str(given))
     display = [*me, "display", "--live", "--stage", str(stage_file.resolve()),
-               "--sub", ",".join(subs), "--camera", args.camera, "--fps", str(args.fps),
+               "--sub", ",".join(subs), "--settings", ",".join(settings),
+               "--camera", args.camera, "--fps", str(args.fps),
                "--size", frame_size(args), *curve["display"]]  # fmt: skip
     if windowed(args):
         display += ["--monitor", str(args.monitor)]
@@ -116,8 +129,33 @@ def _vary(variation: Variation | None) -> list[str]:
             "--vary-amplitude", f"{variation.amplitude:g}"]  # fmt: skip
 
 
+def performer_settings(performer: Performer, stage_file: Path, delay: Delay) -> ShowSettings:
+    """Performer's settings, resolved once for its input daemon and synths: its kit, avatar
+    and map, a map ``auto`` made the one its source's notes mean (for a file, the bundled
+    map that knows the most of them, as ``input --file`` chooses it; roland-td for a kit),
+    the rig's D and L; a stage sounds nothing live."""
+    from livedrummer.live.settings import AUTO, AvatarChoice, ShowSettings, spec_path
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.stage.source import parse_source
+
+    from .common import DEMO_MAP, read_performance
+
+    note_map = performer.map
+    if note_map == AUTO:
+        source = parse_source(performer.source or "", stage_file.parent)
+        note_map = DEMO_MAP
+        if source.kind == "file":
+            quiet = argparse.Namespace(map=AUTO, channel=performer.channel)
+            note_map = read_performance(quiet, source.value, quiet=True)[1].name
+    load_note_map(note_map)  # a bad map is one line before anything starts
+    return ShowSettings(note_map=spec_path(note_map) or note_map,
+                        kit=spec_path(performer.kit) or performer.kit,
+                        avatar=AvatarChoice(spec_path(performer.avatar)), delay=delay)  # fmt: skip
+
+
 def _input(args: argparse.Namespace, stage_file: Path, k: int, performer: Performer,
-           ep: dict[str, str], curve: list[str], copies: int) -> ServiceSpec:  # fmt: skip
+           ep: dict[str, str], curve: list[str], copies: int,
+           settings: Path) -> ServiceSpec:  # fmt: skip
     """Performer ``k``'s input daemon, waiting for its ``copies`` synths to subscribe."""
     from livedrummer.stage.source import parse_source
 
@@ -129,29 +167,34 @@ def _input(args: argparse.Namespace, stage_file: Path, k: int, performer: Perfor
     src += ["--wait"] if args.wait and source.kind in ("midi", "serial") else []
     journal = ["--no-journal"] if args.no_journal else []
     return ServiceSpec(f"input-{performer.id}", [
-        *program_argv(), "input", *src, "--map", performer.map, "--performer", str(k),
+        *program_argv(), "input", *src, "--settings", str(settings), "--performer", str(k),
         "--pub", ep["in_pub"], "--control", ep["in_ctl"], "--wait-subscribers", str(copies),
         *journal, *curve])  # fmt: skip
-
-
-def _avatar(performer: Performer) -> list[str]:
-    return [] if performer.avatar is None else ["--avatar", performer.avatar]
 
 
 def run_stage(args: argparse.Namespace) -> int:
     """``up --stage``: check everything, then supervise the stage's services."""
     from livedrummer.errors import ConfigError
 
-    from ..supervisor import Supervisor
-    from .up import _supervise, check_before_start
+    from .up import check_before_start, resolve
 
     if args.seconds is not None and not args.seconds > 0:
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
     wait = args.wait
     args.wait = True  # the sources are the stage file's (checked below), the options here
-    check_before_start(args)
+    rig = resolve(args)  # D and L for every performer; kits, maps, avatars are the file's
+    check_before_start(args, rig)
     args.wait = wait
-    specs = stage_specs(args, args.stage)
+    with tempfile.TemporaryDirectory(prefix="livedrummer-stage-") as tmp:
+        return _run(args, stage_specs(args, args.stage, rig.delay, Path(tmp)))
+
+
+def _run(args: argparse.Namespace, specs: list[ServiceSpec]) -> int:
+    from livedrummer.errors import ConfigError
+
+    from ..supervisor import Supervisor
+    from .up import _supervise
+
     last = max(int(s.argv[s.argv.index("--performer") + 1]) for s in specs
                if "--performer" in s.argv)  # fmt: skip
     if args.port_base + PORTS_PER_PERFORMER * last + 11 > 65535:
