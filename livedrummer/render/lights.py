@@ -31,18 +31,22 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
-
-import numpy as np
+from typing import TYPE_CHECKING, Any
 
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import ConfigError
 
+if TYPE_CHECKING:  # numpy is imported where it is used: a kit file's [lights] must not load it
+    import numpy as np
+
 #: The light names of a rig, in upload order.
 LIGHT_NAMES: tuple[str, ...] = ("key", "fill", "rim", "wash")
 #: A light's live parameters (OSC ``/livedrummer/light/<name>/<param>``): the intensity, the
-#: direction, and the linear colour (``r``, ``g``, ``b`` one at a time, or ``color`` "#rrggbb").
-LIGHT_PARAMS: tuple[str, ...] = ("intensity", "azimuth", "elevation", "r", "g", "b", "color")
+#: direction, the linear colour (``r``, ``g``, ``b`` one at a time, or ``color`` "#rrggbb")
+#: and whether it is on (``enabled``, 0 or 1).
+LIGHT_PARAMS: tuple[str, ...] = (
+    "intensity", "azimuth", "elevation", "r", "g", "b", "color", "enabled",
+)  # fmt: skip
 #: How far the key spot stands from the kit's centre (its shadow map's eye).
 KEY_DISTANCE_M = 4.6
 MAX_INTENSITY = 20.0
@@ -60,17 +64,20 @@ class Light:
     intensity: float
     azimuth_deg: float
     elevation_deg: float
+    enabled: bool = True  # off: it adds nothing (its other settings are kept for when it is on)
 
     @property
     def direction(self) -> np.ndarray:
         """Unit vector from the kit towards the light (kit frame: +x right, +y audience, +z up)."""
+        import numpy as np
+
         az, el = math.radians(self.azimuth_deg), math.radians(self.elevation_deg)
         return np.array([math.cos(el) * math.sin(az), math.cos(el) * math.cos(az), math.sin(el)])
 
     @property
     def radiance(self) -> tuple[float, float, float]:
-        """Colour times intensity: what the shader adds per unit of cosine."""
-        r, g, b = (c * self.intensity for c in self.color)
+        """Colour times intensity: what the shader adds per unit of cosine (0 when off)."""
+        r, g, b = (c * self.intensity * self.enabled for c in self.color)
         return (r, g, b)
 
 
@@ -95,6 +102,8 @@ class LightRig:
 
     def uniforms(self, centre: np.ndarray) -> dict[str, Any]:
         """The shaders' light uniforms for a kit centred at ``centre`` (xyz, metres)."""
+        import numpy as np
+
         out: dict[str, Any] = {}
         for name in LIGHT_NAMES:
             light = self.light(name)
@@ -183,6 +192,10 @@ def with_light_param(rig: LightRig, light: str, param: str, value: float | str) 
     try:
         if param == "color":
             new = replace(old, color=_colour(str(value)))
+        elif param == "enabled":
+            if isinstance(value, str) or float(value) not in (0.0, 1.0):
+                raise ValueError(f"{value!r}: expected 0 or 1 (false or true)")
+            new = replace(old, enabled=bool(value))
         elif param not in LIGHT_PARAMS:
             raise ValueError(f"expected one of {', '.join(LIGHT_PARAMS)}")
         else:
@@ -211,32 +224,139 @@ def with_light_param(rig: LightRig, light: str, param: str, value: float | str) 
     return replace(rig, **changes)
 
 
-def parse_lights(table: Table, base: LightRig | None = None) -> LightRig:
-    """A rig from a ``[lights]`` table: ``look = NAME`` (else ``base``, else the default
-    look), ``exposure``, ``sky``/``ground`` ([r, g, b] linear) and per light a table of
-    ``intensity``, ``azimuth``, ``elevation`` and ``color`` ("#rrggbb")."""
-    rig = base if base is not None else LOOKS[DEFAULT_LOOK]
-    if table.has("look"):
-        rig = LOOKS[table.text("look", choices=LOOKS)]
-    exposure = table.number("exposure", rig.exposure, lo=0.05, hi=16.0)
-    sky = table.vector("sky", 3, rig.sky)
-    ground = table.vector("ground", 3, rig.ground)
-    rig = replace(rig, exposure=exposure, sky=sky, ground=ground)
+#: One change of one light: (light name, parameter of :data:`LIGHT_PARAMS`, value).
+LightChange = tuple[str, str, float | str]
+
+
+@dataclass(frozen=True)
+class LightSpec:
+    """What a ``[lights]`` table (a kit, stage, preset or cue) says, checked, not yet applied:
+    a look to start from, and changes on top of it. :meth:`apply` lays it over a rig, so
+    files layer (``--look`` > stage > preset > kit > the default look, :func:`resolve_lights`)
+    and a cue changes what is lit now."""
+
+    look: str | None = None
+    exposure: float | None = None
+    sky: tuple[float, float, float] | None = None
+    ground: tuple[float, float, float] | None = None
+    changes: tuple[LightChange, ...] = ()
+
+    def apply(self, base: LightRig) -> LightRig:
+        rig = look_rig(self.look) if self.look is not None else base
+        rig = replace(
+            rig,
+            exposure=rig.exposure if self.exposure is None else self.exposure,
+            sky=rig.sky if self.sky is None else self.sky,
+            ground=rig.ground if self.ground is None else self.ground,
+        )
+        for light, param, value in self.changes:
+            rig = with_light_param(rig, light, param, value)
+        custom = self.changes or self.exposure is not None or self.sky or self.ground
+        return replace(rig, name="custom" if custom else rig.name)
+
+    @property
+    def empty(self) -> bool:
+        return self == LightSpec()
+
+
+def parse_light_spec(table: Table) -> LightSpec:
+    """A :class:`LightSpec` from a ``[lights]`` table: ``look = NAME``, ``exposure``,
+    ``sky``/``ground`` ([r, g, b] linear) and per light (``[lights.key]``, fill, rim, wash)
+    ``intensity``, ``azimuth``, ``elevation`` (or ``direction = [azimuth, elevation]``),
+    ``color`` ("#rrggbb", or [r, g, b] linear 0..1) and ``enabled``. A bad key or value
+    raises the table's error naming the file, the table and the key."""
+    look = table.text("look", None, choices=LOOKS)
+    exposure = table.number("exposure", None, lo=0.05, hi=16.0)
+    sky = table.vector("sky", 3, None)
+    ground = table.vector("ground", 3, None)
+    changes: list[LightChange] = []
     for name in LIGHT_NAMES:
         if not table.has(name):
             continue
         t = table.table(name)
-        for param in ("intensity", "azimuth", "elevation", "color"):
-            if not t.has(param):
+        for key in ("intensity", "azimuth", "elevation", "direction", "color", "enabled"):
+            if not t.has(key):
                 continue
-            value = t.text(param) if param == "color" else t.number(param)
-            try:
-                rig = with_light_param(rig, name, param, value)
-            except LightError as exc:
-                raise t.fail(param, str(exc).split(": ", 1)[1], value) from None
+            found: list[LightChange] = []
+            if key == "direction":
+                az, el = t.vector(key, 2)
+                found = [(name, "azimuth", az), (name, "elevation", el)]
+            elif key == "enabled":
+                found = [(name, key, float(t.boolean(key)))]
+            elif key == "color" and not isinstance(t.raw(key), str):
+                rgb = t.vector(key, 3)
+                found = [(name, c, v) for c, v in zip("rgb", rgb, strict=True)]
+            else:
+                value = t.text(key) if key == "color" else t.number(key)
+                found = [(name, key, value)]
+            for change in found:
+                try:
+                    with_light_param(LOOKS[DEFAULT_LOOK], *change)
+                except LightError as exc:
+                    raise t.fail(key, str(exc).split(": ", 1)[1], t.raw(key)) from None
+            changes.extend(found)
         t.done()
     table.done()
-    return replace(rig, name=rig.name if rig.name in LOOKS else "custom")
+    return LightSpec(look, exposure, sky, ground, tuple(changes))
+
+
+def parse_lights(table: Table, base: LightRig | None = None) -> LightRig:
+    """A rig from a ``[lights]`` table (:func:`parse_light_spec`) laid over ``base`` (else
+    the default look)."""
+    return parse_light_spec(table).apply(base if base is not None else LOOKS[DEFAULT_LOOK])
+
+
+def light_spec_of(data: dict[str, Any], source: str, error: type[ConfigError]) -> LightSpec | None:
+    """The ``[lights]`` table of a parsed TOML file (a kit, stage or preset), checked; None
+    when it has none."""
+    if "lights" not in data:
+        return None
+    return parse_light_spec(Table(data["lights"], source, "lights", error))
+
+
+def resolve_lights(look: str | None, *specs: LightSpec | None) -> LightRig:
+    """The rig a show starts with: the default look, each file's ``[lights]`` over it from
+    the weakest to the strongest (kit, preset, stage), and a ``--look`` given on the command
+    line over all (it names the whole theme: the files' changes are dropped)."""
+    if look is not None:
+        return look_rig(look)
+    rig = LOOKS[DEFAULT_LOOK]
+    for spec in specs:
+        if spec is not None:
+            rig = spec.apply(rig)
+    return rig
+
+
+def _mix(a: float, b: float, s: float) -> float:
+    return a + (b - a) * s
+
+
+def _mix3(a: tuple[float, float, float], b: tuple[float, float, float], s: float
+          ) -> tuple[float, float, float]:  # fmt: skip
+    return (_mix(a[0], b[0], s), _mix(a[1], b[1], s), _mix(a[2], b[2], s))
+
+
+def blend_rigs(a: LightRig, b: LightRig, s: float) -> LightRig:
+    """The rig ``s`` (0..1) of the way from ``a`` to ``b`` (a light fade): colours,
+    intensities, exposure and ambient mixed linearly, directions the short way round; a
+    light switched on or off fades its intensity from or to 0. ``s`` >= 1 gives ``b``."""
+    if s >= 1.0:
+        return b
+    if s <= 0.0:
+        return a
+    lights: dict[str, Any] = {}
+    for name in LIGHT_NAMES:
+        la, lb = a.light(name), b.light(name)
+        turn = (lb.azimuth_deg - la.azimuth_deg + 180.0) % 360.0 - 180.0
+        lights[name] = Light(
+            color=_mix3(la.color, lb.color, s),
+            intensity=_mix(la.intensity * la.enabled, lb.intensity * lb.enabled, s),
+            azimuth_deg=la.azimuth_deg + turn * s,
+            elevation_deg=_mix(la.elevation_deg, lb.elevation_deg, s),
+        )
+    return LightRig(sky=_mix3(a.sky, b.sky, s), ground=_mix3(a.ground, b.ground, s),
+                    exposure=_mix(a.exposure, b.exposure, s), name=b.name,
+                    **lights)  # fmt: skip
 
 
 def load_lights(path: Path | str, base: LightRig | None = None) -> LightRig:

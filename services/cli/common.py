@@ -240,8 +240,22 @@ def add_look_option(parser: Any) -> None:
     """``--look NAME``: the show lights' theme (:data:`livedrummer.render.lights.LOOKS`)."""
     from livedrummer.render.lights import DEFAULT_LOOK, LOOKS
 
-    parser.add_argument("--look", choices=tuple(LOOKS), default=DEFAULT_LOOK,
-                        help=f"the show lights' theme (default: {DEFAULT_LOOK})")  # fmt: skip
+    parser.add_argument("--look", choices=tuple(LOOKS), default=None,
+                        help="the show lights' theme, over the [lights] of the stage, preset "
+                        f"and kit files (default: theirs, else {DEFAULT_LOOK})")  # fmt: skip
+
+
+def lights_of(args: argparse.Namespace, kit: Any, stage: Any = None) -> Any:
+    """The show lights a command starts with (:func:`livedrummer.render.lights.resolve_lights`):
+    ``--look`` over the stage file's ``[lights]``, over the ``--preset``'s, over the kit's,
+    over the default look. ``stage``: a loaded stage file (``--stage``), or None."""
+    from livedrummer.body.expression import preset_lights
+    from livedrummer.render.lights import resolve_lights
+
+    preset = getattr(args, "preset", None)
+    return resolve_lights(getattr(args, "look", None), getattr(kit, "lights", None),
+                          preset_lights(preset) if preset else None,
+                          getattr(stage, "lights", None))  # fmt: skip
 
 
 def background_of(args: argparse.Namespace, window: bool = False) -> Background:

@@ -28,7 +28,6 @@ from typing import TYPE_CHECKING, Any
 
 from livedrummer.errors import LivedrummerError
 from livedrummer.render.camera import CAMERA_NAMES
-from livedrummer.render.lights import look_rig
 from livedrummer.timeline.span import Position, parse_position, span_seconds
 
 from .common import (
@@ -46,6 +45,7 @@ from .common import (
     background_of,
     demo_groove,
     fitted,
+    lights_of,
     parse_aa,
     read_performance,
     rig_for,
@@ -242,6 +242,7 @@ def run(args: argparse.Namespace) -> int:
     # option is the one line on stderr.
     kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
     background = background_of(args)
+    lights = lights_of(args, kit)
     get_strategy(args.sticking)
     if args.cues is not None:  # checked now, applied once the file is animated
         from livedrummer.live.cues import load_cues
@@ -273,7 +274,7 @@ def run(args: argparse.Namespace) -> int:
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=samples, fxaa=fxaa, progress=bar,
         overlays=overlays, soundfont=args.soundfont, avatar=avatar, background=background,
-        span=span, staging=staging, lights=look_rig(args.look),
+        span=span, staging=staging, lights=lights,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
@@ -284,7 +285,7 @@ def run(args: argparse.Namespace) -> int:
         f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"
         f"{', drum track 48 kHz stereo' if out is not None else ''}"
         f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}"
-        f"{', background ' + args.background if args.background else ''}, look {args.look}; "
+        f"{', background ' + args.background if args.background else ''}, look {lights.name}; "
         f"{report.realtime:.2f}x real time"
     )
     return 0
@@ -314,6 +315,8 @@ def run_stage(args: argparse.Namespace) -> int:
                              alpha=background.transparent)  # fmt: skip
     if out is not None:
         check_video_target(out, settings)
+    # the first performer's kit's [lights] under the stage file's
+    lights = lights_of(args, load_kit(stage.performers[0].kit), stage)
     drummers = []
     for part in stage_parts(stage, args):
         p = part.performer
@@ -334,11 +337,11 @@ def run_stage(args: argparse.Namespace) -> int:
     report = export_stage(drummers, out=out, frames_dir=args.frames_dir, settings=settings,
                           camera=args.camera, tail_s=args.tail, progress=bar,
                           background=background, span=span,
-                          lights=look_rig(args.look))  # fmt: skip
+                          lights=lights)  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
           f"{f' (from {span[0]:.2f} s to {span[1]:.2f} s)' if span else ''}, "
           f"{len(drummers)} drummers ({stage.formation.shape}), {size[0]}x{size[1]} @ "
-          f"{args.fps} fps, camera {args.camera}, look {args.look}; "
+          f"{args.fps} fps, camera {args.camera}, look {lights.name}; "
           f"{report.realtime:.2f}x real time")  # fmt: skip
     return 0

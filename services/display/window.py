@@ -45,6 +45,7 @@ from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.lights import LightRig
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.render.transport import KEYS, STEPS, Transport
@@ -77,6 +78,7 @@ class WindowOptions:
     background: Background | None = None  # behind the stage (None: the dark hall)
     frame_log: Path | None = None  # per frame: {"mono": after the swap, "t": position shown}
     keys_port: str | None = None  # live: the MIDI input the drum keys play into (keysend)
+    lights: LightRig | None = None  # the show lights (None: the default look)
 
 
 DEFAULT_OPTIONS = WindowOptions()
@@ -260,7 +262,7 @@ def _loop(
     mesh = build_kit_mesh(kit)
     size = glfw.get_framebuffer_size(window)
     renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False, avatar=avatar,
-                        background=options.background)  # fmt: skip
+                        background=options.background, lights=options.lights)  # fmt: skip
     models = OverlayModels(body, transport.duration_s)
     shown = frozenset(options.overlays)
     strips = overlay_image(size, shown, models)
