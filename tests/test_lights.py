@@ -12,6 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from livedrummer.body.expression import PresetError, load_expression, preset_lights
@@ -240,3 +241,46 @@ def test_a_bar_cues_lights_reach_the_display_from_its_own_cue_list() -> None:
         replay.at(render)
         assert replay.stage.lights_at(render) == lights
     assert Cue("x").lights is None and not Cue("x").stages
+
+
+def test_look_is_passed_to_the_display_of_up_and_of_the_practice_rig() -> None:
+    from services.cli import build_parser
+    from services.cli.practice_show import specs as practice_specs
+    from services.cli.up import specs
+
+    argv = ["up", "--demo", "--headless", "--look", "neon"]
+    by_name = {s.name: s.argv for s in specs(build_parser(argv).parse_args(argv))}
+    display = by_name["display"]
+    assert display[display.index("--look") + 1] == "neon" and "--look" not in by_name["synth"]
+    argv = ["up", "--demo", "--headless"]
+    by_name = {s.name: s.argv for s in specs(build_parser(argv).parse_args(argv))}
+    assert "--look" not in by_name["display"], "no --look: the display reads the kit's lights"
+    groove = REPO / "kits" / "grooves" / "gmd-drummer1-funk-80.mid"
+    argv = ["practice", "play", str(groove), "--virtual", "x", "--headless", "--look", "studio"]
+    args = build_parser(argv).parse_args(argv)
+    by_name = {s.name: s.argv for s in practice_specs(args, "headless", "tcp://127.0.0.1:1")}
+    display = by_name["display"]
+    assert display[display.index("--look") + 1] == "studio"
+
+
+def test_display_live_starts_from_the_kit_lights_under_look(gl_ok: None, tmp_path: Path) -> None:
+    from tests.test_live_osc import read_png
+
+    lit = kit_with(tmp_path, '[lights]\nlook = "neon"\n')
+
+    def first_frame(name: str, *extra: str) -> np.ndarray:
+        out = tmp_path / name
+        proc = subprocess.run(
+            [sys.executable, "-m", "services", "display", "--live", "--headless", "--sub",
+             "tcp://127.0.0.1:1", "--max-frames", "2", "--fps", "10", "--size", "160x90",
+             "--frames-dir", str(out), *extra],
+            cwd=REPO, capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        assert proc.returncode == 0, proc.stderr
+        return read_png(out / "frame_000001.png").astype(int)
+
+    flag = first_frame("flag", "--look", "neon")
+    kit = first_frame("kit", "--kit", str(lit))
+    over = first_frame("over", "--kit", str(lit), "--look", "concert")
+    assert np.abs(flag - kit).mean() < 0.5, "a kit's look draws as --look draws it"
+    assert np.abs(over - kit).mean() > 3.0, "--look wins over the kit's [lights]"
