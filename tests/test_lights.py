@@ -12,6 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import mido
 import numpy as np
 import pytest
 
@@ -40,6 +41,7 @@ from livedrummer.render.lights import (
 )
 from livedrummer.stage.stagefile import StageError, load_stage
 from services.display.showctl import DisplayShow, light_cue, replay_stage
+from tests.conftest import MidiWriter
 
 REPO = Path(__file__).resolve().parents[1]
 ROCK5 = (REPO / "kits" / "rock5.toml").read_text()
@@ -284,3 +286,29 @@ def test_display_live_starts_from_the_kit_lights_under_look(gl_ok: None, tmp_pat
     over = first_frame("over", "--kit", str(lit), "--look", "concert")
     assert np.abs(flag - kit).mean() < 0.5, "a kit's look draws as --look draws it"
     assert np.abs(over - kit).mean() > 3.0, "--look wins over the kit's [lights]"
+
+
+def test_render_fires_light_cues_with_their_fades(gl_ok: None, tmp_path: Path,
+                                                  write_midi: MidiWriter) -> None:  # fmt: skip
+    from tests.test_live_osc import read_png
+
+    msgs = []
+    for k in range(8):  # a snare each half second
+        msgs.append(mido.Message("note_on", channel=9, note=38, velocity=90, time=0 if k == 0
+                                 else 480))  # fmt: skip
+        msgs.append(mido.Message("note_off", channel=9, note=38, velocity=0, time=0))
+    midi = write_midi(msgs)
+    cues = tmp_path / "cues.toml"
+    off = "\n".join(f"[cue.lights.{n}]\nenabled = false" for n in ("key", "fill", "rim", "wash"))
+    cues.write_text(f'[[cue]]\nname = "dark"\nat_s = 0.5\n{off}\n\n'
+                    '[[cue]]\nname = "up"\nat_s = 1.0\nlook = "studio"\nfade_s = 1.0\n')  # fmt: skip
+    out = tmp_path / "frames"
+    run = subprocess.run(
+        [sys.executable, "-m", "services", "render", str(midi), "--frames-dir", str(out),
+         "--size", "160x90", "--fps", "10", "--tail", "0.5", "--cues", str(cues)],
+        capture_output=True, text=True, cwd=REPO, timeout=300,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr[-2000:]
+    mean = {i: read_png(out / f"frame_{i:06d}.png").astype(float).mean() for i in (4, 7, 15, 22)}
+    assert mean[7] < 0.5 * mean[4], "the lights are off from 0.5 s"
+    assert mean[7] < mean[15] < mean[22], "and fade up to studio over 1.0 s to 2.0 s"

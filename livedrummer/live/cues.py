@@ -58,7 +58,7 @@ from livedrummer.config import Table, read_toml
 from livedrummer.errors import ConfigError, LivedrummerError
 from livedrummer.live.stage import Stage, camera_name
 from livedrummer.render.camera import CAMERA_NAMES, Camera
-from livedrummer.render.lights import LOOKS, LightSpec, parse_light_spec
+from livedrummer.render.lights import LOOKS, LightRig, LightSpec, parse_light_spec
 from livedrummer.timeline.events import STAGE_CUE_DTYPE
 
 
@@ -191,7 +191,7 @@ def style_changes(timed: list[tuple[float, Cue]], base: Expression
 class CuedStage:
     """A :class:`~livedrummer.live.stage.Stage` driven by timed cues: :meth:`at` fires the
     cues due by a frame's time (frames asked in time order) and gives its camera and
-    darkness."""
+    darkness; :meth:`lights_at` then gives its lights."""
 
     def __init__(self, stage: Stage, timed: list[tuple[float, Cue]]) -> None:
         self.stage = stage
@@ -204,6 +204,9 @@ class CuedStage:
             fire_stage(self.stage, cue, at)
             self._next += 1
         return self.stage.view(t), self.stage.darkness(t)
+
+    def lights_at(self, t: float) -> LightRig:
+        return self.stage.lights_at(t)
 
 
 def fire_stage(stage: Stage, cue: Cue, now_s: float) -> None:

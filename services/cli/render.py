@@ -128,9 +128,10 @@ def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, not
 
 
 def cued(args: argparse.Namespace, performance: Performance, note_map: NoteMap,
-         body: BodyScene) -> tuple[BodyScene, Any]:  # fmt: skip
-    """``--cues``: the body with the cue list's style changes and the frames' stage (camera and
-    blackout by time); bars are counted on the file's grid."""
+         body: BodyScene, lights: Any = None) -> tuple[BodyScene, Any]:  # fmt: skip
+    """``--cues``: the body with the cue list's style changes and the frames' stage (camera,
+    blackout and lights by time, from ``lights``), a CuedStage; bars are counted on the
+    file's grid."""
     from livedrummer.body.expression import Expression, load_expression
     from livedrummer.body.perform import perform
     from livedrummer.body.strokes import StrokeParams
@@ -152,7 +153,7 @@ def cued(args: argparse.Namespace, performance: Performance, note_map: NoteMap,
     scene = CuedBodyScene(body.kit, p, styled)
     print(f"livedrummer: {args.cues}: {len(timed)} timed cues ({len(styled)} change the style)",
           file=sys.stderr)  # fmt: skip
-    return scene, CuedStage(Stage(body.kit, args.camera), timed).at
+    return scene, CuedStage(Stage(body.kit, args.camera, lights=lights), timed)
 
 
 def first_seconds(performance: Performance, seconds: float) -> Performance:
@@ -268,13 +269,14 @@ def run(args: argparse.Namespace) -> int:
     body = body_scene(args, performance, kit, note_map, avatar)
     staging = None
     if args.cues is not None:
-        body, staging = cued(args, performance, note_map, body)
+        body, staging = cued(args, performance, note_map, body, lights)
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=samples, fxaa=fxaa, progress=bar,
         overlays=overlays, soundfont=args.soundfont, avatar=avatar, background=background,
-        span=span, staging=staging, lights=lights,
+        span=span, staging=None if staging is None else staging.at, lights=lights,
+        lighting=None if staging is None else staging.lights_at,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
