@@ -19,11 +19,16 @@ Every colour here is linear light; the shaders work in linear light, tone-map th
   cuts the drummer out of the dark hall;
 * wash: a broad coloured light from above, lighting the stage floor's pool and every top.
 
-:data:`LOOKS` are the themes a show picks (``--look``); a rig can also be read from a TOML
-table (:func:`parse_lights`: ``[lights]`` with ``look = NAME`` and ``[lights.key]``-style
-tables overriding parameters) and changed one parameter at a time (:func:`with_light_param`:
-the OSC and cue path). Limits: directional lights only (the key's position is for its shadow);
-one shadowed light; no coloured shadows.
+:data:`LOOKS` are the themes a show picks (``--look``). A ``[lights]`` TOML table (in a kit,
+stage or preset file, or a cue) is read into a :class:`LightSpec` (:func:`parse_light_spec`:
+``look = NAME`` and ``[lights.key]``-style tables overriding parameters), checked when the file
+is loaded and applied later over whatever rig is in force, so files layer
+(:func:`resolve_lights`: ``--look`` > stage > preset > kit > the default look) and a cue
+changes only what it names. A rig changes one parameter at a time (:func:`with_light_param`,
+the OSC and cue path) and fades into another (:func:`blend_rigs`, driven by the live
+:class:`~livedrummer.live.stage.Stage`). Limits: directional lights only (the key's position
+is for its shadow); one shadowed light; no coloured shadows; a fade mixes light by light, so
+a light switched on or off fades its intensity.
 """
 
 from __future__ import annotations
@@ -293,7 +298,7 @@ def parse_light_spec(table: Table) -> LightSpec:
                 try:
                     with_light_param(LOOKS[DEFAULT_LOOK], *change)
                 except LightError as exc:
-                    raise t.fail(key, str(exc).split(": ", 1)[1], t.raw(key)) from None
+                    raise t.fail(key, str(exc).split(": ", 1)[1]) from None  # names the value
             changes.extend(found)
         t.done()
     table.done()
