@@ -101,3 +101,45 @@ def test_osc_changes_the_look_and_the_lights_of_the_next_frame(gl_ok: None,
         thread.join(10.0)
         client.close()
         ctx.destroy(0)
+
+
+def test_up_forwards_look_osc_and_bar_cues_light_the_display(gl_ok: None,
+                                                             tmp_path: Path) -> None:  # fmt: skip
+    from tests.test_live_up import launch, wait_running
+
+    probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()
+    cues = tmp_path / "cues.toml"
+    cues.write_text('[[cue]]\nname = "dim"\nbar = 4\n[cue.lights.key]\nenabled = false\n'
+                    "[cue.lights.fill]\nenabled = false\n[cue.lights.wash]\nenabled = false\n")  # fmt: skip
+    proc = launch(tmp_path, "--headless", "--seconds", "14", "--png", "--fps", "10",
+                  "--osc", str(port), "--look", "studio", "--cues", str(cues))  # fmt: skip
+    client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    client.bind(("127.0.0.1", 0))
+    client.settimeout(5.0)
+    frames = Frames(tmp_path / "frames")
+    try:
+        wait_running(proc)
+        first = frames.wait(lambda r: r.get("pose_s") is not None, "with the drummer", 60.0)
+        assert first["look"] == "studio", "up's --look reaches its display"
+        client.sendto(encode("/livedrummer/light/rim/intensity", (-1.0,)), ("127.0.0.1", port))
+        client.sendto(encode("/livedrummer/look", ("neon",)), ("127.0.0.1", port))
+        frames.wait(lambda r: r.get("look") == "neon", "in the look sent to up's port")
+        assert _state(client, port)["look"] == "neon"
+        dim = frames.wait(lambda r: r.get("look") == "custom", "lit by the bar cue", 60.0)
+        out, _ = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.terminate()
+            proc.communicate(timeout=60)
+        client.close()
+    assert proc.returncode == 0, out[-3000:]
+    rows = frames.read()
+    k = int(dim["frame"])  # type: ignore[call-overload]
+    assert [name for name, _at, _late in dim.get("cues", [])] == ["bar 4"]  # type: ignore[attr-defined]
+    assert rows[k - 1]["look"] == "neon" and all(r["look"] == "custom" for r in rows[k:])
+    before, after = frames.png(rows[k - 1]).mean(), frames.png(dim).mean()
+    assert after < 0.6 * before, "the key, fill and wash go out on bar 4; the rim stays"
+    assert out.count("display OSC port: dropped a bad message (argument)") == 1
