@@ -250,10 +250,11 @@ def test_look_is_passed_to_the_display_of_up_and_of_the_practice_rig() -> None:
     from services.cli.practice_show import specs as practice_specs
     from services.cli.up import specs
 
-    argv = ["up", "--demo", "--headless", "--look", "neon"]
+    argv = ["up", "--demo", "--headless", "--look", "neon", "--preset", "relaxed"]
     by_name = {s.name: s.argv for s in specs(build_parser(argv).parse_args(argv))}
     display = by_name["display"]
     assert display[display.index("--look") + 1] == "neon" and "--look" not in by_name["synth"]
+    assert display[display.index("--preset") + 1] == "relaxed", "for the preset's [lights]"
     argv = ["up", "--demo", "--headless"]
     by_name = {s.name: s.argv for s in specs(build_parser(argv).parse_args(argv))}
     assert "--look" not in by_name["display"], "no --look: the display reads the kit's lights"

@@ -256,7 +256,8 @@ class LightSpec:
         )
         for light, param, value in self.changes:
             rig = with_light_param(rig, light, param, value)
-        custom = self.changes or self.exposure is not None or self.sky or self.ground
+        given = (self.exposure, self.sky, self.ground)
+        custom = bool(self.changes) or any(v is not None for v in given)
         return replace(rig, name="custom" if custom else rig.name)
 
     @property

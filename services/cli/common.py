@@ -429,6 +429,14 @@ def osc_allow(args: argparse.Namespace) -> tuple[str, ...]:
         raise ConfigError(str(exc)) from None
 
 
+def lights_argv(args: argparse.Namespace) -> list[str]:
+    """What a child display needs to start from the same lights (:func:`lights_of`) as this
+    command: ``--look`` and the ``--preset`` (for its ``[lights]``), as given."""
+    out = ["--look", args.look] if getattr(args, "look", None) else []
+    preset = getattr(args, "preset", None)
+    return out + (["--preset", str(preset)] if preset is not None else [])
+
+
 def style_argv(args: argparse.Namespace) -> list[str]:
     """``--preset``/``--strokes`` as given, for a child process (``up``)."""
     out = ["--strokes", args.strokes]

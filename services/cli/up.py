@@ -58,6 +58,7 @@ from .common import (
     demo_groove,
     has_screen,
     kit_source,
+    lights_argv,
     osc_allow,
     style_argv,
 )
@@ -267,7 +268,7 @@ def specs(args: argparse.Namespace, sessions: Path | None = None) -> list:  # ty
         synth_argv += cues
         display_argv += cues
     display_argv += ["--background", args.background] if args.background else []
-    display_argv += ["--look", args.look] if args.look else []  # over the kit's [lights]
+    display_argv += lights_argv(args)  # the lights over the kit's [lights]
     display_argv += ["--overlay", args.overlay] if args.overlay else []
     display_argv += ["--keys-port", KEYS_PORT] if args.keys else []
     display_argv += ["--sound", "--map", map_name] if args.sound else []
