@@ -18,6 +18,16 @@ import pytest
 
 from livedrummer.body.expression import PresetError, load_expression, preset_lights
 from livedrummer.errors import KitError
+from livedrummer.kit.lights import (
+    DEFAULT_LOOK,
+    LOOKS,
+    LightError,
+    LightSpec,
+    blend_rigs,
+    look_rig,
+    resolve_lights,
+    with_light_param,
+)
 from livedrummer.kit.loader import load_kit, load_kit_file
 from livedrummer.live.cues import (
     Cue,
@@ -29,16 +39,6 @@ from livedrummer.live.cues import (
     with_lights_of,
 )
 from livedrummer.live.stage import Stage
-from livedrummer.render.lights import (
-    DEFAULT_LOOK,
-    LOOKS,
-    LightError,
-    LightSpec,
-    blend_rigs,
-    look_rig,
-    resolve_lights,
-    with_light_param,
-)
 from livedrummer.stage.stagefile import StageError, load_stage
 from services.display.showctl import DisplayShow, light_cue, replay_stage
 from tests.conftest import MidiWriter

@@ -18,8 +18,8 @@ import zmq
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
 
+from livedrummer.kit.lights import LIGHT_NAMES
 from livedrummer.kit.loader import load_kit
-from livedrummer.render.lights import LIGHT_NAMES
 from livedrummer.render.litshare import lit_share
 from services.display.live import LiveConfig, LiveDisplay, MonotonicFrameClock
 from services.osc import decode, encode

@@ -29,8 +29,8 @@ from pathlib import Path
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import PresetError
 from livedrummer.kit.catalog import entries, looks_like_path
+from livedrummer.kit.lights import LightSpec, light_spec_of, parse_light_spec
 from livedrummer.kit.vocabulary import PieceKind
-from livedrummer.render.lights import LightSpec, light_spec_of, parse_light_spec
 
 Shares = tuple[float, float, float]  # wrist, elbow, shoulder
 

@@ -46,9 +46,9 @@ from pathlib import Path
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import KitError
 from livedrummer.kit.catalog import entries, looks_like_path
+from livedrummer.kit.lights import parse_light_spec
 from livedrummer.kit.model import Kit, Piece
 from livedrummer.kit.vocabulary import DEFAULT_ZONES, INSTRUMENTS, Limb, PieceKind, Zone
-from livedrummer.render.lights import parse_light_spec
 
 _MIRROR_SUFFIX = {"-left": "left", "-right": "right"}
 _MAX_REACH_M = 3.0  # no piece of a playable kit is further than this from the seat

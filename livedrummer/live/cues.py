@@ -13,7 +13,7 @@ grid), or only when called by name (OSC ``/livedrummer/cue NAME``)::
     camera = "front"        # a name or 1-8
     cut = false             # true: cut to the camera, no move
     blackout = false
-    look = "neon"           # the show lights' theme (livedrummer.render.lights.LOOKS)
+    look = "neon"           # the show lights' theme (livedrummer.kit.lights.LOOKS)
     fade_s = 2.0            # the light change takes this long (default 0: at once)
     [cue.params]
     head_amplitude_deg = 10.0
@@ -56,9 +56,9 @@ import numpy as np
 from livedrummer.body.expression import PARAM_NAMES, Expression, load_expression, with_param
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import ConfigError, LivedrummerError
+from livedrummer.kit.lights import LOOKS, LightRig, LightSpec, parse_light_spec
 from livedrummer.live.stage import Stage, camera_name
 from livedrummer.render.camera import CAMERA_NAMES, Camera
-from livedrummer.render.lights import LOOKS, LightRig, LightSpec, parse_light_spec
 from livedrummer.timeline.events import STAGE_CUE_DTYPE
 
 

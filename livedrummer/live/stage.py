@@ -9,7 +9,7 @@ viewpoints, :class:`~livedrummer.render.camera.CameraMove`, or a cut) and how da
 is (0 picture .. 1 black; a blackout fades in and out over ``fade_s`` along a smoothstep),
 and the light rig to draw with (:meth:`Stage.lights_at`: a light change, an OSC
 ``/livedrummer/light/...`` or a cue's, fades over its own time from the rig as it is, along
-the same smoothstep; :func:`~livedrummer.render.lights.blend_rigs`). It holds no socket and
+the same smoothstep; :func:`~livedrummer.kit.lights.blend_rigs`). It holds no socket and
 no GL: the display service feeds it and reads it each frame.
 
 Limits: one move and one light fade at a time (a new one starts from where the camera or the
@@ -18,9 +18,9 @@ lights are); the blackout's fade is the same length both ways.
 
 from __future__ import annotations
 
+from livedrummer.kit.lights import DEFAULT_LOOK, LightRig, blend_rigs, look_rig
 from livedrummer.kit.model import Kit
 from livedrummer.render.camera import CAMERA_NAMES, Camera, CameraMove, kit_cameras
-from livedrummer.render.lights import DEFAULT_LOOK, LightRig, blend_rigs, look_rig
 
 
 def camera_name(spec: str | float) -> str:

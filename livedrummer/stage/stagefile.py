@@ -40,7 +40,7 @@ from pathlib import Path
 
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import ConfigError
-from livedrummer.render.lights import LightSpec, parse_light_spec
+from livedrummer.kit.lights import LightSpec, parse_light_spec
 
 from .formation import FACINGS, SHAPES, Formation, Placement, place
 from .source import parse_source
@@ -74,7 +74,7 @@ class Stage:
     copies: int = 1
     source: str = ""
     placements: tuple[Placement, ...] = field(default=())
-    lights: LightSpec | None = None  # the [lights] table (livedrummer.render.lights)
+    lights: LightSpec | None = None  # the [lights] table (livedrummer.kit.lights)
 
     def players(self) -> list[tuple[Performer, Placement, Variation | None]]:
         """Every drummer on the stage: each performer ``copies`` times, with its spot and the

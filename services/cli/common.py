@@ -237,8 +237,8 @@ def add_background_option(parser: Any, transparent: bool = True) -> None:
 
 
 def add_look_option(parser: Any) -> None:
-    """``--look NAME``: the show lights' theme (:data:`livedrummer.render.lights.LOOKS`)."""
-    from livedrummer.render.lights import DEFAULT_LOOK, LOOKS
+    """``--look NAME``: the show lights' theme (:data:`livedrummer.kit.lights.LOOKS`)."""
+    from livedrummer.kit.lights import DEFAULT_LOOK, LOOKS
 
     parser.add_argument("--look", choices=tuple(LOOKS), default=None,
                         help="the show lights' theme, over the [lights] of the stage, preset "
@@ -246,11 +246,11 @@ def add_look_option(parser: Any) -> None:
 
 
 def lights_of(args: argparse.Namespace, kit: Any, stage: Any = None) -> Any:
-    """The show lights a command starts with (:func:`livedrummer.render.lights.resolve_lights`):
+    """The show lights a command starts with (:func:`livedrummer.kit.lights.resolve_lights`):
     ``--look`` over the stage file's ``[lights]``, over the ``--preset``'s, over the kit's,
     over the default look. ``stage``: a loaded stage file (``--stage``), or None."""
     from livedrummer.body.expression import preset_lights
-    from livedrummer.render.lights import resolve_lights
+    from livedrummer.kit.lights import resolve_lights
 
     preset = getattr(args, "preset", None)
     return resolve_lights(getattr(args, "look", None), getattr(kit, "lights", None),

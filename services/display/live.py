@@ -91,6 +91,7 @@ import zmq
 from livedrummer.avatar.model import Avatar
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
+from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.live.behind import BehindCounter
@@ -98,7 +99,6 @@ from livedrummer.live.track import PoseTrack
 from livedrummer.protocol import Hello, Kind
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import frame_from_pose
-from livedrummer.render.lights import LightRig
 from livedrummer.render.live_overlay import LiveStrips
 
 from ..net import Security

@@ -36,10 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from livedrummer.kit.model import Kit
-from livedrummer.live.cues import Cue, CuedStage, fire_stage, stage_cue_of, with_lights_of
-from livedrummer.live.stage import Stage, camera_name
-from livedrummer.render.lights import (
+from livedrummer.kit.lights import (
     LIGHT_NAMES,
     LOOKS,
     LightChange,
@@ -47,6 +44,9 @@ from livedrummer.render.lights import (
     LightRig,
     LightSpec,
 )
+from livedrummer.kit.model import Kit
+from livedrummer.live.cues import Cue, CuedStage, fire_stage, stage_cue_of, with_lights_of
+from livedrummer.live.stage import Stage, camera_name
 
 from ..osc import (
     CUE,

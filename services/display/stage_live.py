@@ -46,10 +46,10 @@ import numpy as np
 import zmq
 
 from livedrummer.avatar.model import Avatar
+from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.render.body_scene import frame_from_pose
-from livedrummer.render.lights import LightRig
 from livedrummer.stage.formation import Placement
 
 from ..net import Security

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from livedrummer.avatar.model import Avatar
+from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.live.stage import Stage
 from livedrummer.midi.keypads import KEYPADS, keypad_hit
@@ -34,7 +35,6 @@ from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON
 from livedrummer.render.camera import Camera, CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
-from livedrummer.render.lights import LightRig
 from livedrummer.render.scene import SceneFrame
 
 from .keysend import KeySender

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from livedrummer.avatar.model import Avatar
+from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.midi.keypads import KEYPADS, keypad_hit
@@ -45,7 +46,6 @@ from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import CameraMove, kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
-from livedrummer.render.lights import LightRig
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.render.transport import KEYS, STEPS, Transport

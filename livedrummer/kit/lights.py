@@ -1,5 +1,10 @@
 """Show lighting as scene objects: a key, a fill, a rim and a wash light, and the hall's ambient.
 
+Why in ``kit``. A kit file, an expression preset, a stage file and a cue each carry a
+``[lights]`` table, checked when the file is read; the lights are plain data, so they live
+below every package that reads such a file (kit, body, stage, live) and the renderer
+(:mod:`services.display.renderer`) takes them from here like any other scene data.
+
 Why this shape. Lights are plain data in the scene (as pygfx keeps them), not uniforms
 scattered through the renderer: a :class:`Light` is a colour, an intensity and a direction
 (azimuth and elevation, degrees, of where the light comes *from*, seen from the kit: azimuth 0
@@ -34,6 +39,7 @@ a light switched on or off fades its intensity.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -180,13 +186,16 @@ def look_rig(name: str) -> LightRig:
     return LOOKS[name]
 
 
-def _colour(text: str) -> tuple[float, float, float]:
-    from livedrummer.render.background import BackgroundError, parse_colour
+_HEX = re.compile(r"#(?:[0-9a-fA-F]{3}|[0-9a-fA-F]{6})")
 
-    try:
-        return parse_colour(text)
-    except BackgroundError:
-        raise ValueError(f"colour {text!r}: expected #rrggbb or #rgb") from None
+
+def _colour(text: str) -> tuple[float, float, float]:
+    """``#rrggbb`` or ``#rgb`` as 0..1 per channel (each digit pair over 255)."""
+    if not _HEX.fullmatch(text):
+        raise ValueError(f"colour {text!r}: expected #rrggbb or #rgb")
+    digits = text[1:] if len(text) == 7 else "".join(c * 2 for c in text[1:])
+    r, g, b = (int(digits[i : i + 2], 16) / 255 for i in (0, 2, 4))
+    return (r, g, b)
 
 
 def with_light_param(rig: LightRig, light: str, param: str, value: float | str) -> LightRig:
