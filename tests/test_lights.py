@@ -8,6 +8,7 @@ give are checked in ``tests/test_lights_live.py``.
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -313,3 +314,29 @@ def test_render_fires_light_cues_with_their_fades(gl_ok: None, tmp_path: Path,
     mean = {i: read_png(out / f"frame_{i:06d}.png").astype(float).mean() for i in (4, 7, 15, 22)}
     assert mean[7] < 0.5 * mean[4], "the lights are off from 0.5 s"
     assert mean[7] < mean[15] < mean[22], "and fade up to studio over 1.0 s to 2.0 s"
+
+
+@pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
+def test_the_file_window_is_lit_by_look_and_by_the_kit(tmp_path: Path) -> None:
+    from tests.test_live_osc import read_png
+
+    lit = kit_with(tmp_path, '[lights]\nlook = "neon"\n')
+
+    def shot(name: str, *extra: str) -> np.ndarray:
+        png = tmp_path / f"{name}.png"
+        run = subprocess.run(
+            ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", sys.executable, "-m", "services",
+             "display", "--size", "320x180", "--aa", "0", "--camera", "front", "--seconds",
+             "0.5", "--no-sound", "--screenshot", str(png), *extra],
+            cwd=REPO, capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        assert run.returncode == 0, run.stderr
+        return read_png(png).astype(float)
+
+    def magenta(im: np.ndarray) -> float:  # neon's key is magenta, its rim violet
+        return float((im[..., 0].mean() + im[..., 2].mean()) / (2 * im[..., 1].mean() + 1))
+
+    concert = magenta(shot("concert"))
+    assert magenta(shot("flag", "--look", "neon")) > 1.2 * concert
+    assert magenta(shot("kit", "--kit", str(lit))) > 1.2 * concert
+    assert magenta(shot("over", "--kit", str(lit), "--look", "concert")) < 1.1 * concert
