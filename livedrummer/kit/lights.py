@@ -269,10 +269,6 @@ class LightSpec:
         custom = bool(self.changes) or any(v is not None for v in given)
         return replace(rig, name="custom" if custom else rig.name)
 
-    @property
-    def empty(self) -> bool:
-        return self == LightSpec()
-
 
 def parse_light_spec(table: Table) -> LightSpec:
     """A :class:`LightSpec` from a ``[lights]`` table: ``look = NAME``, ``exposure``,
