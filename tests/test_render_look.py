@@ -10,18 +10,18 @@ import pytest
 
 from livedrummer.body.skeleton import SegmentLengths
 from livedrummer.config import Table
-from livedrummer.kit.lights import (
+from livedrummer.kit.loader import load_kit
+from livedrummer.render.background import parse_background
+from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
+from livedrummer.render.camera import figure_points, kit_cameras
+from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.lights import (
     LOOKS,
     LightError,
     look_rig,
     parse_lights,
     with_light_param,
 )
-from livedrummer.kit.loader import load_kit
-from livedrummer.render.background import parse_background
-from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
-from livedrummer.render.camera import figure_points, kit_cameras
-from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.litshare import background_luma, hall_luma, lit_share
 from services.display.context import DisplayError, headless_context
 from services.display.renderer import Renderer

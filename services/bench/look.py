@@ -2,7 +2,7 @@
 
 Renders the demo groove (optimal sticking, the built-in character or ``--avatar``) at a few
 times from the ``front``, ``stage`` and ``drummer`` cameras, once per ``--looks`` theme
-(:data:`livedrummer.kit.lights.LOOKS`), and prints per camera the median over the times of
+(:data:`livedrummer.render.lights.LOOKS`), and prints per camera the median over the times of
 the lit share (pixels above luma 0.1, :func:`livedrummer.render.litshare.lit_share`), the
 subject's share (pixels the drummer and the kit cover: a second render without the floor on a
 transparent background) and the mean luma outside the subject (floor and hall,
@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from livedrummer.kit.lights import LightRig, look_rig
 from livedrummer.kit.loader import load_kit
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
@@ -26,6 +25,7 @@ from livedrummer.render.background import parse_background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import kit_cameras
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.lights import LightRig, look_rig
 from livedrummer.render.litshare import background_luma, hall_luma, lit_share
 
 from ..cli.common import DEMO_MAP, demo_groove, rig_for

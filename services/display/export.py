@@ -42,11 +42,11 @@ import numpy as np
 from livedrummer.audio.kitfile import render_kit_file
 from livedrummer.audio.mix import mix_onsets
 from livedrummer.avatar.model import Avatar
-from livedrummer.kit.lights import LightRig
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import Camera, pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.lights import LightRig
 from livedrummer.render.overlay import OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.timeline.performance import Performance

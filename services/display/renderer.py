@@ -44,7 +44,6 @@ import numpy as np
 from livedrummer.avatar.model import Avatar
 from livedrummer.body.face import FaceTrack
 from livedrummer.body.skeleton import N_JOINTS, J
-from livedrummer.kit.lights import DEFAULT_LOOK, LightRig, look_rig
 from livedrummer.render.background import HALL, Background
 from livedrummer.render.camera import Camera, look_at, perspective
 from livedrummer.render.geometry import Mesh, all_meshes
@@ -55,6 +54,7 @@ from livedrummer.render.kitmesh import (
     STAGE_RADIUS_M,
     KitMesh,
 )
+from livedrummer.render.lights import DEFAULT_LOOK, LightRig, look_rig
 from livedrummer.render.scene import CH_HIGHLIGHT, SceneFrame, Skeleton, Tone, empty_channels
 from livedrummer.render.shaders import PROGRAMS, program_sources, shader_source
 
@@ -99,7 +99,7 @@ class Renderer:
         lights: LightRig | None = None,
     ) -> None:
         self.ctx = ctx
-        #: the show lights (:mod:`livedrummer.kit.lights`); replace it to relight the next
+        #: the show lights (:mod:`livedrummer.render.lights`); replace it to relight the next
         #: frame (a live OSC or cue change)
         self.lights = lights if lights is not None else look_rig(DEFAULT_LOOK)
         # the kit drawn into depth only, before the body: the body alone is seen, hidden where

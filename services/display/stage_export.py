@@ -43,12 +43,12 @@ import numpy as np
 
 from livedrummer.audio.mix import fit_headroom, mix_onsets
 from livedrummer.avatar.model import Avatar
-from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.render.background import Background
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import Camera, pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
+from livedrummer.render.lights import LightRig
 from livedrummer.render.scene import SceneFrame
 from livedrummer.stage.formation import Placement
 from livedrummer.stage.layout import cell_neighbours, fit_group_camera, footprint, group_points
