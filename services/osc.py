@@ -8,6 +8,11 @@ Addresses (the table of docs/reference/osc.md):
 ``/livedrummer/camera``         name or 1-8         smooth move to a stored viewpoint (display)
 ``/livedrummer/camera/cut``     name or 1-8         cut to it, no move (display)
 ``/livedrummer/blackout``       0 or 1              fade to black, and back (display)
+``/livedrummer/look``           name [fade_s]       the show lights' theme (display)
+``/livedrummer/light/L/P``      value(s) [fade_s]   one light parameter (display; L key, fill,
+                                                    rim, wash; P intensity, azimuth, elevation,
+                                                    r, g, b, enabled 0/1, color r g b or
+                                                    "#rrggbb", direction azimuth elevation)
 ``/livedrummer/cue``            name                a cue of ``--cues FILE`` (both)
 ``/livedrummer/state``          (none)              reply: name/value pairs of every service
 ==============================  ==================  =========================================
@@ -58,7 +63,10 @@ PREFIX = "/livedrummer/"
 STATE = PREFIX + "state"
 CUE = PREFIX + "cue"
 SYNTH_ADDRESSES = (PREFIX + "preset", PREFIX + "param/", CUE)
-DISPLAY_ADDRESSES = (PREFIX + "camera", PREFIX + "camera/cut", PREFIX + "blackout", CUE)
+LOOK = PREFIX + "look"
+LIGHT = PREFIX + "light/"
+DISPLAY_ADDRESSES = (PREFIX + "camera", PREFIX + "camera/cut", PREFIX + "blackout", CUE, LOOK,
+                     LIGHT)  # fmt: skip
 LOOPBACK = ("127.0.0.1", "::1")
 MAX_DATAGRAM = 65_536
 

@@ -127,5 +127,8 @@ def test_the_osc_page_names_every_address_served() -> None:
 
     page = (REPO / "docs" / "reference" / "osc.md").read_text(encoding="utf-8")
     documented = set(re.findall(r"^\| `(/livedrummer/[^`]*)`", page, re.M))
-    served = {a.replace("param/", "param/NAME") for a in (*SYNTH_ADDRESSES, *DISPLAY_ADDRESSES)}
+    served = {
+        a.replace("param/", "param/NAME").replace("light/", "light/L/P")
+        for a in (*SYNTH_ADDRESSES, *DISPLAY_ADDRESSES)
+    }
     assert documented == served | {STATE}

@@ -116,7 +116,8 @@ def moved_kit(kit: Kit, k: float) -> Kit:
         for p in kit.pieces
     )  # fmt: skip
     return Kit(kit.name, kit.description, kit.handedness, kit.seat_height_m * k, pieces,
-               dict(kit.pairs), f"{kit.source} (moved x{k:.3f} to the avatar)")  # fmt: skip
+               dict(kit.pairs), f"{kit.source} (moved x{k:.3f} to the avatar)",
+               kit.lights)  # fmt: skip
 
 
 def _try(kit: Kit, lengths: SegmentLengths | None) -> tuple[Rig | None, str]:

@@ -29,6 +29,7 @@ from pathlib import Path
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import PresetError
 from livedrummer.kit.catalog import entries, looks_like_path
+from livedrummer.kit.lights import LightSpec, light_spec_of, parse_light_spec
 from livedrummer.kit.vocabulary import PieceKind
 
 Shares = tuple[float, float, float]  # wrist, elbow, shoulder
@@ -211,8 +212,17 @@ def parse_expression(data: dict[str, object], source: str) -> Expression:
         else:
             t.number(p.name, p.default)  # marks it known
     t.done()
+    if root.has("lights"):  # the show lights a preset brings (preset_lights), checked here too
+        parse_light_spec(root.table("lights"))
     root.done()
     return out
+
+
+def preset_lights(name_or_path: str) -> LightSpec | None:
+    """The ``[lights]`` table of a preset (by name or path, as :func:`load_expression`),
+    checked; None when it has none."""
+    path = _preset_path(name_or_path)
+    return light_spec_of(read_toml(path, PresetError), str(path), PresetError)
 
 
 def expression_to_toml(e: Expression) -> str:
@@ -229,12 +239,15 @@ def expression_to_toml(e: Expression) -> str:
 
 def load_expression(name_or_path: str) -> Expression:
     """A preset by name (``kits/presets/NAME.toml``) or by path."""
-    if looks_like_path(name_or_path):
-        path = Path(name_or_path)
-    else:
-        found = entries("kits/presets")
-        if name_or_path not in found:
-            known = ", ".join(sorted(found)) or "none"
-            raise PresetError(f"no expression preset named {name_or_path!r} (known: {known})")
-        path = found[name_or_path].path
+    path = _preset_path(name_or_path)
     return parse_expression(read_toml(path, PresetError), str(path))
+
+
+def _preset_path(name_or_path: str) -> Path:
+    if looks_like_path(name_or_path):
+        return Path(name_or_path)
+    found = entries("kits/presets")
+    if name_or_path not in found:
+        known = ", ".join(sorted(found)) or "none"
+        raise PresetError(f"no expression preset named {name_or_path!r} (known: {known})")
+    return found[name_or_path].path

@@ -46,6 +46,7 @@ from pathlib import Path
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import KitError
 from livedrummer.kit.catalog import entries, looks_like_path
+from livedrummer.kit.lights import parse_light_spec
 from livedrummer.kit.model import Kit, Piece
 from livedrummer.kit.vocabulary import DEFAULT_ZONES, INSTRUMENTS, Limb, PieceKind, Zone
 
@@ -83,8 +84,9 @@ def parse_kit(data: dict[str, object], source: str) -> Kit:
             raise t.fail("pieces", "this pair is already defined", [a, b])
         pairs[(a, b)] = value
         t.done()
+    lights = parse_light_spec(root.table("lights")) if root.has("lights") else None
     root.done()
-    return Kit(pieces=pieces, pairs=pairs, source=source, **kit_kwargs)
+    return Kit(pieces=pieces, pairs=pairs, source=source, lights=lights, **kit_kwargs)
 
 
 def _pair_names(t: Table, names: set[str]) -> tuple[str, str]:
@@ -235,6 +237,7 @@ def extend_kit(kit: Kit, extension: str) -> Kit:
         pieces=kit.pieces + pieces,
         pairs=kit.pairs,
         source=f"{kit.source} + extension {extension}",
+        lights=kit.lights,
     )
 
 

@@ -32,6 +32,8 @@ from livedrummer.kit.vocabulary import HiHat, Limb, PieceKind, Zone
 if TYPE_CHECKING:  # numpy is imported where it is used: listing kits must not load it
     import numpy as np
 
+    from livedrummer.kit.lights import LightSpec
+
 Vec3 = tuple[float, float, float]
 
 
@@ -100,6 +102,7 @@ class Kit:
     pieces: tuple[Piece, ...]
     pairs: Mapping[tuple[str, str], float] = field(default_factory=dict)
     source: str = "<memory>"
+    lights: LightSpec | None = None  # the kit file's [lights] (livedrummer.kit.lights)
     _by_name: Mapping[str, Piece] = field(init=False, repr=False, compare=False)
     _routes: Mapping[str, Piece] = field(init=False, repr=False, compare=False)
 
@@ -150,4 +153,5 @@ class Kit:
             pieces=tuple(p.mirrored() for p in self.pieces),
             pairs={key: -value for key, value in self.pairs.items()},
             source=f"{self.source} (mirrored)",
+            lights=self.lights,
         )

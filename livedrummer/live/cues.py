@@ -1,7 +1,8 @@
 """Cue lists: SMED's "local control" per section, as a TOML file of named cues.
 
 A cue sets any of: an expression preset, expression parameters (on top of the preset, or of
-what is playing), the camera (a smooth move, or a cut) and the blackout. It fires at a time
+what is playing), the camera (a smooth move, or a cut), the blackout and the show lights (a
+look and light parameters, faded over ``fade_s``). It fires at a time
 (``at_s``, seconds from the start of a file), at a bar (``bar``, 1-based, on the file's bar
 grid), or only when called by name (OSC ``/livedrummer/cue NAME``)::
 
@@ -12,14 +13,20 @@ grid), or only when called by name (OSC ``/livedrummer/cue NAME``)::
     camera = "front"        # a name or 1-8
     cut = false             # true: cut to the camera, no move
     blackout = false
+    look = "neon"           # the show lights' theme (livedrummer.kit.lights.LOOKS)
+    fade_s = 2.0            # the light change takes this long (default 0: at once)
     [cue.params]
     head_amplitude_deg = 10.0
+    [cue.lights]            # light parameters over the look (as a kit's [lights] table)
+    key = { intensity = 4.0, color = "#ffd0a0" }
+    rim = { enabled = false }
 
 Why this shape. A cue is plain data (:class:`Cue`, loaded strictly: unknown keys, a bad
 parameter or camera name the file and the cue); :func:`cue_times` puts them on a timeline,
 and :func:`expression_at` folds the ones fired so far into the expression in force, so the
 file renderer and the live services apply the same cue the same way: the synth takes its
-preset and parameters, the display its camera and blackout.
+preset and parameters, the display its camera, blackout and lights (a cue's light change
+applies over the lights as they are when it fires).
 
 Live, bars are counted by the beat tracker (:meth:`livedrummer.live.beat.BeatTracker.bars`: bar
 1 is the first bar it hears start once it has a tempo, 4/4 assumed) and :class:`BarCues` fires
@@ -32,14 +39,16 @@ D); a display turns a row back into a cue (:func:`stage_cue_of`) and applies it 
 :func:`fire_stage` when a frame reaches that show time, the one function that applies a cue to
 a :class:`~livedrummer.live.stage.Stage`.
 
-Limits: bars are counted on a file's tempo map and meter (live: the tracker's, 4/4); a cue's
-preset is read when the list is loaded.
+The wire's STAGE_CUE row carries the camera and blackout only: a display given the same cue
+list (``up --cues`` gives it to both) takes a bar cue's lights from its own copy
+(:func:`with_lights_of`). Limits: bars are counted on a file's tempo map and meter (live: the
+tracker's, 4/4); a cue's preset is read when the list is loaded.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +56,7 @@ import numpy as np
 from livedrummer.body.expression import PARAM_NAMES, Expression, load_expression, with_param
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import ConfigError, LivedrummerError
+from livedrummer.kit.lights import LOOKS, LightRig, LightSpec, parse_light_spec
 from livedrummer.live.stage import Stage, camera_name
 from livedrummer.render.camera import CAMERA_NAMES, Camera
 from livedrummer.timeline.events import STAGE_CUE_DTYPE
@@ -67,6 +77,8 @@ class Cue:
     camera: str | None = None
     cut: bool = False
     blackout: bool | None = None
+    lights: LightSpec | None = None  # a look and light parameters, over the lights in force
+    fade_s: float = 0.0  # how long the light change takes
 
     def apply(self, base: Expression) -> Expression:
         """The expression after this cue: its preset (else ``base``) with its parameters."""
@@ -81,8 +93,8 @@ class Cue:
 
     @property
     def stages(self) -> bool:
-        """Whether it moves the camera or the blackout (a display's part)."""
-        return self.camera is not None or self.blackout is not None
+        """Whether it moves the camera, the blackout or the lights (a display's part)."""
+        return self.camera is not None or self.blackout is not None or self.lights is not None
 
 
 def parse_cues(data: dict[str, object], source: str) -> dict[str, Cue]:
@@ -122,8 +134,18 @@ def parse_cues(data: dict[str, object], source: str) -> dict[str, Cue]:
                 raise t.fail("camera", str(exc)) from None
         cut = t.boolean("cut", False)
         blackout = t.boolean("blackout") if t.has("blackout") else None
+        look = t.text("look", None, choices=LOOKS)
+        lights = parse_light_spec(t.table("lights")) if t.has("lights") else None
+        if look is not None:
+            if lights is not None and lights.look is not None:
+                raise t.fail("look", "given twice: here and in [cue.lights]", look)
+            lights = LightSpec(look) if lights is None else replace(lights, look=look)
+        fade_s = t.number("fade_s", 0.0, lo=0.0, hi=600.0)
+        if t.has("fade_s") and lights is None:
+            raise t.fail("fade_s", "fades a light change: give look or [cue.lights] too")
         t.done()
-        out[name] = Cue(name, at_s, bar, preset, expression, tuple(params), camera, cut, blackout)
+        out[name] = Cue(name, at_s, bar, preset, expression, tuple(params), camera, cut, blackout,
+                        lights, fade_s)  # fmt: skip
     root.done()
     return out
 
@@ -169,7 +191,7 @@ def style_changes(timed: list[tuple[float, Cue]], base: Expression
 class CuedStage:
     """A :class:`~livedrummer.live.stage.Stage` driven by timed cues: :meth:`at` fires the
     cues due by a frame's time (frames asked in time order) and gives its camera and
-    darkness."""
+    darkness; :meth:`lights_at` then gives its lights."""
 
     def __init__(self, stage: Stage, timed: list[tuple[float, Cue]]) -> None:
         self.stage = stage
@@ -183,13 +205,18 @@ class CuedStage:
             self._next += 1
         return self.stage.view(t), self.stage.darkness(t)
 
+    def lights_at(self, t: float) -> LightRig:
+        return self.stage.lights_at(t)
+
 
 def fire_stage(stage: Stage, cue: Cue, now_s: float) -> None:
-    """A cue's camera and blackout, applied at ``now_s``."""
+    """A cue's camera, blackout and lights, applied at ``now_s``."""
     if cue.camera is not None:
         stage.set_camera(cue.camera, now_s, cut=cue.cut)
     if cue.blackout is not None:
         stage.set_blackout(cue.blackout, now_s)
+    if cue.lights is not None:
+        stage.set_lights(cue.lights.apply(stage.lights), now_s, cue.fade_s)
 
 
 class BarCues:
@@ -213,7 +240,7 @@ class BarCues:
 def stage_cue_rows(fired: list[tuple[float, int, Cue]]) -> np.ndarray:
     """The stage part of cues fired at (show time, bar, cue), as STAGE_CUE_DTYPE rows (the
     wire's kind STAGE_CUE); cues without one are left out."""
-    fired = [f for f in fired if f[2].stages]
+    fired = [f for f in fired if f[2].stages]  # a lights-only row: its bar, for with_lights_of
     out = np.zeros(len(fired), STAGE_CUE_DTYPE)
     for i, (show_s, bar, cue) in enumerate(fired):
         camera = 0 if cue.camera is None else CAMERA_NAMES.index(cue.camera) + 1
@@ -230,3 +257,14 @@ def stage_cue_of(row: np.void) -> Cue:
     return Cue(f"bar {bar}", bar=bar or None,
                camera=CAMERA_NAMES[camera - 1] if camera else None, cut=bool(row["cut"]),
                blackout=None if blackout < 0 else bool(blackout))  # fmt: skip
+
+
+def with_lights_of(cue: Cue, cues: dict[str, Cue]) -> Cue:
+    """A STAGE_CUE row's cue (:func:`stage_cue_of`) with the lights of the bar cue of
+    ``cues`` it came from (the row carries no lights); itself when there is none."""
+    if cue.bar is None:
+        return cue
+    for own in cues.values():
+        if own.bar == cue.bar and own.lights is not None:
+            return replace(cue, lights=own.lights, fade_s=own.fade_s)
+    return cue

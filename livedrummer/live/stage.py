@@ -1,19 +1,24 @@
-"""What the audience sees besides the drummer: the camera and the blackout, set while playing.
+"""What the audience sees besides the drummer: the camera, the blackout and the show lights,
+set while playing.
 
 Why this shape. A show technician cues camera moves and blackouts (over OSC, a MIDI
 controller or a cue list); the display applies them on its own frame clock. This module is
 the pure state of those two: :class:`Stage` takes commands stamped with the display's clock
 time and answers, for any frame time, the camera to draw from (a smooth move between stored
 viewpoints, :class:`~livedrummer.render.camera.CameraMove`, or a cut) and how dark the frame
-is (0 picture .. 1 black; a blackout fades in and out over ``fade_s`` along a smoothstep).
-It holds no socket and no GL: the display service feeds it and reads it each frame.
+is (0 picture .. 1 black; a blackout fades in and out over ``fade_s`` along a smoothstep),
+and the light rig to draw with (:meth:`Stage.lights_at`: a light change, an OSC
+``/livedrummer/light/...`` or a cue's, fades over its own time from the rig as it is, along
+the same smoothstep; :func:`~livedrummer.kit.lights.blend_rigs`). It holds no socket and
+no GL: the display service feeds it and reads it each frame.
 
-Limits: one move at a time (a new one starts from where the camera is); the fade is the
-same length both ways.
+Limits: one move and one light fade at a time (a new one starts from where the camera or the
+lights are); the blackout's fade is the same length both ways.
 """
 
 from __future__ import annotations
 
+from livedrummer.kit.lights import DEFAULT_LOOK, LightRig, blend_rigs, look_rig
 from livedrummer.kit.model import Kit
 from livedrummer.render.camera import CAMERA_NAMES, Camera, CameraMove, kit_cameras
 
@@ -41,8 +46,13 @@ class Stage:
     """The camera and the blackout (see the module docstring)."""
 
     def __init__(self, kit: Kit, camera: str = "stage", fade_s: float = 0.5,
-                 move_s: float = 1.2) -> None:  # fmt: skip
+                 move_s: float = 1.2, lights: LightRig | None = None) -> None:  # fmt: skip
         self.cameras = kit_cameras(kit)
+        #: the rig the lights are at or fading to (the last change's); lights_at for a frame
+        self.lights = lights if lights is not None else look_rig(DEFAULT_LOOK)
+        self._lights_from = self.lights
+        self._lights_t0 = -1e300
+        self._lights_fade_s = 0.0
         self.fade_s = fade_s
         self.move_s = move_s
         start = self.cameras[camera_name(camera)]
@@ -65,6 +75,20 @@ class Stage:
         self._fade_from = self.darkness(now_s)
         self._fade_t0 = now_s
         self.blackout = on
+
+    def set_lights(self, rig: LightRig, now_s: float, fade_s: float = 0.0) -> None:
+        """Change the lights to ``rig``, fading over ``fade_s`` from where they are now."""
+        self._lights_from = self.lights_at(now_s)
+        self._lights_t0 = now_s
+        self._lights_fade_s = max(0.0, fade_s)
+        self.lights = rig
+
+    def lights_at(self, now_s: float) -> LightRig:
+        """The light rig to draw a frame at ``now_s`` with."""
+        if self._lights_fade_s <= 0.0 or now_s >= self._lights_t0 + self._lights_fade_s:
+            return self.lights if now_s >= self._lights_t0 else self._lights_from
+        s = _smoothstep((now_s - self._lights_t0) / self._lights_fade_s)
+        return blend_rigs(self._lights_from, self.lights, s)
 
     def view(self, now_s: float) -> Camera:
         """The camera to draw a frame at ``now_s`` from."""

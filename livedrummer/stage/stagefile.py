@@ -40,6 +40,7 @@ from pathlib import Path
 
 from livedrummer.config import Table, read_toml
 from livedrummer.errors import ConfigError
+from livedrummer.kit.lights import LightSpec, parse_light_spec
 
 from .formation import FACINGS, SHAPES, Formation, Placement, place
 from .source import parse_source
@@ -73,6 +74,7 @@ class Stage:
     copies: int = 1
     source: str = ""
     placements: tuple[Placement, ...] = field(default=())
+    lights: LightSpec | None = None  # the [lights] table (livedrummer.kit.lights)
 
     def players(self) -> list[tuple[Performer, Placement, Variation | None]]:
         """Every drummer on the stage: each performer ``copies`` times, with its spot and the
@@ -134,6 +136,7 @@ def load_stage(path: Path) -> Stage:
             seed=int(e.integer("seed", 1, 0, 2**31)),
         )
         e.done()
+    lights = parse_light_spec(top.table("lights")) if top.has("lights") else None
     top.done()
     count = len(performers) * copies
     try:
@@ -142,7 +145,7 @@ def load_stage(path: Path) -> Stage:
         raise StageError(f"{path}: [formation] {exc}") from None
     who = [(p, c) for p in performers for c in range(copies)]
     spots = [_own_spot(p, s) if c == 0 else s for (p, c), s in zip(who, spots, strict=True)]
-    return Stage(tuple(performers), formation, ensemble, copies, str(path), tuple(spots))
+    return Stage(tuple(performers), formation, ensemble, copies, str(path), tuple(spots), lights)
 
 
 def _own_spot(p: Performer, s: Placement) -> Placement:

@@ -237,11 +237,25 @@ def add_background_option(parser: Any, transparent: bool = True) -> None:
 
 
 def add_look_option(parser: Any) -> None:
-    """``--look NAME``: the show lights' theme (:data:`livedrummer.render.lights.LOOKS`)."""
-    from livedrummer.render.lights import DEFAULT_LOOK, LOOKS
+    """``--look NAME``: the show lights' theme (:data:`livedrummer.kit.lights.LOOKS`)."""
+    from livedrummer.kit.lights import DEFAULT_LOOK, LOOKS
 
-    parser.add_argument("--look", choices=tuple(LOOKS), default=DEFAULT_LOOK,
-                        help=f"the show lights' theme (default: {DEFAULT_LOOK})")  # fmt: skip
+    parser.add_argument("--look", choices=tuple(LOOKS), default=None,
+                        help="the show lights' theme, over the [lights] of the stage, preset "
+                        f"and kit files (default: theirs, else {DEFAULT_LOOK})")  # fmt: skip
+
+
+def lights_of(args: argparse.Namespace, kit: Any, stage: Any = None) -> Any:
+    """The show lights a command starts with (:func:`livedrummer.kit.lights.resolve_lights`):
+    ``--look`` over the stage file's ``[lights]``, over the ``--preset``'s, over the kit's,
+    over the default look. ``stage``: a loaded stage file (``--stage``), or None."""
+    from livedrummer.body.expression import preset_lights
+    from livedrummer.kit.lights import resolve_lights
+
+    preset = getattr(args, "preset", None)
+    return resolve_lights(getattr(args, "look", None), getattr(kit, "lights", None),
+                          preset_lights(preset) if preset else None,
+                          getattr(stage, "lights", None))  # fmt: skip
 
 
 def background_of(args: argparse.Namespace, window: bool = False) -> Background:
@@ -413,6 +427,14 @@ def osc_allow(args: argparse.Namespace) -> tuple[str, ...]:
         return parse_allow(args.osc_allow)
     except ValueError as exc:
         raise ConfigError(str(exc)) from None
+
+
+def lights_argv(args: argparse.Namespace) -> list[str]:
+    """What a child display needs to start from the same lights (:func:`lights_of`) as this
+    command: ``--look`` and the ``--preset`` (for its ``[lights]``), as given."""
+    out = ["--look", args.look] if getattr(args, "look", None) else []
+    preset = getattr(args, "preset", None)
+    return out + (["--preset", str(preset)] if preset is not None else [])
 
 
 def style_argv(args: argparse.Namespace) -> list[str]:

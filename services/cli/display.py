@@ -35,6 +35,7 @@ from .common import (
     add_channel_option,
     add_command,
     add_kit_option,
+    add_look_option,
     add_motion_options,
     add_osc_options,
     add_renamed,
@@ -44,6 +45,7 @@ from .common import (
     cues_of,
     demo_groove,
     fitted,
+    lights_of,
     osc_allow,
     read_performance,
 )
@@ -101,6 +103,7 @@ def register(sub: Subparsers) -> None:
     add_motion_options(p)
     add_avatar_option(p)
     add_background_option(p, transparent=False)
+    add_look_option(p)
     live = p.add_argument_group("live (poses from a running synth)")
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
     live.add_argument("--sub", default="tcp://127.0.0.1:5720",
@@ -163,6 +166,8 @@ def run(args: argparse.Namespace) -> int:
         return run_stage_live(args)
     if args.live:
         return run_live(args)
+    import dataclasses
+
     from livedrummer.kit.loader import load_kit
     from livedrummer.render.overlay import parse_overlays
 
@@ -184,6 +189,7 @@ def run(args: argparse.Namespace) -> int:
         frame_log=args.frame_log,
     )  # fmt: skip
     kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
+    options = dataclasses.replace(options, lights=lights_of(args, kit))
     body = body_scene(args, performance, kit, note_map, avatar)
     sound = None
     if not args.no_sound:
@@ -276,6 +282,7 @@ def run_live(args: argparse.Namespace) -> int:
         video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
         control=args.control, avatar=avatar, osc_port=args.osc, osc_allow=osc_allow(args),
         cues=cues_of(args), background=background, overlays=overlays,
+        lights=lights_of(args, kit),
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     if args.practice is not None:

@@ -35,7 +35,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .common import add_avatar_option, add_kit_option, has_screen
+from .common import add_avatar_option, add_kit_option, add_look_option, has_screen
 from .settings import write_settings
 
 if TYPE_CHECKING:
@@ -65,6 +65,7 @@ def add_show_options(p: argparse.ArgumentParser) -> None:
                    "SECONDS ahead; default 0.5) or off (default ghost)")  # fmt: skip
     add_kit_option(p)
     add_avatar_option(p)
+    add_look_option(p)
     p.add_argument("--frames-dir", type=Path, default=Path("out/practice"), metavar="DIR",
                    help="--headless: frames.jsonl (and --png frames) here "
                    "(default out/practice)")  # fmt: skip
@@ -155,6 +156,7 @@ def specs(args: argparse.Namespace, mode: str, readout: str, settings: Path) -> 
                     "--practice", readout, "--teacher", args.teacher,
                     str(args.reference), "--map", args.map]  # fmt: skip
     display_argv += ["--channel", args.channel] if args.channel is not None else []
+    display_argv += ["--look", args.look] if args.look else []
     if mode == "window":
         display_argv += ["--aa", "0"]
     else:

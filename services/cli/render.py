@@ -28,7 +28,6 @@ from typing import TYPE_CHECKING, Any
 
 from livedrummer.errors import LivedrummerError
 from livedrummer.render.camera import CAMERA_NAMES
-from livedrummer.render.lights import look_rig
 from livedrummer.timeline.span import Position, parse_position, span_seconds
 
 from .common import (
@@ -46,6 +45,7 @@ from .common import (
     background_of,
     demo_groove,
     fitted,
+    lights_of,
     parse_aa,
     read_performance,
     rig_for,
@@ -128,9 +128,10 @@ def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, not
 
 
 def cued(args: argparse.Namespace, performance: Performance, note_map: NoteMap,
-         body: BodyScene) -> tuple[BodyScene, Any]:  # fmt: skip
-    """``--cues``: the body with the cue list's style changes and the frames' stage (camera and
-    blackout by time); bars are counted on the file's grid."""
+         body: BodyScene, lights: Any = None) -> tuple[BodyScene, Any]:  # fmt: skip
+    """``--cues``: the body with the cue list's style changes and the frames' stage (camera,
+    blackout and lights by time, from ``lights``), a CuedStage; bars are counted on the
+    file's grid."""
     from livedrummer.body.expression import Expression, load_expression
     from livedrummer.body.perform import perform
     from livedrummer.body.strokes import StrokeParams
@@ -152,7 +153,7 @@ def cued(args: argparse.Namespace, performance: Performance, note_map: NoteMap,
     scene = CuedBodyScene(body.kit, p, styled)
     print(f"livedrummer: {args.cues}: {len(timed)} timed cues ({len(styled)} change the style)",
           file=sys.stderr)  # fmt: skip
-    return scene, CuedStage(Stage(body.kit, args.camera), timed).at
+    return scene, CuedStage(Stage(body.kit, args.camera, lights=lights), timed)
 
 
 def first_seconds(performance: Performance, seconds: float) -> Performance:
@@ -242,6 +243,7 @@ def run(args: argparse.Namespace) -> int:
     # option is the one line on stderr.
     kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
     background = background_of(args)
+    lights = lights_of(args, kit)
     get_strategy(args.sticking)
     if args.cues is not None:  # checked now, applied once the file is animated
         from livedrummer.live.cues import load_cues
@@ -267,13 +269,14 @@ def run(args: argparse.Namespace) -> int:
     body = body_scene(args, performance, kit, note_map, avatar)
     staging = None
     if args.cues is not None:
-        body, staging = cued(args, performance, note_map, body)
+        body, staging = cued(args, performance, note_map, body, lights)
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
         performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
         camera=args.camera, tail_s=args.tail, samples=samples, fxaa=fxaa, progress=bar,
         overlays=overlays, soundfont=args.soundfont, avatar=avatar, background=background,
-        span=span, staging=staging, lights=look_rig(args.look),
+        span=span, staging=None if staging is None else staging.at, lights=lights,
+        lighting=None if staging is None else staging.lights_at,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
@@ -284,7 +287,7 @@ def run(args: argparse.Namespace) -> int:
         f"{', overlay ' + ','.join(n for n in OVERLAYS if n in overlays) if overlays else ''}"
         f"{', drum track 48 kHz stereo' if out is not None else ''}"
         f"{' from ' + str(args.soundfont) if out is not None and args.soundfont else ''}"
-        f"{', background ' + args.background if args.background else ''}, look {args.look}; "
+        f"{', background ' + args.background if args.background else ''}, look {lights.name}; "
         f"{report.realtime:.2f}x real time"
     )
     return 0
@@ -314,6 +317,8 @@ def run_stage(args: argparse.Namespace) -> int:
                              alpha=background.transparent)  # fmt: skip
     if out is not None:
         check_video_target(out, settings)
+    # the first performer's kit's [lights] under the stage file's
+    lights = lights_of(args, load_kit(stage.performers[0].kit), stage)
     drummers = []
     for part in stage_parts(stage, args):
         p = part.performer
@@ -334,11 +339,11 @@ def run_stage(args: argparse.Namespace) -> int:
     report = export_stage(drummers, out=out, frames_dir=args.frames_dir, settings=settings,
                           camera=args.camera, tail_s=args.tail, progress=bar,
                           background=background, span=span,
-                          lights=look_rig(args.look))  # fmt: skip
+                          lights=lights)  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
           f"{f' (from {span[0]:.2f} s to {span[1]:.2f} s)' if span else ''}, "
           f"{len(drummers)} drummers ({stage.formation.shape}), {size[0]}x{size[1]} @ "
-          f"{args.fps} fps, camera {args.camera}, look {args.look}; "
+          f"{args.fps} fps, camera {args.camera}, look {lights.name}; "
           f"{report.realtime:.2f}x real time")  # fmt: skip
     return 0

@@ -28,6 +28,7 @@ def run_stage_live(args: argparse.Namespace) -> int:
 
     from ..display.stage_live import StageConfig, StageDisplay, StagePerformer
     from ..service import serve
+    from .common import lights_of
     from .keys import security_from_args
     from .render import parse_size
     from .staging import check_room
@@ -71,6 +72,8 @@ def run_stage_live(args: argparse.Namespace) -> int:
         window=window, render=not args.no_render,
         display_offset_s=calibration.display_ms / 1000.0,
         security=security_from_args(args), control=args.control,
+        # the first live performer's kit's [lights] under the stage file's, under --look
+        lights=lights_of(args, played[0][0], stage),
     )  # fmt: skip
     import zmq
 

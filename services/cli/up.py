@@ -56,6 +56,7 @@ from .common import (
     add_background_option,
     add_command,
     add_kit_option,
+    add_look_option,
     add_osc_options,
     add_renamed,
     add_style_options,
@@ -65,6 +66,7 @@ from .common import (
     demo_groove,
     has_screen,
     kit_source,
+    lights_argv,
     osc_allow,
     style_argv,
 )
@@ -107,6 +109,7 @@ def register(sub: Subparsers) -> None:
     add_kit_option(p)
     add_avatar_option(p)
     add_background_option(p, transparent=False)
+    add_look_option(p)
     p.add_argument("--map", help="note map (default roland-td)")
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
@@ -302,6 +305,7 @@ def specs(args: argparse.Namespace, settings: Path, sessions: Path | None = None
         synth_argv += cues
         display_argv += cues
     display_argv += ["--background", args.background] if args.background else []
+    display_argv += lights_argv(args)  # the lights over the kit's [lights]
     display_argv += ["--overlay", args.overlay] if args.overlay else []
     display_argv += ["--keys-port", KEYS_PORT] if args.keys else []
     if windowed(args):

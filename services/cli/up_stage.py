@@ -108,6 +108,7 @@ def stage_specs(
         display += [] if args.png and args.video is None else ["--no-png"]
         display += ["--video", str(args.video)] if args.video is not None else []
         display += ["--seconds", str(args.seconds)] if recorded(args) else []
+    display += ["--look", args.look] if args.look else []  # over the stage's and kit's [lights]
     specs.append(ServiceSpec("display", display, ends_rig=windowed(args) or recorded(args)))
     return specs
 

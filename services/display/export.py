@@ -104,6 +104,7 @@ def export(
     fxaa: bool = False,
     staging: Callable[[float], tuple[Camera, float]] | None = None,
     lights: LightRig | None = None,
+    lighting: Callable[[float], LightRig] | None = None,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
@@ -115,7 +116,8 @@ def export(
     before the cut are already in the air), and the track is the whole mix's slice, so a
     cymbal struck before the cut still rings into it. ``staging``: each frame's camera and
     darkness by its time (a cue list's :class:`~livedrummer.live.cues.CuedStage`), instead
-    of ``camera``."""
+    of ``camera``; ``lighting``: each frame's lights by its time (asked after ``staging``,
+    which fires the cues), instead of ``lights``."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
     start = time.perf_counter()
@@ -160,6 +162,8 @@ def export(
                 renderer.draw(frame, cam)
             else:
                 view, dark = staging(float(times[i]))
+                if lighting is not None:
+                    renderer.lights = lighting(float(times[i]))
                 renderer.draw(frame, view)
                 darken(renderer, dark)
             if not strips.empty:

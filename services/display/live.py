@@ -81,7 +81,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import IO, Any, Protocol
 
@@ -91,6 +91,7 @@ import zmq
 from livedrummer.avatar.model import Avatar
 from livedrummer.body.pose import pose_dtype
 from livedrummer.body.skeleton import J
+from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.live.behind import BehindCounter
@@ -205,6 +206,7 @@ class LiveConfig:
     control: str | None = None  # HELLO/READY endpoint (none unless asked: up runs many displays)
     avatar: Avatar | None = None  # who is drawn (None: the built-in character); READY says which
     background: Background | None = None  # behind the stage, off screen (None: the hall)
+    lights: LightRig | None = None  # the show lights it starts with (None: the default look)
     osc_port: int | None = None  # OSC camera and blackout (services.display.showctl)
     osc_allow: tuple[str, ...] = ()
     cues: dict[str, Any] = field(default_factory=dict)  # livedrummer.live.cues, by name
@@ -294,7 +296,7 @@ class LiveDisplay(Service):
         port = self.config.osc_port
         if port is not None or self.config.cues:
             self.show = DisplayShow(self.kit, self.config.camera, port, self.config.osc_allow,
-                                    self.config.cues)  # fmt: skip
+                                    self.config.cues, self.config.lights)  # fmt: skip
         if self.show is not None and self.show.osc is not None:
             self.endpoints["osc"] = f"udp://127.0.0.1:{self.show.osc.port}"
 
@@ -318,10 +320,13 @@ class LiveDisplay(Service):
         log_file: IO[str] | None = None
         try:
             if cfg.window is not None:
-                surface = WindowSurface(self.kit, cfg.window, cfg.avatar)
+                window = (
+                    cfg.window if cfg.lights is None else replace(cfg.window, lights=cfg.lights)
+                )
+                surface = WindowSurface(self.kit, window, cfg.avatar)
             elif cfg.render:
                 surface = HeadlessSurface(self.kit, cfg.size, cfg.camera, cfg.avatar,
-                                          cfg.background)  # fmt: skip
+                                          cfg.background, cfg.lights)  # fmt: skip
             if surface is not None and self.show is not None:
                 surface.stage = self.show.stage
             if surface is not None and not isinstance(surface, WindowSurface):
@@ -375,6 +380,7 @@ class LiveDisplay(Service):
                     record["camera"] = self.show.stage.camera
                     # unrounded: the first frame of a fade is dark by as little as 1e-6
                     record["dark"] = self.show.stage.darkness(now)
+                    record["look"] = self.show.stage.lights_at(now).name
                 if got is not None:
                     pose_s, row = got
                     record["pose_s"] = pose_s

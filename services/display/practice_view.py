@@ -151,6 +151,7 @@ class PracticeView:
                 shadows=False, background=Background(kind="transparent") if ghost else None,
                 kit_occludes_only=ghost)  # fmt: skip
         r = self._renderer
+        r.lights = main.lights  # the teacher stands under the player's lights
         r.draw(self.teacher.frame_at(ref), view)
         rgba = r.read_rgba_top()
         if self.mode == "ghost":

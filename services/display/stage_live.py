@@ -46,6 +46,7 @@ import numpy as np
 import zmq
 
 from livedrummer.avatar.model import Avatar
+from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.render.body_scene import frame_from_pose
@@ -90,6 +91,7 @@ class StageConfig:
     display_offset_s: float = 0.0
     security: Security = field(default_factory=Security)
     control: str | None = None
+    lights: LightRig | None = None  # the show lights (None: the default look)
 
 
 class _Stream(PoseStream):
@@ -194,12 +196,12 @@ class StageDisplay(Service):
             if cfg.window is not None:
                 window = _Window(cfg.window)
                 painter = StagePainter(window.ctx, performers, window.size, cfg.camera,
-                                       target=window.ctx.screen)  # fmt: skip
+                                       target=window.ctx.screen, lights=cfg.lights)  # fmt: skip
             elif cfg.render:
                 from .context import headless_context
 
                 gl = headless_context()
-                painter = StagePainter(gl, performers, cfg.size, cfg.camera)
+                painter = StagePainter(gl, performers, cfg.size, cfg.camera, lights=cfg.lights)
             if cfg.video is not None and painter is not None and window is None:
                 recorder = _Recorder(cfg.video, VideoSettings(size=cfg.size, fps=round(cfg.fps)))
             if cfg.out is not None:

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from livedrummer.avatar.model import Avatar
+from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.live.stage import Stage
 from livedrummer.midi.keypads import KEYPADS, keypad_hit
@@ -54,15 +55,16 @@ class HeadlessSurface:
     """An off-screen renderer on an EGL context; read frames back from :attr:`renderer`."""
 
     def __init__(self, kit: Kit, size: tuple[int, int], camera: str,
-                 avatar: Avatar | None = None,
-                 background: Background | None = None) -> None:  # fmt: skip
+                 avatar: Avatar | None = None, background: Background | None = None,
+                 lights: LightRig | None = None) -> None:  # fmt: skip
         from livedrummer.render.camera import pick_camera
 
         from .context import headless_context
 
         self._ctx = headless_context()
         self.renderer = Renderer(self._ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0,
-                                 avatar=avatar, background=background)  # fmt: skip
+                                 avatar=avatar, background=background,
+                                 lights=lights)  # fmt: skip
         self._camera = pick_camera(kit, camera)
         self.stage: Stage | None = None  # show control: camera and blackout (showctl)
         self.overlays: frozenset[str] = frozenset()  # the strips drawn (score, joints)
@@ -72,6 +74,8 @@ class HeadlessSurface:
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
         stage = self.stage
         self.view = self._camera if stage is None else stage.view(now_s)
+        if stage is not None:
+            self.renderer.lights = stage.lights_at(now_s)
         self.renderer.draw(frame, self.view)
         if stage is not None:
             darken(self.renderer, stage.darkness(now_s))
@@ -99,7 +103,8 @@ class WindowSurface:
         self._glfw, self._window, self._ctx = glfw, window, ctx
         size = glfw.get_framebuffer_size(window)
         self.renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False,
-                                 avatar=avatar, background=options.background)  # fmt: skip
+                                 avatar=avatar, background=options.background,
+                                 lights=options.lights)  # fmt: skip
         self._cameras = kit_cameras(kit)
         start = self._cameras[options.camera]
         self._move = CameraMove(start, start, 0.0, 0.0)
@@ -139,6 +144,7 @@ class WindowSurface:
             view = self._move.at(now_s)
         else:
             view = stage.view(now_s)
+            self.renderer.lights = stage.lights_at(now_s)
         self.view = view
         self.renderer.draw(frame, view, target=self._ctx.screen)
         if stage is not None:

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from livedrummer.avatar.model import Avatar
+from livedrummer.kit.lights import LightRig
 from livedrummer.kit.model import Kit
 from livedrummer.live.ahead import RenderAhead
 from livedrummer.midi.keypads import KEYPADS, keypad_hit
@@ -77,6 +78,7 @@ class WindowOptions:
     background: Background | None = None  # behind the stage (None: the dark hall)
     frame_log: Path | None = None  # per frame: {"mono": after the swap, "t": position shown}
     keys_port: str | None = None  # live: the MIDI input the drum keys play into (keysend)
+    lights: LightRig | None = None  # the show lights (None: the default look)
 
 
 DEFAULT_OPTIONS = WindowOptions()
@@ -260,7 +262,7 @@ def _loop(
     mesh = build_kit_mesh(kit)
     size = glfw.get_framebuffer_size(window)
     renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False, avatar=avatar,
-                        background=options.background)  # fmt: skip
+                        background=options.background, lights=options.lights)  # fmt: skip
     models = OverlayModels(body, transport.duration_s)
     shown = frozenset(options.overlays)
     strips = overlay_image(size, shown, models)
