@@ -1,4 +1,4 @@
-"""The synth's curves in a worker process (services.synth.curveworker): a real spawned child.
+"""The synth's curves in a worker process (services.synth.curveworker): a real child process.
 
 The synth fed through a worker publishes exactly what the in-process synth does; a killed or
 stopped child is replaced and the samples stay those of the same curves; a bad request is

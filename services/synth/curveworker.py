@@ -6,12 +6,13 @@ thread holds the interpreter (the GIL) while it re-animates the window (3-44 ms 
 samples the strokes (2-33 ms): the answer thread gets it back only at the switch interval,
 between the animation's numpy calls. :class:`CurveWorker` is a
 :class:`~livedrummer.live.curves.CurveSource` whose :class:`~livedrummer.live.curves.CurveSet`
-lives in a child process (started with ``spawn``: nothing of the service's threads or sockets
-is inherited). The animation thread sends a request over a pipe and blocks on the reply, in a
-system call with the GIL let go, so the answer thread runs whenever a hit arrives; the
-operating system shares the cores between the two processes, not the interpreter. What the
-child computes is what the in-process set would have (the same code on the same pickled
-inputs): the strokes replace the quick contacts as before.
+lives in a child process (``python -m services.synth.curveworker`` on a socket pair: nothing
+of the service's threads or sockets is inherited, and unlike ``multiprocessing``'s spawn it
+does not import the parent's main module again). The animation thread sends a request over
+the socket and blocks on the reply, in a system call with the GIL let go, so the answer
+thread runs whenever a hit arrives; the operating system shares the cores between the two
+processes, not the interpreter. What the child computes is what the in-process set would
+have (the same code on the same pickled inputs): the strokes replace the quick contacts as before.
 
 The protocol. One request at a time, answered before the next is sent (the queue is bounded
 by construction: the animation thread waits for each reply): ``("rebuild", arguments)``,
@@ -38,13 +39,14 @@ from __future__ import annotations
 import copyreg
 import io
 import logging
-import multiprocessing
 import os
 import pickle
 import signal
+import socket
+import subprocess
+import sys
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
-from multiprocessing.process import BaseProcess
 from types import MappingProxyType, TracebackType
 from typing import Any
 
@@ -88,13 +90,13 @@ def dumps(obj: object) -> bytes:
     return buf.getvalue()
 
 
-def serve(conn: Connection, setup: bytes, nice: int) -> None:
-    """The child's loop: one request in, one reply out, until the pipe closes. ``setup``:
-    the rig, ``blend_s`` and the stroke parameters, pickled by :func:`dumps`."""
+def serve(conn: Connection, nice: int) -> None:
+    """The child's loop: the set-up (the rig, ``blend_s`` and the stroke parameters, pickled
+    by :func:`dumps`) first, then one request in, one reply out, until the pipe closes."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the service's to handle
     if nice:
         os.nice(nice)
-    rig, blend_s, strokes = pickle.loads(setup)
+    rig, blend_s, strokes = pickle.loads(conn.recv_bytes())
     curves = CurveSet(rig, blend_s, strokes)
     conn.send_bytes(dumps(("ok", os.getpid())))
     while True:
@@ -145,7 +147,7 @@ class CurveWorker:
         self.timeout_s = timeout_s
         self.nice = nice
         self.restarts = 0  # children started again after one died or hung
-        self._proc: BaseProcess | None = None
+        self._proc: subprocess.Popen[bytes] | None = None
         self._conn: Connection | None = None
         self._last_rebuild: bytes | None = None
         self.reset_local()
@@ -154,22 +156,24 @@ class CurveWorker:
 
     def start(self) -> CurveWorker:
         """Start the child and wait until it is ready (its imports take about a second)."""
-        ctx = multiprocessing.get_context("spawn")
-        mine, theirs = ctx.Pipe(duplex=True)
-        setup = dumps((self.rig, self.blend_s, self.strokes))
-        proc = ctx.Process(target=serve, args=(theirs, setup, self.nice), name="synth-curves",
-                           daemon=True)  # fmt: skip
-        proc.start()
+        mine, theirs = socket.socketpair()
+        fd = theirs.fileno()
+        proc = subprocess.Popen([sys.executable, "-m", __name__, str(fd), str(self.nice)],
+                                pass_fds=(fd,), stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL)  # fmt: skip
         theirs.close()
-        self._proc, self._conn = proc, mine
-        if not mine.poll(START_TIMEOUT_S):
-            self.close()
-            raise CurveWorkerError(f"the curve worker did not start within {START_TIMEOUT_S:g} s")
+        self._proc, self._conn = proc, Connection(mine.detach())
         try:
-            pickle.loads(mine.recv_bytes())
+            self._conn.send_bytes(dumps((self.rig, self.blend_s, self.strokes)))
+            ready = self._conn.poll(START_TIMEOUT_S)
+            if ready:
+                pickle.loads(self._conn.recv_bytes())
         except (EOFError, OSError) as exc:
             self.close()
             raise CurveWorkerError(f"the curve worker died at start ({exc})") from None
+        if not ready:
+            self.close()
+            raise CurveWorkerError(f"the curve worker did not start within {START_TIMEOUT_S:g} s")
         return self
 
     def close(self) -> None:
@@ -179,10 +183,11 @@ class CurveWorker:
         if conn is not None:
             conn.close()
         if proc is not None:
-            proc.join(2.0)
-            if proc.is_alive():
+            try:
+                proc.wait(2.0)
+            except subprocess.TimeoutExpired:
                 proc.kill()
-                proc.join(2.0)
+                proc.wait(2.0)
 
     def __enter__(self) -> CurveWorker:
         return self.start()
@@ -284,7 +289,7 @@ class CurveWorker:
             reply = pickle.loads(conn.recv_bytes())
         except (EOFError, OSError) as exc:
             proc = self._proc
-            code = None if proc is None else proc.exitcode
+            code = None if proc is None else proc.poll()
             return f"it died ({type(exc).__name__}, exit code {code})"
         if not (isinstance(reply, tuple) and len(reply) == 2 and isinstance(reply[0], str)):
             return f"a reply of the wrong shape ({type(reply).__name__})"
@@ -292,10 +297,21 @@ class CurveWorker:
 
     def _restart(self, why: str) -> None:
         proc = self._proc
-        if proc is not None and proc.is_alive():
+        if proc is not None and proc.poll() is None:
             proc.kill()
         self.close()
         self.restarts += 1
         log.warning("synth: the curve worker stopped answering (%s); restarted (%d so far), "
                     "the cross-fade under way is lost", why, self.restarts)  # fmt: skip
         self.start()
+
+
+def main(argv: list[str]) -> int:
+    """The child's entry (``python -m services.synth.curveworker FD NICE``): serve on the
+    socket ``FD`` the parent passed."""
+    serve(Connection(int(argv[0])), int(argv[1]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
