@@ -19,12 +19,22 @@ it at the next contact, so every contact is sampled from the new curves alone.
 contact can sample the curves without touching the set. Limits: the stick guard
 (:func:`~livedrummer.body.animation.guard_sticks`) is not run again on blended samples (each
 side of the blend was guarded; their blend may graze a piece for a few milliseconds).
+
+Where the curves live. :class:`CurveSource` is what the synth needs of a curve set: rebuild,
+sample, the current curves' key and contacts. :class:`CurveSet` is the in-process one; the
+synth service passes a worker process that holds a :class:`CurveSet` of its own
+(:mod:`services.synth.curveworker`), so that the re-animation does not hold the service's
+interpreter while a hit is being answered. Only an in-process set has a :meth:`CurveSet.view`
+a quick contact can sample (a worker's view is empty: a quick contact then starts from the
+samples published, as it does whenever there are any).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -123,6 +133,48 @@ def blend_rows(rig: Rig, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndar
     return out
 
 
+class Built(Protocol):
+    """What the synth reads of the current curves: their key and committed contacts."""
+
+    @property
+    def key(self) -> tuple[object, ...]: ...
+
+    @property
+    def contacts_s(self) -> np.ndarray: ...
+
+
+class CurveSource(Protocol):
+    """What :class:`~livedrummer.live.synth.LiveSynth` needs of its curves (see the module
+    docstring): :class:`CurveSet`, or a worker process holding one."""
+
+    animations: int
+    built_at: float
+
+    @property
+    def current(self) -> Built | None: ...
+
+    def view(self) -> CurveView: ...
+
+    def reset(self) -> None: ...
+
+    def rebuild(
+        self,
+        sticking: Sticking,
+        beats: np.ndarray,
+        openness: Openness,
+        key: tuple[object, ...],
+        contacts_s: np.ndarray,
+        chokes: list[np.ndarray] | None,
+        start_s: float,
+        horizon_s: float,
+        answer: Answer | None = None,
+        expression: Expression | None = None,
+        change: StyleChange | None = None,
+    ) -> object: ...
+
+    def sample(self, times: np.ndarray, answer: Answer | None = None) -> np.ndarray: ...
+
+
 class CurveSet:
     """The current curves and the fade from the previous ones (see the module docstring)."""
 
@@ -137,7 +189,7 @@ class CurveSet:
         self._memo: ClearanceMemo = {}  # the clearance search's settings, window to window
         self._memo_old: ClearanceMemo = {}  # the same for the old expression during a change
         self.animations = 0  # how many times the body was re-run (for benchmarks)
-        self.built_at = -np.inf  # the committed horizon of the last rebuild
+        self.built_at = -math.inf  # the committed horizon of the last rebuild
 
     @property
     def current(self) -> Curves | None:

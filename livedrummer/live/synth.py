@@ -11,7 +11,8 @@ parts, each with one job and its own state:
   their decided or provisional limbs, the predictor's guesses, the controls, the online
   sticker;
 * the curve set (:class:`~livedrummer.live.curves.CurveSet`): the current curves and the
-  cross-fade from the old ones (slerp, so bones keep their length mid-fade);
+  cross-fade from the old ones (slerp, so bones keep their length mid-fade); in this process,
+  or in a worker process the synth service gives it (:mod:`services.synth.curveworker`);
 * the sample ledger (:class:`~livedrummer.live.ledger.SampleLedger`): the one store of what
   was published, what is held ahead and the quick contacts.
 
@@ -94,7 +95,7 @@ from livedrummer.body.pose import pose_dtype
 from livedrummer.body.rig import Rig
 from livedrummer.body.strike import foot_contacts
 from livedrummer.body.strokes import StrokeParams
-from livedrummer.live.curves import Answer, CurveSet
+from livedrummer.live.curves import Answer, CurveSet, CurveSource
 from livedrummer.live.ledger import SampleLedger
 from livedrummer.live.quick import QuickState, quick_contact
 from livedrummer.live.settings import check_delay
@@ -173,7 +174,11 @@ class LiveSynth:
         cc_open: np.ndarray | None = None,
         note_map: NoteMap | None = None,
         expression: Expression | None = None,
+        curves: CurveSource | None = None,
     ) -> None:
+        """``curves``: where the window is animated and sampled (default: a
+        :class:`~livedrummer.live.curves.CurveSet` in this process, built with ``strokes``;
+        one given was built with the same rig, ``blend_s`` and strokes)."""
         self.rig = rig
         self.params = p = params or SynthParams()
         self.cc_open = cc_open
@@ -182,7 +187,7 @@ class LiveSynth:
         wp = WindowParams(p.lookahead_s, ahead, p.window_s, p.guard_s, p.idle_period_s, p.epoch_s,
                           p.max_notes, p.delay_s)  # fmt: skip
         self.window = NoteWindow(rig, wp, note_map)
-        self.curves = CurveSet(rig, p.blend_s, strokes)
+        self.curves = curves if curves is not None else CurveSet(rig, p.blend_s, strokes)
         self.ledger = SampleLedger(self.dtype)
         self.style = StyleRamp(expression, p.style_ramp_s)
         self.feet = foot_contacts(rig)  # a quick contact's feet, solved once

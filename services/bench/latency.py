@@ -20,6 +20,12 @@ sample. Measured per note, on the shared clock, from the moment the note-on is s
   synth's own share (one hop in, its work, one hop out);
 * in the input daemon: its ONSET message's send time minus the onset's stamp (the daemon's
   own share of "onset on the bus"; the rest is ZeroMQ and the subscriber waking up).
+* note-ons sent late: the bench's own sending thread against its schedule; and how many
+  notes were stamped within the sticking's chord window (15 ms) of the two notes before
+  them though planned further apart, with how many of those got no pose: on a loaded
+  machine the sender and JACK's non-realtime dummy server deliver notes in bursts, their
+  stamps are close together, and the sticking, which gives two hands one stroke each per
+  instant, leaves the third out (the 100 notes/s runs' "no pose" notes are these).
 
 Prints p50/p99 per stage and rate and the counts lost at each stage (sent vs on the bus, on
 the bus vs contact samples; a note the sticking leaves out, e.g. a third hand note of a
@@ -57,6 +63,7 @@ import zmq
 from livedrummer import protocol as p
 from livedrummer.body.pose import pose_dtype
 from livedrummer.kit.loader import load_kit
+from livedrummer.sticking.prepare import CHORD_WINDOW_S
 from livedrummer.timeline.clock import MonotonicClock
 
 from ..program import program_argv
@@ -164,12 +171,14 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
         pose_in.clear()
         jack.loop_times.clear()
         sent: list[float] = []
+        planned: list[float] = []
         stop = threading.Event()
 
         def play() -> None:
             start = clock.now() + 0.05
             for at, note, velocity in schedule:
                 clock.wait_until(start + at, stop)
+                planned.append(start + at)
                 sent.append(clock.now())
                 jack.out.send_message([0x99, note, velocity])
 
@@ -217,6 +226,14 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
     after_onset = (contact_at - stamps[:n])[~np.isnan(contact_at)]
     after_bus = (contact_at - got_t[:n])[~np.isnan(contact_at)]
     late_mask = contact_at - stamps[:n] > d
+    # notes stamped within the sticking's chord window of the two before them, though planned
+    # further apart: a third hand note "at once" that the sticking must leave out
+    plan = np.array(planned[:n])
+    bunched = np.zeros(n, dtype=bool)
+    if n > 2:
+        bunched[2:] = (stamps[2:n] - stamps[: n - 2] <= CHORD_WINDOW_S) & (
+            plan[2:] - plan[:-2] > CHORD_WINDOW_S)  # fmt: skip
+    no_pose = np.isnan(contact_at)
     late = int(np.sum(late_mask))
     # Where the late ones are: how far past D, and in which quarter of the run (queueing
     # shows as lateness growing towards the end of a burst; a stray slow answer does not).
@@ -244,6 +261,8 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
         "after_onset": after_onset, "after_bus": after_bus, "late": late,
         "in_daemon": np.array(sent_by_daemon[:n]) - stamps[:n],
         "no_contact": missing_pose, "late_where": late_where,
+        "sender_late": sent_a - plan, "bunched": int(bunched.sum()),
+        "bunched_no_pose": int((bunched & no_pose).sum()),
         "synth": (tmp / "synth.err").read_text().strip()[-260:],
     }  # fmt: skip
 
@@ -390,9 +409,19 @@ def _print_run(r: dict[str, Any], label: str) -> None:
     fast = float(np.mean(ab <= 0.001)) if ab.size else 0.0
     print(f"         pose within 1 ms of the onset on the bus: {fast:.0%} of "
           f"contacts; frame - onset {_pct(r['frame_onset'])}; in the input daemon "
-          f"(stamp -> sent) {_pct(r['in_daemon'])}; {r['late_where']}; "
+          f"(stamp -> sent) {_pct(r['in_daemon'])}; {_bunching(r)}{r['late_where']}; "
           f"{r['synth']}",
           flush=True)  # fmt: skip
+
+
+def _bunching(r: dict[str, Any]) -> str:
+    """The detail line's part on the bench's sending and the notes stamped together (empty
+    for a run that did not measure them)."""
+    if "sender_late" not in r:
+        return ""
+    return (f"the bench's note-ons sent late {_pct(r['sender_late'])}; {r['bunched']} notes "
+            f"stamped within {CHORD_WINDOW_S * 1000:g} ms of the two before them though sent "
+            f"apart ({r['bunched_no_pose']} of them without a pose); ")  # fmt: skip
 
 
 def _print_both(results: list[tuple[str, str, dict[str, Any]]]) -> None:

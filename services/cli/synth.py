@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+from contextlib import nullcontext
 from typing import TYPE_CHECKING
 
 from .common import (
@@ -54,6 +55,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--no-predict", action="store_true", help="no upswing before expected hits")
     p.add_argument("--no-provisional", action="store_true",
                    help="publish a hit only once its hand is decided, L after it")  # fmt: skip
+    p.add_argument("--curves-in-process", action="store_true",
+                   help="re-animate on a thread of this process, not in a worker process "
+                   "(the answers then share the interpreter with it; for comparison)")  # fmt: skip
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
     p.add_argument("--vary", type=int, default=None, metavar="SEED",
                    help="be an ensemble copy: seeded smooth delay and gain per onset "
@@ -81,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.timeline.clock import MonotonicClock
 
     from ..service import serve
+    from ..synth.curveworker import CurveWorker
     from ..synth.service import SynthConfig, SynthService
 
     settings = settings_of(args, note_map=args.map)  # --settings FILE, or these flags
@@ -101,8 +106,12 @@ def run(args: argparse.Namespace) -> int:
     kit, avatar = played_by(settings)
     rig = rig_for(kit, avatar)
     expression = load_expression(args.preset) if args.preset else None
-    synth = LiveSynth(rig, params, strokes=StrokeParams(model=args.strokes), cc_open=cc_open,
-                      note_map=note_map, expression=expression)  # fmt: skip
+    strokes = StrokeParams(model=args.strokes)
+    # the window is re-animated in a worker process (services.synth.curveworker), so that a
+    # hit's answer never waits for the interpreter while it runs
+    worker = None if args.curves_in_process else CurveWorker(rig, params.blend_s, strokes)
+    synth = LiveSynth(rig, params, strokes=strokes, cc_open=cc_open, note_map=note_map,
+                      expression=expression, curves=worker)  # fmt: skip
     vary = vary_of(args, settings.delay)
     calibration = Calibration.load()
     config = SynthConfig(
@@ -114,7 +123,8 @@ def run(args: argparse.Namespace) -> int:
     )  # fmt: skip
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = SynthService(synth, config, MonotonicClock(), ctx)
-    code = serve(service, lambda endpoints: endpoints["pub"], {"settings": settings.summary()})
+    with worker if worker is not None else nullcontext():
+        code = serve(service, lambda endpoints: endpoints["pub"], {"settings": settings.summary()})
     s = service.summary()
     p50, p99 = ("-" if v is None else v for v in s["answer_ms"])
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "

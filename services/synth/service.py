@@ -27,6 +27,10 @@ behind a full memory barrier), so batches leave in the order they were cut. The 
 the answer thread go first (:class:`~services.synth.answerlock.AnswerFirstLock`): a plain
 lock let the animation thread, taking it back between its steps, starve the answers at 100
 notes a second.
+``livedrummer synth`` gives the synth a curve worker (:mod:`services.synth.curveworker`): the
+re-animation and the sampling then run in a child process, and the animation thread waits
+for them in a system call with the GIL let go, so the answer thread no longer shares the
+interpreter with them (``--curves-in-process`` keeps them on the thread, for comparison).
 Each onset is also forwarded on the pose socket the moment it is read, before the synth
 works on it, as a SHOWN_ONSET message stamped with its show time (onset + D): a display sounds
 it then (``display --live --sound``), a score strip can draw it. Each control (a cymbal grab,
