@@ -15,6 +15,11 @@ as the render goes, and the drum track is mixed on disk
 (:func:`~services.display.record.spooled_track`), so memory stays bounded however long the
 file.
 
+The frames are drawn by a :class:`FramePainter`, in this process or (``jobs`` > 1, ``render
+--jobs``) in worker processes, each with its own context and renderer, which hand them back in
+frame order (:mod:`.parallel`); the encoder thread and the PNG names are the same either way,
+and so are the frames.
+
 The frame count is ``ceil((performance.duration_s + tail_s) * fps)`` and the audio track is
 exactly that many frames long, so video and audio durations agree to the sample.
 
