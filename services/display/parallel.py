@@ -207,11 +207,6 @@ class FrameStream:
             reader.join(timeout=1.0)
 
 
-def followed(wanted: np.ndarray) -> int:
-    """How many frames a worker drawing ``wanted`` (ascending) goes through: 0 to its last."""
-    return int(wanted[-1]) + 1 if wanted.size else 0
-
-
 #: what the fork server imports once, so that each worker it forks starts with them loaded
 PRELOAD = ["services.display.export", "services.display.stage_export"]
 
