@@ -20,11 +20,12 @@ from livedrummer.render.frame_split import (
     owner_of,
     parse_jobs,
     threads_per_worker,
+    usable_cores,
     worker_frames,
 )
 from services.cli import main
 from services.display.context import DisplayError
-from services.display.parallel import FrameStream
+from services.display.parallel import FrameStream, frame_stream
 from tests.test_stage import write_band
 
 SIZE = "256x144"
@@ -103,6 +104,28 @@ def _render(*extra: str) -> None:
     code = main(["render", "--size", SIZE, "--fps", "20", "--start", "2.5", "--end", "4.2",
                  "--tail", "0", *extra])  # fmt: skip
     assert code == 0
+
+
+def test_a_scene_that_cannot_go_to_workers(caplog: pytest.LogCaptureFixture) -> None:
+    """A draw that does not pickle (a local function here): asked for 2 workers, a named
+    error; on auto, the frames are drawn in this process, with a warning on a multi-core box."""
+    calls = []
+
+    def local(wanted: np.ndarray) -> Iterator[np.ndarray | None]:
+        calls.append(wanted.size)
+        yield from _numbered(wanted)
+
+    with pytest.raises(DisplayError, match=r"cannot send the scene to them .*use --jobs 1"):
+        frame_stream(local, 40, jobs=2, chunk=4)
+    stream = frame_stream(local, 40, jobs=None, chunk=4)
+    try:
+        got = [int(image[0, 0]) for image in stream if image is not None]
+    finally:
+        stream.close()
+    assert got == list(range(40))
+    assert calls == [40]  # one draw, here, of every frame
+    if usable_cores() > 1:
+        assert "drawing in this process" in caplog.text
 
 
 @pytest.mark.usefixtures("gl_ok")  # which also makes a context here first: workers still start

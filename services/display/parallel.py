@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import copyreg
 import io
+import logging
 import multiprocessing
 import os
 import pickle
@@ -54,6 +55,8 @@ from livedrummer.render.frame_split import (
 )
 
 from .context import DisplayError
+
+log = logging.getLogger("livedrummer.render")
 
 #: draw(wanted) -> one item per frame index from 0 up to wanted[-1], in order: for an index in
 #: ``wanted`` the frame (array) or None (written by the worker itself), for any other index
@@ -144,11 +147,12 @@ class FrameStream:
         return stream
 
     @classmethod
-    def fork(cls, draw: DrawFrames, frames: int, jobs: int, threads: int,
+    def fork(cls, draw: DrawFrames | bytes, frames: int, jobs: int, threads: int,
              chunk: int = DEFAULT_CHUNK) -> FrameStream:  # fmt: skip
-        """``jobs`` workers forked now (``threads`` llvmpipe threads each), drawing at once."""
+        """``jobs`` workers forked now (``threads`` llvmpipe threads each), drawing at once;
+        ``draw`` or its :func:`payload`."""
         stream = cls(frames, chunk)
-        sent = payload(draw)
+        sent = draw if isinstance(draw, bytes) else payload(draw)
         ctx = start_server()
         pipes = []
         try:
@@ -190,7 +194,9 @@ class FrameStream:
             if kind == _FRAME:
                 yield value
                 continue
-            if kind == _ERROR and value is None:
+            if kind == _DONE:
+                value = f"finished before frame {i}"
+            elif value is None:
                 self._procs[k].join(timeout=5.0)
                 value = f"exited with status {self._procs[k].exitcode} before frame {i}"
             raise DisplayError(f"render worker {k}: {value}")
@@ -226,9 +232,18 @@ def start_server() -> Any:
 def frame_stream(draw: DrawFrames, frames: int, jobs: int | None,
                  chunk: int = DEFAULT_CHUNK) -> FrameStream:  # fmt: skip
     """``jobs`` workers (None: :func:`~livedrummer.render.frame_split.default_jobs` for this
-    machine's cores) drawing ``frames`` frames; one worker draws here, in this process."""
+    machine's cores) drawing ``frames`` frames; one worker draws here, in this process. With
+    ``jobs`` None a scene that cannot be sent to workers (:func:`payload`) is drawn here, and
+    a warning says why; asked for workers, the DisplayError says it."""
     cores = usable_cores()
     count = default_jobs(cores, frames, chunk) if jobs is None else min(jobs, max(1, frames))
-    if count <= 1:
-        return FrameStream.here(draw, frames)
-    return FrameStream.fork(draw, frames, count, threads_per_worker(cores, count), chunk)
+    if count > 1:
+        try:
+            sent = payload(draw)
+        except DisplayError as exc:
+            if jobs is not None:
+                raise
+            log.warning("%s; drawing in this process", exc)
+        else:
+            return FrameStream.fork(sent, frames, count, threads_per_worker(cores, count), chunk)
+    return FrameStream.here(draw, frames)
