@@ -75,6 +75,7 @@ def test_forked_workers_hand_frames_back_in_order() -> None:
     finally:
         stream.close()
     assert got == [i % 251 for i in range(70)]
+    assert len(stream.cpu_s) == 3 and all(s >= 0.0 for s in stream.cpu_s)  # each one's report
 
 
 def _failing(wanted: np.ndarray) -> Iterator[np.ndarray | None]:

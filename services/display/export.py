@@ -37,6 +37,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import resource
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -126,7 +127,7 @@ def export(
     :mod:`.parallel`), the same frames as one process draws."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
-    start = time.perf_counter()
+    start, cpu0 = time.perf_counter(), _cpu_s()
     fps = settings.fps
     first_s, end_s = span if span is not None else (0.0, performance.duration_s + tail_s)
     n = frame_count(end_s - first_s, fps)
@@ -164,7 +165,16 @@ def export(
             else:
                 log.warning("render stopped after %d of %d frames: they are in %s",
                             writer.frames, n, writer.path)  # fmt: skip
-    return ExportReport(n, n / fps, time.perf_counter() - start)
+    wall_s = time.perf_counter() - start
+    log.info("render: %.2f s of CPU here, %.2f s in %d workers, %.2f s wall",
+             _cpu_s() - cpu0, sum(stream.cpu_s), stream.workers, wall_s)  # fmt: skip
+    return ExportReport(n, n / fps, wall_s)
+
+
+def _cpu_s() -> float:
+    """This process's CPU seconds so far, every thread's (user + system)."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
 
 
 def _open_writer(performance: Performance, body: BodyScene, out: Path, settings: VideoSettings,

@@ -38,6 +38,7 @@ import multiprocessing
 import os
 import pickle
 import queue
+import resource
 import threading
 from collections.abc import Callable, Iterator
 from types import MappingProxyType
@@ -97,7 +98,8 @@ def _work(sent: bytes, wanted: np.ndarray, conn: Any, threads: int) -> None:
         for index, image in enumerate(draw(wanted)):
             if index in mine:
                 conn.send((_FRAME, image))
-        conn.send((_DONE, None))
+        usage = resource.getrusage(resource.RUSAGE_SELF)
+        conn.send((_DONE, (len(mine), usage.ru_utime + usage.ru_stime)))
     except KeyboardInterrupt:  # the parent got it too and ends the render
         pass
     except Exception as exc:  # sent to the parent, which raises it on its own thread
@@ -138,6 +140,8 @@ class FrameStream:
         self._queues: list[queue.Queue[tuple[str, Any]]] = []
         self._readers: list[threading.Thread] = []
         self._stop = threading.Event()
+        #: each worker's CPU seconds (user + system), once every frame has been taken
+        self.cpu_s: list[float] = []
 
     @classmethod
     def here(cls, draw: DrawFrames, frames: int) -> FrameStream:
@@ -200,6 +204,19 @@ class FrameStream:
                 self._procs[k].join(timeout=5.0)
                 value = f"exited with status {self._procs[k].exitcode} before frame {i}"
             raise DisplayError(f"render worker {k}: {value}")
+        self._report()
+
+    def _report(self) -> None:
+        """Log each worker's frames and CPU seconds (``-v``): how busy the cores were."""
+        for k, q in enumerate(self._queues):
+            try:
+                kind, value = q.get(timeout=5.0)
+            except queue.Empty:
+                continue
+            if kind == _DONE:
+                frames, cpu_s = value
+                self.cpu_s.append(cpu_s)
+                log.info("render worker %d: %d frames, %.2f s of CPU", k, frames, cpu_s)
 
     def close(self) -> None:
         """End the workers (at once if they are still drawing) and their readers."""
