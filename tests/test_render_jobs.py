@@ -45,7 +45,8 @@ def test_workers_share_every_frame_once_in_chunks(frames: int, jobs: int, chunk:
 
 def test_jobs_and_threads_fit_the_cores() -> None:
     assert default_jobs(2, 1000) == 2
-    assert default_jobs(16, 20, chunk=16) == 2  # never more workers than chunks
+    assert default_jobs(16, 64, chunk=16) == 2  # two chunks at least for each worker
+    assert default_jobs(16, 48, chunk=16) == 1
     assert default_jobs(8, 1) == 1
     assert threads_per_worker(2, 2) == 1
     assert threads_per_worker(16, 2) == 8

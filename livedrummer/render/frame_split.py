@@ -30,6 +30,8 @@ from livedrummer.errors import ConfigError
 #: worker's waiting frames stay a few tens of megabytes at 720p
 DEFAULT_CHUNK = 16
 MAX_JOBS = 64
+#: chunks a worker gets at least on ``--jobs auto`` (see :func:`default_jobs`)
+MIN_CHUNKS = 2
 
 
 def usable_cores() -> int:
@@ -41,9 +43,10 @@ def usable_cores() -> int:
 
 
 def default_jobs(cores: int, frames: int, chunk: int = DEFAULT_CHUNK) -> int:
-    """Worker processes for ``frames`` frames on ``cores`` cores: one a core, never more than
-    there are chunks (one worker: the render stays in the calling process)."""
-    return max(1, min(cores, MAX_JOBS, chunk_count(frames, chunk)))
+    """Worker processes for ``frames`` frames on ``cores`` cores: one a core, each with at
+    least :data:`MIN_CHUNKS` chunks, since a worker's start-up (a renderer of its own) costs
+    about a chunk's drawing (one worker: the render stays in the calling process)."""
+    return max(1, min(cores, MAX_JOBS, chunk_count(frames, chunk) // MIN_CHUNKS))
 
 
 def threads_per_worker(cores: int, jobs: int) -> int:
