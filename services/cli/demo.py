@@ -164,7 +164,7 @@ def run_file(args: argparse.Namespace) -> int:
     bar = ProgressBar("demo", True, DEMO_FPS, every_s=0.2 if sys.stderr.isatty() else 10.0)
     start = time.perf_counter()
     report = export(performance, body, out=out, settings=settings, camera=camera,
-                    progress=bar, soundfont=args.soundfont)  # fmt: skip
+                    progress=bar, soundfont=args.soundfont, jobs=None)  # fmt: skip
     took = time.perf_counter() - start
     print(f"demo: wrote {out.resolve()} ({report.duration_s:.1f} s of video with sound) "
           f"in {took:.1f} s ({report.realtime:.2f}x real time)")  # fmt: skip

@@ -13,7 +13,8 @@ the bottom of the frame. ``--soundfont FILE.sf2`` plays the drum track with that
 SoundFont's kit (FluidSynth, :mod:`livedrummer.audio.soundfont`) instead of the built-in one.
 ``--background`` puts a colour, an image, chroma green or nothing (alpha: RGBA PNGs, or a
 ``.mov`` ProRes 4444 / ``.webm`` VP9 video with alpha, the default output then ``.mov``)
-behind the stage.
+behind the stage. ``--jobs N`` draws the frames in N worker processes (default: one a core),
+the same frames one process draws (:mod:`services.display.parallel`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 from livedrummer.errors import LivedrummerError
 from livedrummer.render.camera import CAMERA_NAMES
+from livedrummer.render.frame_split import parse_jobs
 from livedrummer.timeline.span import Position, parse_position, span_seconds
 
 from .common import (
@@ -102,6 +104,9 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
                    help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
                    "default: the built-in kit)")  # fmt: skip
+    p.add_argument("--jobs", default="auto", metavar="N|auto",
+                   help="worker processes drawing the frames, each its own OpenGL context "
+                   "(default auto: one a core; 1: this process alone)")  # fmt: skip
     add_motion_options(p)
     add_avatar_option(p)
     p.add_argument("--stage", type=Path, metavar="TOML",
@@ -218,6 +223,17 @@ class ProgressBar:
         sys.stderr.flush()
 
 
+def _start_workers_early(jobs: int | None) -> None:
+    """``--jobs`` other than 1: the workers' fork server starts now, while the file is read
+    and performed (:func:`services.display.parallel.start_server`)."""
+    from livedrummer.render.frame_split import usable_cores
+
+    if jobs != 1 and usable_cores() > 1:
+        from ..display.parallel import start_server
+
+        start_server()
+
+
 def run(args: argparse.Namespace) -> int:
     if args.stage is not None:
         return run_stage(args)
@@ -229,6 +245,7 @@ def run(args: argparse.Namespace) -> int:
     from ..display.video import VideoSettings, check_video_target
 
     size = parse_size(args.size)
+    jobs = parse_jobs(args.jobs)
     samples, fxaa = parse_aa(args.aa)
     overlays = parse_overlays(args.overlay)
     if not 1 <= args.fps <= 240:
@@ -239,6 +256,7 @@ def run(args: argparse.Namespace) -> int:
 
         check_kit_file(args.soundfont)
     source = Path(args.file) if args.file else demo_groove()
+    _start_workers_early(jobs)
     # Every option is checked before the file is read (and its report printed): a mistyped
     # option is the one line on stderr.
     kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
@@ -276,7 +294,7 @@ def run(args: argparse.Namespace) -> int:
         camera=args.camera, tail_s=args.tail, samples=samples, fxaa=fxaa, progress=bar,
         overlays=overlays, soundfont=args.soundfont, avatar=avatar, background=background,
         span=span, staging=None if staging is None else staging.at, lights=lights,
-        lighting=None if staging is None else staging.lights_at,
+        lighting=None if staging is None else staging.lights_at, jobs=jobs,
     )  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
@@ -305,11 +323,13 @@ def run_stage(args: argparse.Namespace) -> int:
     if args.file:
         raise RenderOptionError("render: give a MIDI file or --stage, not both")
     size = parse_size(args.size)
+    jobs = parse_jobs(args.jobs)
     if not 1 <= args.fps <= 240:
         raise RenderOptionError(f"--fps {args.fps}: expected 1..240")
     background = background_of(args)
     start_pos, end_pos = position_option("--start", args.start), position_option("--end", args.end)
     stage = load_stage(args.stage)
+    _start_workers_early(jobs)
     out = args.output
     if out is None and args.frames_dir is None:
         out = Path(args.stage.stem + (".mov" if background.transparent else ".mp4"))
@@ -339,7 +359,7 @@ def run_stage(args: argparse.Namespace) -> int:
     report = export_stage(drummers, out=out, frames_dir=args.frames_dir, settings=settings,
                           camera=args.camera, tail_s=args.tail, progress=bar,
                           background=background, span=span,
-                          lights=lights)  # fmt: skip
+                          lights=lights, jobs=jobs)  # fmt: skip
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
           f"{f' (from {span[0]:.2f} s to {span[1]:.2f} s)' if span else ''}, "

@@ -15,6 +15,11 @@ as the render goes, and the drum track is mixed on disk
 (:func:`~services.display.record.spooled_track`), so memory stays bounded however long the
 file.
 
+The frames are drawn by a :class:`FramePainter`, in this process or (``jobs`` > 1, ``render
+--jobs``) in worker processes, each with its own context and renderer, which hand them back in
+frame order (:mod:`.parallel`); the encoder thread and the PNG names are the same either way,
+and so are the frames.
+
 The frame count is ``ceil((performance.duration_s + tail_s) * fps)`` and the audio track is
 exactly that many frames long, so video and audio durations agree to the sample.
 
@@ -32,8 +37,9 @@ from __future__ import annotations
 import logging
 import math
 import os
+import resource
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,6 +58,7 @@ from livedrummer.render.overlay_raster import overlay_image
 from livedrummer.timeline.performance import Performance
 
 from .context import DisplayError, headless_context
+from .parallel import frame_stream
 from .png import write_png
 from .record import spooled_track
 from .renderer import Renderer, i420_ok
@@ -105,6 +112,7 @@ def export(
     staging: Callable[[float], tuple[Camera, float]] | None = None,
     lights: LightRig | None = None,
     lighting: Callable[[float], LightRig] | None = None,
+    jobs: int | None = 1,
 ) -> ExportReport:
     """Render ``performance`` to ``out`` (MP4) and/or PNGs in ``frames_dir``, with the
     overlay strips ``overlays`` (names of :data:`~livedrummer.render.overlay.OVERLAYS`); the
@@ -117,10 +125,11 @@ def export(
     cymbal struck before the cut still rings into it. ``staging``: each frame's camera and
     darkness by its time (a cue list's :class:`~livedrummer.live.cues.CuedStage`), instead
     of ``camera``; ``lighting``: each frame's lights by its time (asked after ``staging``,
-    which fires the cues), instead of ``lights``."""
+    which fires the cues), instead of ``lights``. ``jobs``: worker processes drawing the frames
+    (None: one a core; :mod:`.parallel`), the same frames as one process draws."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
-    start = time.perf_counter()
+    start, cpu0 = time.perf_counter(), _cpu_s()
     fps = settings.fps
     first_s, end_s = span if span is not None else (0.0, performance.duration_s + tail_s)
     n = frame_count(end_s - first_s, fps)
@@ -132,52 +141,25 @@ def export(
             frames_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise DisplayError(f"cannot make frames folder {frames_dir}: {exc.strerror}") from None
+    painter = FramePainter(body, cam, settings.size, times, frames_dir, samples=samples,
+                           avatar=avatar, background=background, fxaa=fxaa, lights=lights,
+                           overlays=overlays, end_s=first_s + n / fps, video=out is not None,
+                           staging=staging, lighting=lighting)  # fmt: skip
+    # forked now, before the sound is mixed: the workers build their renderers meanwhile
+    stream = frame_stream(painter, n, jobs)
     writer: VideoWriter | None = None
-    if out is not None:
-        lead = round(first_s * settings.sample_rate)
-        length = round(n / fps * settings.sample_rate)
-        track = spooled_track(lead + length)
-        mixed_s = (lead + length) / settings.sample_rate
-        if soundfont is not None:  # before the writer: a bad file leaves no empty video
-            audio = render_kit_file(performance.onsets, mixed_s, soundfont, settings.sample_rate,
-                                     kit, body.performed.sound_chokes, track)  # fmt: skip
-        else:
-            audio = mix_onsets(performance.onsets, mixed_s, kit, settings.sample_rate,
-                               body.performed.sound_chokes, track)  # fmt: skip
-        check_video_target(out, settings)
-        writer = VideoWriter(partial_path(out), settings)
-        writer.write_audio(audio[lead:])
-    ctx = None
     done = False
     try:
-        ctx = headless_context()
-        renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, settings.size,
-                            samples=samples, avatar=avatar, background=background,
-                            fxaa=fxaa, lights=lights)  # fmt: skip
-        alpha = background is not None and background.transparent
-        gpu_yuv = i420_ok(settings.size) and not alpha
-        strips = overlay_image(settings.size, overlays, OverlayModels(body, first_s + n / fps))
-        for i, frame in enumerate(body.frames(times)):
-            if staging is None:
-                renderer.draw(frame, cam)
-            else:
-                view, dark = staging(float(times[i]))
-                if lighting is not None:
-                    renderer.lights = lighting(float(times[i]))
-                renderer.draw(frame, view)
-                darken(renderer, dark)
-            if not strips.empty:
-                r = strips.rect
-                renderer.draw_overlay(strips.paint(float(times[i])), (r.x, r.y, r.width, r.height))
-            if writer is not None:
-                writer.write(renderer.read_i420() if gpu_yuv else renderer.read_rgba())
-            if frames_dir is not None:
-                pixels = renderer.read_rgba_top() if alpha else renderer.read_rgb()
-                write_png(frames_dir / f"frame_{i:06d}.png", pixels)
+        if out is not None:
+            writer = _open_writer(performance, body, out, settings, first_s, n, soundfont)
+        for i, image in enumerate(stream):
+            if writer is not None and image is not None:
+                writer.write(image)
             if progress is not None:
                 progress(i + 1, n)
         done = True
     finally:
+        stream.close()
         if writer is not None:
             writer.close()  # also on Ctrl-C: what was rendered stays watchable, as .part
             if done and out is not None:
@@ -185,6 +167,96 @@ def export(
             else:
                 log.warning("render stopped after %d of %d frames: they are in %s",
                             writer.frames, n, writer.path)  # fmt: skip
-        if ctx is not None:
+    wall_s = time.perf_counter() - start
+    log.info("render: %.2f s of CPU here, %.2f s in %d workers, %.2f s wall",
+             _cpu_s() - cpu0, sum(stream.cpu_s), stream.workers, wall_s)  # fmt: skip
+    return ExportReport(n, n / fps, wall_s)
+
+
+def _cpu_s() -> float:
+    """This process's CPU seconds so far, every thread's (user + system)."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _open_writer(performance: Performance, body: BodyScene, out: Path, settings: VideoSettings,
+                 first_s: float, n: int, soundfont: Path | None) -> VideoWriter:  # fmt: skip
+    """The part file's writer with the whole drum track already in (see :func:`export`)."""
+    fps = settings.fps
+    lead = round(first_s * settings.sample_rate)
+    length = round(n / fps * settings.sample_rate)
+    track = spooled_track(lead + length)
+    mixed_s = (lead + length) / settings.sample_rate
+    if soundfont is not None:  # before the writer: a bad file leaves no empty video
+        audio = render_kit_file(performance.onsets, mixed_s, soundfont, settings.sample_rate,
+                                 body.kit, body.performed.sound_chokes, track)  # fmt: skip
+    else:
+        audio = mix_onsets(performance.onsets, mixed_s, body.kit, settings.sample_rate,
+                           body.performed.sound_chokes, track)  # fmt: skip
+    check_video_target(out, settings)
+    writer = VideoWriter(partial_path(out), settings)
+    writer.write_audio(audio[lead:])
+    return writer
+
+
+class FramePainter:
+    """Draws the frames of an export (:data:`~.parallel.DrawFrames`): its own EGL context
+    and renderer, made when called, so each worker process has its own. Frames it is not
+    asked for are only uploaded, never drawn: the face's reactions
+    (:class:`~livedrummer.body.face.FaceTrack`) follow every frame in time order, so a frame
+    looks the same whichever worker draws it."""
+
+    def __init__(self, body: BodyScene, camera: Camera, size: tuple[int, int], times: np.ndarray,
+                 frames_dir: Path | None, *, samples: int, avatar: Avatar | None,
+                 background: Background | None, fxaa: bool, lights: LightRig | None,
+                 overlays: frozenset[str], end_s: float, video: bool,
+                 staging: Callable[[float], tuple[Camera, float]] | None,
+                 lighting: Callable[[float], LightRig] | None = None) -> None:  # fmt: skip
+        self.lighting = lighting
+        self.body, self.camera, self.size, self.times = body, camera, size, times
+        self.frames_dir, self.samples, self.avatar = frames_dir, samples, avatar
+        self.background, self.fxaa, self.lights = background, fxaa, lights
+        self.overlays, self.staging, self.end_s = overlays, staging, end_s
+        self.alpha = background is not None and background.transparent
+        self.video = video  # False: the frames go to PNGs only
+
+    def __call__(self, wanted: np.ndarray) -> Iterator[np.ndarray | None]:
+        if not wanted.size:
+            return
+        mine = np.zeros(int(wanted[-1]) + 1, bool)
+        mine[wanted] = True
+        ctx = headless_context()
+        try:
+            renderer = Renderer(ctx, build_kit_mesh(self.body.kit), BODY_SKELETON, self.size,
+                                samples=self.samples, avatar=self.avatar,
+                                background=self.background, fxaa=self.fxaa,
+                                lights=self.lights)  # fmt: skip
+            gpu_yuv = i420_ok(self.size) and not self.alpha
+            times = self.times
+            strips = overlay_image(self.size, self.overlays, OverlayModels(self.body, self.end_s))
+            for i, frame in enumerate(self.body.frames(times[: mine.size])):
+                if not mine[i]:
+                    renderer.upload(frame)  # followed, not drawn (see the class docstring)
+                    yield None
+                    continue
+                t = float(times[i])
+                if self.staging is None:
+                    renderer.draw(frame, self.camera)
+                else:
+                    view, dark = self.staging(t)
+                    if self.lighting is not None:
+                        renderer.lights = self.lighting(t)
+                    renderer.draw(frame, view)
+                    darken(renderer, dark)
+                if not strips.empty:
+                    r = strips.rect
+                    renderer.draw_overlay(strips.paint(t), (r.x, r.y, r.width, r.height))
+                if self.frames_dir is not None:
+                    pixels = renderer.read_rgba_top() if self.alpha else renderer.read_rgb()
+                    write_png(self.frames_dir / f"frame_{i:06d}.png", pixels)
+                if not self.video:
+                    yield None
+                else:
+                    yield renderer.read_i420() if gpu_yuv else renderer.read_rgba()
+        finally:
             ctx.release()
-    return ExportReport(n, n / fps, time.perf_counter() - start)

@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -56,6 +56,7 @@ from livedrummer.timeline.performance import Performance
 
 from .context import DisplayError, headless_context
 from .export import ExportReport, frame_count, partial_path
+from .parallel import frame_stream
 from .png import write_png
 from .record import spooled_track
 from .renderer import Renderer
@@ -189,13 +190,15 @@ def export_stage(
     background: Background | None = None,
     span: tuple[float, float] | None = None,
     lights: LightRig | None = None,
+    jobs: int | None = 1,
 ) -> ExportReport:
     """Render the stage to ``out`` (MP4 with the summed drum track) and/or PNGs, in front of
     ``background`` (transparent: alpha 0 where no drummer, kit or floor is nearest).
 
     ``span`` = (start_s, end_s) renders only that part, as :func:`.export.export` does
     (``render --stage --start/--end``): frame ``i`` shows ``start_s + i / fps``, every drummer's
-    motion is its whole performance's and the track is the whole mix's slice."""
+    motion is its whole performance's and the track is the whole mix's slice. ``jobs``: worker
+    processes drawing the frames (None: one a core; :mod:`.parallel`)."""
     if not drummers:
         raise DisplayError("a stage needs at least one drummer")
     if out is None and frames_dir is None:
@@ -208,38 +211,73 @@ def export_stage(
     times = first_s + np.arange(n) / fps
     if frames_dir is not None:
         frames_dir.mkdir(parents=True, exist_ok=True)
-    writer: VideoWriter | None = None
     if out is not None:
         check_video_target(out, settings)
-        lead = round(first_s * settings.sample_rate)
-        length_n = round(n / fps * settings.sample_rate)
-        audio = _track(drummers, (lead + length_n) / settings.sample_rate, settings.sample_rate)
-        writer = VideoWriter(partial_path(out), settings)
-        writer.write_audio(audio[lead:])
-    alpha = background is not None and background.transparent
-    ctx = None
+    painter = StageFrames(drummers, settings.size, camera, times, frames_dir,
+                          background=background, lights=lights, video=out is not None)  # fmt: skip
+    stream = frame_stream(painter, n, jobs)  # forked before the mix: see export()
+    writer: VideoWriter | None = None
     done = False
     try:
-        ctx = headless_context()
-        painter = StagePainter(ctx, drummers, settings.size, camera, background=background,
-                               lights=lights)  # fmt: skip
-        frames = [d.body.frames(times) for d in drummers]
-        for i in range(n):
-            painter.draw([next(f) for f in frames])
-            rgba = painter.read_rgba()  # bottom row first, as GL reads
-            if writer is not None:
+        if out is not None:
+            lead = round(first_s * settings.sample_rate)
+            length_n = round(n / fps * settings.sample_rate)
+            audio = _track(drummers, (lead + length_n) / settings.sample_rate,
+                           settings.sample_rate)  # fmt: skip
+            writer = VideoWriter(partial_path(out), settings)
+            writer.write_audio(audio[lead:])
+        for i, rgba in enumerate(stream):
+            if writer is not None and rgba is not None:
                 writer.write(rgba)
-            if frames_dir is not None:
-                top_down = rgba[::-1] if alpha else rgba[::-1, :, :3]
-                write_png(frames_dir / f"frame_{i:06d}.png", np.ascontiguousarray(top_down))
             if progress is not None:
                 progress(i + 1, n)
         done = True
     finally:
+        stream.close()
         if writer is not None:
             writer.close()
             if done and out is not None:
                 os.replace(writer.path, out)
-        if ctx is not None:
-            ctx.release()
     return ExportReport(n, n / fps, time.perf_counter() - start)
+
+
+class StageFrames:
+    """Draws the frames of a stage export (:data:`~.parallel.DrawFrames`), its own context
+    and :class:`StagePainter` made when called (one per worker process); frames it is not
+    asked for are only uploaded, as :class:`~.export.FramePainter` does, so every drummer's
+    face follows every frame."""
+
+    def __init__(self, drummers: Sequence[StageDrummer], size: tuple[int, int], camera: str,
+                 times: np.ndarray, frames_dir: Path | None, *, background: Background | None,
+                 lights: LightRig | None, video: bool) -> None:  # fmt: skip
+        self.drummers, self.size, self.camera, self.times = drummers, size, camera, times
+        self.frames_dir, self.background, self.lights = frames_dir, background, lights
+        self.video = video
+        self.alpha = background is not None and background.transparent
+
+    def __call__(self, wanted: np.ndarray) -> Iterator[np.ndarray | None]:
+        if not wanted.size:
+            return
+        mine = np.zeros(int(wanted[-1]) + 1, bool)
+        mine[wanted] = True
+        ctx = headless_context()
+        try:
+            painter = StagePainter(ctx, self.drummers, self.size, self.camera,
+                                   background=self.background, lights=self.lights)  # fmt: skip
+            frames = [d.body.frames(self.times[: mine.size]) for d in self.drummers]
+            for i in range(mine.size):
+                now = [next(f) for f in frames]
+                if not mine[i]:
+                    for (renderer, _cam), frame in zip(painter.passes, now, strict=True):
+                        renderer.upload(frame)  # followed, not drawn
+                    yield None
+                    continue
+                painter.draw(now)
+                rgba = painter.read_rgba()  # bottom row first, as GL reads
+                if self.frames_dir is not None:
+                    top_down = rgba[::-1] if self.alpha else rgba[::-1, :, :3]
+                    write_png(self.frames_dir / f"frame_{i:06d}.png",
+                              np.ascontiguousarray(top_down))  # fmt: skip
+                yield rgba if self.video else None
+        finally:
+            ctx.release()
