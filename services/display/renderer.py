@@ -7,7 +7,10 @@ clear to the ``background`` (:mod:`livedrummer.render.background`: the dark hall
 chroma green, alpha 0, or an image stretched over it first by :class:`BackdropPass`), upload the
 frame's kit channels, joints and sticks into the instance buffers (:class:`ScenePass`), draw the
 casters into the key light's shadow map (:class:`ShadowPass`, ``shadows``, on by default), draw
-the body and the kit lit and shadowed (:class:`ScenePass`); then, when asked, an overlay
+the body and the kit lit and shadowed (:class:`ScenePass`), or, for the renderer's own
+off-screen frame, start from the kit at rest cached per view and draw only what differs from
+it (:class:`LayerPass`, ``static_layer``, on by default: the same pixels, fewer of them
+shaded); then, when asked, an overlay
 (:meth:`Renderer.draw_overlay`, :class:`OverlayPass`), the resolve and FXAA (:class:`PostPass`)
 and a read-back (:class:`ReadbackPass`: :meth:`Renderer.read_rgb`, :meth:`Renderer.read_rgba`,
 :meth:`Renderer.read_i420`).
@@ -39,10 +42,11 @@ from .avatar_gl import SkinnedDraw
 from .passes.backdrop import BackdropPass
 from .passes.body import PALETTE, STICK_COLOR, STICK_RADIUS_M
 from .passes.gpu import Gpu
+from .passes.layer import LayerPass
 from .passes.overlay import OverlayPass, overlay_drawn
 from .passes.post import PostPass
 from .passes.readback import ReadbackPass, i420_ok
-from .passes.scene import MAX_CELL_OTHERS, ScenePass
+from .passes.scene import MAX_CELL_OTHERS, FrameView, ScenePass
 from .passes.shadow import SHADOW_SIZE, ShadowPass, key_light_view_projection
 
 __all__ = [
@@ -79,6 +83,7 @@ class Renderer:
         kit_occludes_only: bool = False,
         cache_static_shadow: bool = True,
         lights: LightRig | None = None,
+        static_layer: bool = True,
     ) -> None:
         self.ctx = ctx
         #: the show lights (:mod:`livedrummer.render.lights`); replace it to relight the next
@@ -101,6 +106,13 @@ class Renderer:
         self.backdrop = BackdropPass(ctx)
         self.overlay = OverlayPass(ctx)
         self.readback = ReadbackPass(ctx, self.post)
+        self._inst = np.zeros((0, 0), np.float32)  # the kit's instances uploaded last
+        #: the still kit cached per view (:mod:`.passes.layer`); None where it cannot apply
+        self.layer: LayerPass | None = None
+        body = self.scene.body
+        if (static_layer and self.post.fbo is not None and samples == 0
+                and not kit_occludes_only and not body.has_blend):  # fmt: skip
+            self.layer = LayerPass(self.gpu, self.scene.kit, size)
 
     # what the users of the renderer (and its tests) read of its parts
     @property
@@ -145,8 +157,8 @@ class Renderer:
 
     def upload(self, frame: SceneFrame | None) -> None:
         """Copy one frame's kit channels, joints and sticks into the instance buffers."""
-        inst = self.scene.upload(frame)
-        self.shadow.upload(inst)
+        self._inst = self.scene.upload(frame)
+        self.shadow.upload(self._inst)
 
     def draw(self, frame: SceneFrame | None, camera: Camera, target: Any = None,
              clear: bool = True) -> None:  # fmt: skip
@@ -162,6 +174,17 @@ class Renderer:
         ctx.viewport = (0, 0, w, h)
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
+        layer = self.layer if target is None and clear and not self.kit_occludes_only else None
+        if layer is not None:
+            self.upload(frame)
+            view = self.scene.frame(camera, w / h, self.lights, self.shadow.enabled)
+            self.scene.floor_cell(self.floor_cell_others)
+            self.gpu.set_uniforms(view.uniforms)
+            if self.shadow.enabled:
+                self.shadow.draw(view.light_vp, self.scene.kit, self.scene.body)
+            layer.draw(fbo, view, self._layer_key(view), frame, self._inst, self.scene.body,
+                       self.shadow, self.background, self.backdrop, self.size)  # fmt: skip
+            return
         if clear:
             bg = self.background
             fbo.clear(*bg.rgb, bg.alpha, depth=1.0)
@@ -178,6 +201,15 @@ class Renderer:
             ctx.viewport = (0, 0, w, h)
         self.shadow.bind()
         self.scene.draw(fbo, view, self.kit_occludes_only)
+
+    def _layer_key(self, view: FrameView) -> bytes:
+        """What the static layer's pixels depend on: the view's uniforms (camera, lights), the
+        floor's cell, the background and the size."""
+        bg = self.background
+        parts = [repr(sorted((k, v) for k, v in view.uniforms.items())).encode(),
+                 np.asarray(self.floor_cell_others, np.float32).tobytes(),
+                 repr((bg.kind, bg.rgb, bg.path, id(bg.image), self.size)).encode()]  # fmt: skip
+        return b"|".join(parts)
 
     def pool_centre(self) -> np.ndarray:
         """The centre (x, y) of the floor's pool of key light, in this kit's frame."""

@@ -9,6 +9,8 @@ from the renderer that maps it to the GPU: :class:`.gpu.Gpu` holds what every pa
   (the kit's never-moving parts cached once per light);
 * :class:`.scene.ScenePass`: the kit, the drummer and the sticks, lit and shadowed, the floor
   blended last (:class:`.kit.KitDraw` and :class:`.body.BodyDraw` hold their instance buffers);
+* :class:`.layer.LayerPass`: in place of the last two where it applies, the kit at rest cached
+  per view and only what differs from it drawn each frame (off screen, no multisampling);
 * :class:`.overlay.OverlayPass`: a 2D RGBA image blended over the frame;
 * :class:`.post.PostPass`: the off-screen targets, the multisample resolve and FXAA;
 * :class:`.readback.ReadbackPass`: the frame back to numpy as RGB, RGBA or GPU-made I420.

@@ -19,6 +19,7 @@ import numpy as np
 from livedrummer.avatar.model import Avatar
 from livedrummer.body.face import FaceTrack
 from livedrummer.body.skeleton import N_JOINTS, J
+from livedrummer.render.body_reach import BodyReach, SkinBoxes
 from livedrummer.render.kitmesh import MATERIAL_PLAIN
 from livedrummer.render.scene import CH_HIGHLIGHT, SceneFrame, Skeleton, Tone
 
@@ -36,6 +37,10 @@ STICK_COLOR = (0.80, 0.60, 0.34)
 STICK_RADIUS_M = 0.0075
 SEGMENT_FLOATS = 15  # a xyz, b xyz, radius, colour rgba, material
 BALL_FLOATS = 12  # centre xyz radius, colour rgba, material
+#: metres a face shape moves a vertex at most (added to a skinned drummer's boxes)
+FACE_MARGIN_M = 0.05
+#: boxes a stick is cut into for its shadow (a slanted stick's one box would be mostly air)
+STICK_PIECES = 4
 _SEGMENT = ("3f 3f 1f 4f 4f/i", "in_a", "in_b", "in_radius", "in_color", "in_material")
 _BALL = ("4f 4f 4f/i", "in_centre_radius", "in_color", "in_material")
 
@@ -89,9 +94,47 @@ class BodyDraw:
         if self.skinned is not None and self.skinned.has_face:
             self._face = FaceTrack(kit_crash_like)
         self._pose: tuple[np.ndarray, np.ndarray] | None = None
+        self._capsule_reach: BodyReach | None = None
+        if sk is not None:
+            self._capsule_reach = BodyReach.from_capsules(
+                sk.parent, self._bones, sk.segment_radius_m[self._bones], self._balls,
+                sk.joint_radius_m[self._balls])  # fmt: skip
+        self._skin_boxes: SkinBoxes | None = None
+        if self.skinned is not None:
+            mesh = self.skinned.avatar.mesh
+            self._skin_boxes = SkinBoxes(mesh.positions, mesh.joints, mesh.weights)
         self._counts = (0, 0)  # segments and balls drawn
         #: whether a drummer is drawn (False for a frame of None: the kit at rest)
         self.shown = False
+
+    @property
+    def has_blend(self) -> bool:
+        """Whether the avatar has transparent (BLEND) parts, drawn blended in draw order."""
+        if self.skinned is None:
+            return False
+        mesh = self.skinned.avatar.mesh
+        return any(mesh.materials[p.material].alpha_mode == "BLEND" for p in mesh.primitives)
+
+    def caster_boxes(self, frame: SceneFrame, margin_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Boxes (lo (B, 3), hi (B, 3)) that hold everything drawn of the drummer and the
+        sticks for ``frame`` (uploaded last), grown by ``margin_m``
+        (:class:`livedrummer.render.body_reach.BodyReach`)."""
+        ends = frame.sticks_m.reshape(2, 1, 2, 3)
+        steps = np.linspace(0.0, 1.0, STICK_PIECES + 1)[None, :, None]
+        along = ends[:, :, 0] + steps * (ends[:, :, 1] - ends[:, :, 0])  # (2, pieces + 1, 3)
+        pieces = np.stack([along[:, :-1], along[:, 1:]], axis=2).reshape(-1, 2, 3)
+        lo = [pieces.min(axis=1) - STICK_RADIUS_M]
+        hi = [pieces.max(axis=1) + STICK_RADIUS_M]
+        if self._pose is not None and self._skin_boxes is not None and self.skinned is not None:
+            skin_m = self.skinned.skin_matrices(*self._pose)
+            b_lo, b_hi = self._skin_boxes.boxes(skin_m, FACE_MARGIN_M)
+            lo.append(b_lo)
+            hi.append(b_hi)
+        elif self._capsule_reach is not None and len(frame.joints_m):
+            b_lo, b_hi = self._capsule_reach.boxes(frame.joints_m, 0.0)
+            lo.append(b_lo)
+            hi.append(b_hi)
+        return np.concatenate(lo) - margin_m, np.concatenate(hi) + margin_m
 
     def upload(self, frame: SceneFrame | None) -> None:
         """Copy one frame's joints and sticks into the instance buffers (checked already)."""

@@ -1,0 +1,181 @@
+"""The static layer: the kit at rest and the floor drawn once per view, each frame only what
+differs from it drawn again.
+
+On llvmpipe (no GPU) a frame's cost is its shaded pixels, and most of them are the floor and
+the kit, most of whose pieces are at rest in any frame. So the layer draws the kit at rest into
+a colour and depth framebuffer of its own, lit and shadowed by the kit at rest (a shadow map of
+its own, no drummer in it), whenever the view changes (camera, lights, background, the floor's
+cell, the size), and each frame starts from a copy of it (a blit of colour and depth). Then:
+
+* where the frame can differ from the copy, it is drawn again from scratch (cleared to the
+  background, the whole kit in its current pose, with the frame's full shadow map), under a
+  scissor, in a few rectangles of whole tiles (:mod:`livedrummer.render.shadow_region`): the
+  old and the new pixels of every piece away from its rest pose (a swing, a lift, a pedal, a
+  struck head's glow), and the shadow volumes of every caster not in the cache: the drummer
+  (:mod:`livedrummer.render.body_reach`), the sticks, and the moved pieces in both poses;
+* the drummer and the sticks, over everything, depth-tested against the copied depth.
+
+Same shaders, same uniforms, so the same pixels as the full path: ``tests/test_render_layer.py``
+compares the two frame for frame. The floor is blended; in the full path it is drawn after
+the drummer, here before it. Both give the nearer surface where the drummer stands in front of
+the floor, and nothing is ever below it. Limits: only for the renderer's own off-screen target,
+without multisampling, when it clears the frame, not for the kit drawn as an occluder only, and
+not for an avatar with transparent (BLEND) parts, whose blending depends on draw order: the
+renderer takes the full path there. A camera that moves every frame rebuilds the layer every
+frame (one more blit than the full path).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from livedrummer.render.background import Background
+from livedrummer.render.kitmesh import KitMesh
+from livedrummer.render.scene import SceneFrame, empty_channels
+from livedrummer.render.shadow_region import Rect, box_corners, box_rects, shadow_rects, tile_cover
+
+from .backdrop import BackdropPass
+from .body import BodyDraw
+from .gpu import Gpu
+from .kit import KitDraw
+from .scene import FrameView
+from .shadow import SHADOW_SIZE, SHADOW_UNIT, ShadowPass
+
+#: metres added round a caster's box: the shadow lookup's normal offset (12 mm) and its
+#: filter's reach (a few 7 mm texels), with margin
+CASTER_PAD_M = 0.06
+
+
+class LayerPass:
+    """The cached kit at rest and the per-frame redraw over it (see the module docstring)."""
+
+    def __init__(self, gpu: Gpu, kit: KitDraw, size: tuple[int, int]) -> None:
+        import moderngl
+
+        self._gpu = gpu
+        self._kit = kit
+        ctx = gpu.ctx
+        km: KitMesh = kit.kit_mesh
+        self._kit_mesh = km
+        self._rest = km.instances(empty_channels(km.pieces))
+        lo_hi = {n: (m.vertices[:, :3].min(0), m.vertices[:, :3].max(0))
+                 for n, m in gpu.meshes.items()}  # fmt: skip
+        unit_lo = np.array([lo_hi[str(n)][0] for n in km.mesh]).reshape(-1, 3)
+        unit_hi = np.array([lo_hi[str(n)][1] for n in km.mesh]).reshape(-1, 3)
+        self._unit_corners = box_corners(unit_lo, unit_hi)  # (N, 8, 3) in each piece's frame
+        self._casts = km.mesh != "floor"
+        rest = self._world_corners(self._rest, np.arange(len(self._rest)))
+        # what shadows can fall on: the box of the pieces at rest, and the floor's
+        groups = [rest[self._casts], rest[~self._casts]]
+        boxes = [(g.min(axis=(0, 1)), g.max(axis=(0, 1))) for g in groups if len(g)]
+        lo, hi = (np.array([b[k] for b in boxes]).reshape(-1, 3) for k in (0, 1))
+        self._receivers = (lo - CASTER_PAD_M, hi + CASTER_PAD_M)
+        w, h = size
+        self._colour = ctx.texture((w, h), 4)
+        self._fbo = ctx.framebuffer(color_attachments=[self._colour],
+                                    depth_attachment=ctx.depth_renderbuffer((w, h)))  # fmt: skip
+        self._map = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
+        self._map.compare_func = "<="
+        self._map.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        self._map.repeat_x = self._map.repeat_y = False
+        self._map_fbo = ctx.framebuffer(
+            color_attachments=[ctx.renderbuffer((SHADOW_SIZE, SHADOW_SIZE), 1)],
+            depth_attachment=self._map,
+        )
+        self._key: bytes | None = None
+        #: rectangles redrawn in the last frame (for the bench and the tests)
+        self.last_rects: list[Rect] = []
+
+    def draw(self, fbo: Any, view: FrameView, key: bytes, frame: SceneFrame | None,
+             inst: np.ndarray, body: BodyDraw, shadow: ShadowPass, background: Background,
+             backdrop: BackdropPass, size: tuple[int, int]) -> None:  # fmt: skip
+        """The frame into ``fbo`` (the renderer's own target): the layer (rebuilt when ``key``
+        changed), the rectangles that differ from it, the drummer. The kit's buffers hold this
+        frame's instances ``inst`` and the shadow pass has drawn this frame's map."""
+        ctx = self._gpu.ctx
+        if key != self._key:
+            self._build(view, shadow.enabled, inst, background, backdrop, size)
+            self._key = key
+        ctx.copy_framebuffer(fbo, self._fbo)
+        fbo.use()
+        ctx.viewport = (0, 0, *size)
+        shadow.bind()
+        self.last_rects = self._rects(view, frame, inst, body, shadow.enabled, size)
+        for rect in self.last_rects:
+            ctx.scissor = rect
+            self._clear(background, backdrop, size)
+        ctx.scissor = None
+        # the drummer before the kit, as in the full path, so that equal depths (a stick on a
+        # head, a shoe on a pedal) resolve the same way inside the rectangles
+        body.draw(fbo)
+        if self.last_rects:
+            # one draw of the kit over the rectangles' box: outside the cleared rectangles every
+            # fragment meets the copied depth of the same surface (or the drummer's, nearer) and
+            # fails the test, so nothing blends twice; the scissor spares the floor, whose
+            # shader discards and so is depth-tested late, after shading
+            r = np.array(self.last_rects)
+            x0, y0 = r[:, 0].min(), r[:, 1].min()
+            x1, y1 = (r[:, 0] + r[:, 2]).max(), (r[:, 1] + r[:, 3]).max()
+            ctx.scissor = (int(x0), int(y0), int(x1 - x0), int(y1 - y0))
+            self._kit.draw(ctx)
+            ctx.scissor = None
+
+    def _build(self, view: FrameView, shadows: bool, inst: np.ndarray, background: Background,
+               backdrop: BackdropPass, size: tuple[int, int]) -> None:  # fmt: skip
+        """The kit at rest, shadowed by itself alone, into the layer."""
+        ctx = self._gpu.ctx
+        self._kit.upload(self._rest)
+        if shadows:
+            self._gpu.programs["depth_mesh"]["u_view_proj"].write(view.light_vp.T.tobytes())
+            self._map_fbo.use()
+            ctx.viewport = (0, 0, SHADOW_SIZE, SHADOW_SIZE)
+            self._map_fbo.clear(depth=1.0)
+            self._kit.draw_depth()
+            self._map.use(location=SHADOW_UNIT)
+        self._fbo.use()
+        ctx.viewport = (0, 0, *size)
+        self._clear(background, backdrop, size)
+        self._kit.draw(ctx)
+        self._kit.upload(inst)
+
+    def _clear(self, background: Background, backdrop: BackdropPass,
+               size: tuple[int, int]) -> None:  # fmt: skip
+        """The bound framebuffer (within the scissor, if set) cleared to the background."""
+        import moderngl
+
+        ctx = self._gpu.ctx
+        ctx.fbo.clear(*background.rgb, background.alpha, depth=1.0)
+        if background.image is not None:
+            backdrop.draw(background.image, size)
+        ctx.enable(moderngl.DEPTH_TEST)
+
+    def _rects(self, view: FrameView, frame: SceneFrame | None, inst: np.ndarray,
+               body: BodyDraw, shadows: bool, size: tuple[int, int]) -> list[Rect]:  # fmt: skip
+        """Where this frame can differ from the layer (see the module docstring)."""
+        moved = np.flatnonzero((inst != self._rest).any(axis=1))
+        worlds = [self._world_corners(self._rest, moved), self._world_corners(inst, moved)]
+        own = box_rects(np.concatenate(worlds), view.view_proj, size)
+        rects = [own]
+        if shadows:
+            lo, hi = [], []
+            casting = self._casts[moved]
+            for corners in worlds:
+                lo.append(corners[casting].min(axis=1) - CASTER_PAD_M)
+                hi.append(corners[casting].max(axis=1) + CASTER_PAD_M)
+            if frame is not None:
+                b_lo, b_hi = body.caster_boxes(frame, CASTER_PAD_M)
+                lo.append(b_lo)
+                hi.append(b_hi)
+            light = np.asarray(view.uniforms["u_key_pos"], np.float64)
+            rects.append(shadow_rects(np.concatenate(lo), np.concatenate(hi), light,
+                                      *self._receivers, view.view_proj, size))  # fmt: skip
+        return tile_cover(np.concatenate(rects), size)
+
+    def _world_corners(self, inst: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """The world corners (R, 8, 3) of the unit-mesh boxes of ``inst``'s ``rows``."""
+        model = inst[rows, :16].reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
+        local = self._unit_corners[rows]
+        out: np.ndarray = np.einsum("rij,rkj->rki", model[:, :3, :3], local) + model[:, None, :3, 3]
+        return out
