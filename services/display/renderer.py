@@ -183,8 +183,10 @@ class Renderer:
             if self.shadow.enabled:
                 self.shadow.draw(view.light_vp, self.scene.kit, self.scene.body)
             layer.draw(fbo, view, self._layer_key(view), frame, self._inst, self.scene.body,
-                       self.shadow, self.background, self.backdrop, self.size)  # fmt: skip
+                       self.shadow, self.background, self.backdrop, self.size,
+                       self.post)  # fmt: skip
             return
+        self.post.reuse = None
         if clear:
             bg = self.background
             fbo.clear(*bg.rgb, bg.alpha, depth=1.0)

@@ -46,14 +46,31 @@ class KitDraw:
 
     def draw(self, ctx: Any) -> None:
         """Every piece lit, the floor last and blended over what is behind it."""
+        self.draw_pieces()
+        self.draw_floor(ctx)
+
+    def draw_pieces(self) -> None:
+        """Every piece but the floor, lit."""
+        for name, vao, _buf, idx in self._lit:
+            if name != "floor":
+                vao.render(instances=len(idx))
+
+    def draw_floor(self, ctx: Any, scissors: list[tuple[int, int, int, int]] | None = None) -> None:
+        """The floor, lit and blended over what is behind it (its rim fades into whatever
+        background is there), over the frame or once within each of ``scissors``."""
         import moderngl
 
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
+                          moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)  # fmt: skip
         for name, vao, _buf, idx in self._lit:
-            if name == "floor":  # its rim fades into whatever background is behind it
-                ctx.enable(moderngl.BLEND)
-                ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
-                                  moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)  # fmt: skip
-            vao.render(instances=len(idx))
+            if name == "floor":
+                for rect in [None] if scissors is None else scissors:
+                    if rect is not None:
+                        ctx.scissor = rect
+                    vao.render(instances=len(idx))
+                if scissors is not None:
+                    ctx.scissor = None
         ctx.disable(moderngl.BLEND)
 
     def draw_depth(self) -> None:

@@ -40,9 +40,12 @@ from .backdrop import BackdropPass
 from .body import BodyDraw
 from .gpu import Gpu
 from .kit import KitDraw
+from .post import PostPass
 from .scene import FrameView
 from .shadow import SHADOW_SIZE, SHADOW_UNIT, ShadowPass
 
+#: pixels round a changed pixel whose FXAA result may change (its taps reach 5 pixels out)
+FXAA_REACH_PX = 6
 #: metres added round a caster's box: the shadow lookup's normal offset (12 mm) and its
 #: filter's reach (a few 7 mm texels), with margin
 CASTER_PAD_M = 0.06
@@ -87,10 +90,14 @@ class LayerPass:
         self._key: bytes | None = None
         #: rectangles redrawn in the last frame (for the bench and the tests)
         self.last_rects: list[Rect] = []
+        #: rectangles outside which the last frame's pixels are the layer's, grown by what FXAA
+        #: reads round a pixel (:attr:`PostPass.reuse`)
+        self.changed: list[Rect] = []
+        self._still_aa: Any = None  # the layer anti-aliased, made with the first FXAA frame
 
     def draw(self, fbo: Any, view: FrameView, key: bytes, frame: SceneFrame | None,
              inst: np.ndarray, body: BodyDraw, shadow: ShadowPass, background: Background,
-             backdrop: BackdropPass, size: tuple[int, int]) -> None:  # fmt: skip
+             backdrop: BackdropPass, size: tuple[int, int], post: PostPass) -> None:  # fmt: skip
         """The frame into ``fbo`` (the renderer's own target): the layer (rebuilt when ``key``
         changed), the rectangles that differ from it, the drummer. The kit's buffers hold this
         frame's instances ``inst`` and the shadow pass has drawn this frame's map."""
@@ -98,11 +105,24 @@ class LayerPass:
         if key != self._key:
             self._build(view, shadow.enabled, inst, background, backdrop, size)
             self._key = key
+            if post.fxaa:
+                if self._still_aa is None:
+                    tex = ctx.texture(size, 4)
+                    self._still_aa = ctx.framebuffer(color_attachments=[tex])
+                post.antialias(self._colour, self._still_aa)
         ctx.copy_framebuffer(fbo, self._fbo)
         fbo.use()
         ctx.viewport = (0, 0, *size)
         shadow.bind()
-        self.last_rects = self._rects(view, frame, inst, body, shadow.enabled, size)
+        self.last_rects, drummer = self._rects(view, frame, inst, body, shadow.enabled, size)
+        grown = np.array([(x - FXAA_REACH_PX, y - FXAA_REACH_PX, x + w + FXAA_REACH_PX,
+                           y + h + FXAA_REACH_PX) for x, y, w, h in self.last_rects],
+                         np.int64).reshape(-1, 4)  # fmt: skip
+        grown = np.concatenate([grown, drummer + np.array([-1, -1, 1, 1]) * FXAA_REACH_PX])
+        grown[:, [0, 2]] = grown[:, [0, 2]].clip(0, size[0])
+        grown[:, [1, 3]] = grown[:, [1, 3]].clip(0, size[1])
+        self.changed = tile_cover(grown, size)
+        post.reuse = (self._still_aa, self.changed) if post.fxaa else None
         for rect in self.last_rects:
             ctx.scissor = rect
             self._clear(background, backdrop, size)
@@ -111,16 +131,17 @@ class LayerPass:
         # head, a shoe on a pedal) resolve the same way inside the rectangles
         body.draw(fbo)
         if self.last_rects:
-            # one draw of the kit over the rectangles' box: outside the cleared rectangles every
-            # fragment meets the copied depth of the same surface (or the drummer's, nearer) and
-            # fails the test, so nothing blends twice; the scissor spares the floor, whose
-            # shader discards and so is depth-tested late, after shading
+            # the pieces in one draw over the rectangles' box: outside the cleared rectangles
+            # every fragment meets the copied depth of the same surface (or the drummer's,
+            # nearer) and fails the early depth test; the floor once in each rectangle, as its
+            # shader discards (a stage's cell) and so is depth-tested late, after shading
             r = np.array(self.last_rects)
             x0, y0 = r[:, 0].min(), r[:, 1].min()
             x1, y1 = (r[:, 0] + r[:, 2]).max(), (r[:, 1] + r[:, 3]).max()
             ctx.scissor = (int(x0), int(y0), int(x1 - x0), int(y1 - y0))
-            self._kit.draw(ctx)
+            self._kit.draw_pieces()
             ctx.scissor = None
+            self._kit.draw_floor(ctx, self.last_rects)
 
     def _build(self, view: FrameView, shadows: bool, inst: np.ndarray, background: Background,
                backdrop: BackdropPass, size: tuple[int, int]) -> None:  # fmt: skip
@@ -152,12 +173,18 @@ class LayerPass:
         ctx.enable(moderngl.DEPTH_TEST)
 
     def _rects(self, view: FrameView, frame: SceneFrame | None, inst: np.ndarray,
-               body: BodyDraw, shadows: bool, size: tuple[int, int]) -> list[Rect]:  # fmt: skip
-        """Where this frame can differ from the layer (see the module docstring)."""
+               body: BodyDraw, shadows: bool,
+               size: tuple[int, int]) -> tuple[list[Rect], np.ndarray]:  # fmt: skip
+        """Where this frame's kit can differ from the layer (see the module docstring), as
+        tiles; and the drummer's pixel boxes (B, 4: x0, y0, x1, y1)."""
         moved = np.flatnonzero((inst != self._rest).any(axis=1))
         worlds = [self._world_corners(self._rest, moved), self._world_corners(inst, moved)]
         own = box_rects(np.concatenate(worlds), view.view_proj, size)
         rects = [own]
+        drummer = np.zeros((0, 4), np.int64)
+        if frame is not None:
+            d_lo, d_hi = body.caster_boxes(frame, 0.0)
+            drummer = box_rects(box_corners(d_lo, d_hi), view.view_proj, size)
         if shadows:
             lo, hi = [], []
             casting = self._casts[moved]
@@ -171,7 +198,7 @@ class LayerPass:
             light = np.asarray(view.uniforms["u_key_pos"], np.float64)
             rects.append(shadow_rects(np.concatenate(lo), np.concatenate(hi), light,
                                       *self._receivers, view.view_proj, size))  # fmt: skip
-        return tile_cover(np.concatenate(rects), size)
+        return tile_cover(np.concatenate(rects), size), drummer
 
     def _world_corners(self, inst: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """The world corners (R, 8, 3) of the unit-mesh boxes of ``inst``'s ``rows``."""

@@ -47,18 +47,22 @@ class PostPass:
         #: the finished frame's framebuffer and its colour texture
         self.final: Any = self._resolve
         self.final_tex: Any = colour
-        self._fxaa: tuple[Any, Any] | None = None
+        self._fxaa: Any = None  # the FXAA pass's vertex array
+        self._scene_tex: Any = colour
+        self._samplers: dict[int, Any] = {}
         #: a frame drawn since the anti-aliasing pass last ran
         self.stale = False
+        #: set by a static layer for the frame drawn last: a framebuffer holding its still
+        #: picture anti-aliased already, and the rectangles outside which the frame's filtered
+        #: pixels equal it (FXAA reads a few pixels round each; the layer grows them by that)
+        self.reuse: tuple[Any, list[tuple[int, int, int, int]]] | None = None
         if self.fxaa:
             post = ctx.texture(size, 4)
             self.final, self.final_tex = ctx.framebuffer(color_attachments=[post]), post
             prog = ctx.program(vertex_shader=shader_source("fullscreen.vert"),
                                fragment_shader=shader_source("fxaa.frag"))  # fmt: skip
             prog["u_image"].value = 0
-            sampler = ctx.sampler(texture=colour, filter=(moderngl.LINEAR, moderngl.LINEAR),
-                                  repeat_x=False, repeat_y=False)  # fmt: skip
-            self._fxaa = (ctx.vertex_array(prog, []), sampler)
+            self._fxaa = ctx.vertex_array(prog, [])
 
     def overlay_target(self, target: Any) -> Any:
         """The framebuffer an overlay is painted into: ``target``, else the off-screen frame,
@@ -78,15 +82,37 @@ class PostPass:
         if self.samples > 0:
             ctx.copy_framebuffer(self._resolve, self.fbo)
         if self._fxaa is not None:
-            import moderngl
-
-            vao, sampler = self._fxaa
-            self.final.use()
-            w, h = self.final_tex.size
-            ctx.viewport = (0, 0, w, h)
-            ctx.disable(moderngl.DEPTH_TEST)
-            vao.program["u_texel"].value = (1.0 / w, 1.0 / h)
-            sampler.use(location=0)
-            vao.render(moderngl.TRIANGLES, vertices=3)
-            sampler.clear(location=0)
+            if self.reuse is not None:
+                still, rects = self.reuse
+                ctx.copy_framebuffer(self.final, still)
+                self.antialias(self._scene_tex, self.final, rects)
+            else:
+                self.antialias(self._scene_tex, self.final)
         self.stale = False
+
+    def antialias(self, texture: Any, target: Any,
+                  rects: list[tuple[int, int, int, int]] | None = None) -> None:  # fmt: skip
+        """The FXAA pass over ``texture`` into framebuffer ``target`` of the same size, over the
+        whole frame or only within ``rects`` (x, y, w, h from the bottom left)."""
+        import moderngl
+
+        if self._fxaa is None:
+            raise ValueError("antialias on a renderer without FXAA")
+        ctx = self._ctx
+        vao = self._fxaa
+        sampler = self._samplers.get(id(texture))
+        if sampler is None:
+            sampler = ctx.sampler(texture=texture, filter=(moderngl.LINEAR, moderngl.LINEAR),
+                                  repeat_x=False, repeat_y=False)  # fmt: skip
+            self._samplers[id(texture)] = sampler
+        target.use()
+        w, h = texture.size
+        ctx.viewport = (0, 0, w, h)
+        ctx.disable(moderngl.DEPTH_TEST)
+        vao.program["u_texel"].value = (1.0 / w, 1.0 / h)
+        sampler.use(location=0)
+        for rect in [None] if rects is None else rects:
+            ctx.scissor = rect
+            vao.render(moderngl.TRIANGLES, vertices=3)
+        ctx.scissor = None
+        sampler.clear(location=0)
