@@ -66,6 +66,16 @@ def test_a_frame_from_the_layer_equals_the_fully_drawn_frame(config: str) -> Non
                 redrawn.append(sum(r[2] * r[3] for r in rects) / (size[0] * size[1]))
         assert min(redrawn) == 0.0  # the kit at rest, no drummer: the layer alone
         assert float(np.median(redrawn)) < 0.8  # the layer was used, not whole-frame redraws
+        # a camera moving every frame: the full path (the layer is not rebuilt), same pixels
+        from livedrummer.render.camera import Camera
+
+        held = layered.layer._key
+        for k, frame in enumerate(frames):
+            cam = Camera("move", (0.5 * k, -3.0, 1.6), (0.0, 0.3, 0.7))
+            layered.draw(frame, cam)
+            full.draw(frame, cam)
+            assert np.array_equal(layered.read_rgba_top(), full.read_rgba_top())
+        assert layered.layer._key == held
     finally:
         ctx.release()
 

@@ -174,17 +174,17 @@ class Renderer:
         ctx.viewport = (0, 0, w, h)
         ctx.enable(moderngl.DEPTH_TEST)
         ctx.disable(moderngl.CULL_FACE)
+        view = self.scene.frame(camera, w / h, self.lights, self.shadow.enabled)
         layer = self.layer if target is None and clear and not self.kit_occludes_only else None
-        if layer is not None:
+        key = self._layer_key(view) if layer is not None else b""
+        if layer is not None and layer.still(key):
             self.upload(frame)
-            view = self.scene.frame(camera, w / h, self.lights, self.shadow.enabled)
             self.scene.floor_cell(self.floor_cell_others)
             self.gpu.set_uniforms(view.uniforms)
             if self.shadow.enabled:
                 self.shadow.draw(view.light_vp, self.scene.kit, self.scene.body)
-            layer.draw(fbo, view, self._layer_key(view), frame, self._inst, self.scene.body,
-                       self.shadow, self.background, self.backdrop, self.size,
-                       self.post)  # fmt: skip
+            layer.draw(fbo, view, key, frame, self._inst, self.scene.body, self.shadow,
+                       self.background, self.backdrop, self.size, self.post)  # fmt: skip
             return
         self.post.reuse = None
         if clear:
@@ -194,7 +194,6 @@ class Renderer:
                 self.backdrop.draw(bg.image, self.size)
                 ctx.enable(moderngl.DEPTH_TEST)
         self.upload(frame)
-        view = self.scene.frame(camera, w / h, self.lights, self.shadow.enabled)
         self.scene.floor_cell(self.floor_cell_others)
         self.gpu.set_uniforms(view.uniforms)
         if self.shadow.enabled:

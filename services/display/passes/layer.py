@@ -21,8 +21,8 @@ the drummer, here before it. Both give the nearer surface where the drummer stan
 the floor, and nothing is ever below it. Limits: only for the renderer's own off-screen target,
 without multisampling, when it clears the frame, not for the kit drawn as an occluder only, and
 not for an avatar with transparent (BLEND) parts, whose blending depends on draw order: the
-renderer takes the full path there. A camera that moves every frame rebuilds the layer every
-frame (one more blit than the full path).
+renderer takes the full path there; and while the view changes every frame (a camera move):
+the layer is rebuilt once the view has held for two frames (:meth:`LayerPass.still`).
 """
 
 from __future__ import annotations
@@ -87,13 +87,22 @@ class LayerPass:
             color_attachments=[ctx.renderbuffer((SHADOW_SIZE, SHADOW_SIZE), 1)],
             depth_attachment=self._map,
         )
-        self._key: bytes | None = None
+        self._key: bytes | None = None  # the view the layer holds
+        self._seen: bytes | None = None  # the view of the frame before
         #: rectangles redrawn in the last frame (for the bench and the tests)
         self.last_rects: list[Rect] = []
         #: rectangles outside which the last frame's pixels are the layer's, grown by what FXAA
         #: reads round a pixel (:attr:`PostPass.reuse`)
         self.changed: list[Rect] = []
         self._still_aa: Any = None  # the layer anti-aliased, made with the first FXAA frame
+
+    def still(self, key: bytes) -> bool:
+        """Whether to draw a frame of view ``key`` from the layer: when the layer holds it, or
+        the frame before had it too (the view held still; the layer is rebuilt for it). A view
+        that changes every frame (a camera move) takes the full path: rebuilding the layer each
+        frame would cost more than it saves."""
+        seen, self._seen = self._seen, key
+        return key == self._key or key == seen
 
     def draw(self, fbo: Any, view: FrameView, key: bytes, frame: SceneFrame | None,
              inst: np.ndarray, body: BodyDraw, shadow: ShadowPass, background: Background,
