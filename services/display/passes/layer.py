@@ -8,11 +8,16 @@ its own, no drummer in it), whenever the view changes (camera, lights, backgroun
 cell, the size), and each frame starts from a copy of it (a blit of colour and depth). Then:
 
 * where the frame can differ from the copy, it is drawn again from scratch (cleared to the
-  background, the whole kit in its current pose, with the frame's full shadow map), under a
-  scissor, in a few rectangles of whole tiles (:mod:`livedrummer.render.shadow_region`): the
-  old and the new pixels of every piece away from its rest pose (a swing, a lift, a pedal, a
-  struck head's glow), and the shadow volumes of every caster not in the cache: the drummer
-  (:mod:`livedrummer.render.body_reach`), the sticks, and the moved pieces in both poses;
+  background, the whole kit in its current pose, with the frame's full shadow map), in whole
+  tiles (:func:`livedrummer.render.shadow_region.tile_cover`): the old and the new pixels of
+  every piece away from its rest pose (a swing, a lift, a pedal, a struck head's glow: boxes
+  projected), and every tile whose still surfaces look up shadow-map texels that a caster not
+  in the cache covers. Those casters (the drummer, the sticks, the moved pieces in both poses)
+  are drawn depth-only from the key light at the map's resolution and read back (1 MB); the
+  covered texels, grown by what a lookup reaches, are matched against a per-view table of the
+  (tile, map cell) pairs the layer's surfaces look up (its depth read back and unprojected once
+  per view). Where no moving caster covers a texel, the frame's map and the layer's hold the
+  same depth there, so an untouched tile's shadows are the layer's;
 * the drummer and the sticks, over everything, depth-tested against the copied depth.
 
 Same shaders, same uniforms, so the same pixels as the full path: ``tests/test_render_layer.py``
@@ -32,23 +37,25 @@ from typing import Any
 import numpy as np
 
 from livedrummer.render.background import Background
-from livedrummer.render.kitmesh import KitMesh
+from livedrummer.render.kitmesh import INSTANCE_FLOATS, KitMesh
 from livedrummer.render.scene import SceneFrame, empty_channels
-from livedrummer.render.shadow_region import Rect, box_corners, box_rects, shadow_rects, tile_cover
+from livedrummer.render.shadow_region import TILE_PX, Rect, box_corners, box_rects, tile_cover
 
 from .backdrop import BackdropPass
 from .body import BodyDraw
 from .gpu import Gpu
-from .kit import KitDraw
+from .kit import KIT_LAYOUT, KitDraw
 from .post import PostPass
 from .scene import FrameView
 from .shadow import SHADOW_SIZE, SHADOW_UNIT, ShadowPass
 
+#: shadow-map texels a lookup reaches round its surface point: the normal offset (12 mm, under
+#: 3 texels where the map is finest) and the four filtered taps (2 texels), with margin
+LOOKUP_REACH_TEXELS = 6
+#: shadow-map texels a side of a cell of the per-view lookup table
+CELL_TEXELS = 4
 #: pixels round a changed pixel whose FXAA result may change (its taps reach 5 pixels out)
 FXAA_REACH_PX = 6
-#: metres added round a caster's box: the shadow lookup's normal offset (12 mm) and its
-#: filter's reach (a few 7 mm texels), with margin
-CASTER_PAD_M = 0.06
 
 
 class LayerPass:
@@ -69,12 +76,6 @@ class LayerPass:
         unit_hi = np.array([lo_hi[str(n)][1] for n in km.mesh]).reshape(-1, 3)
         self._unit_corners = box_corners(unit_lo, unit_hi)  # (N, 8, 3) in each piece's frame
         self._casts = km.mesh != "floor"
-        rest = self._world_corners(self._rest, np.arange(len(self._rest)))
-        # what shadows can fall on: the box of the pieces at rest, and the floor's
-        groups = [rest[self._casts], rest[~self._casts]]
-        boxes = [(g.min(axis=(0, 1)), g.max(axis=(0, 1))) for g in groups if len(g)]
-        lo, hi = (np.array([b[k] for b in boxes]).reshape(-1, 3) for k in (0, 1))
-        self._receivers = (lo - CASTER_PAD_M, hi + CASTER_PAD_M)
         w, h = size
         self._colour = ctx.texture((w, h), 4)
         self._fbo = ctx.framebuffer(color_attachments=[self._colour],
@@ -87,6 +88,19 @@ class LayerPass:
             color_attachments=[ctx.renderbuffer((SHADOW_SIZE, SHADOW_SIZE), 1)],
             depth_attachment=self._map,
         )
+        # the moved casters drawn depth-only from the key light, at the shadow map's resolution
+        self._moved_map = ctx.framebuffer(
+            color_attachments=[ctx.renderbuffer((SHADOW_SIZE, SHADOW_SIZE), 1)],
+            depth_attachment=ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE)),
+        )
+        self._moved_draws: list[tuple[np.ndarray, Any, Any]] = []  # rows, buffer, depth vao
+        for name, idx in kit.groups.items():
+            if name != "floor":
+                buf = ctx.buffer(reserve=2 * len(idx) * INSTANCE_FLOATS * 4, dynamic=True)
+                self._moved_draws.append((idx, buf, gpu.vao("depth_mesh", name, buf, *KIT_LAYOUT)))
+        # per view: which shadow-map cells each screen tile's still surfaces look up
+        self._pair_tile = np.zeros(0, np.int64)
+        self._pair_cell = np.zeros(0, np.int64)
         self._key: bytes | None = None  # the view the layer holds
         self._seen: bytes | None = None  # the view of the frame before
         #: rectangles redrawn in the last frame (for the bench and the tests)
@@ -114,16 +128,18 @@ class LayerPass:
         if key != self._key:
             self._build(view, shadow.enabled, inst, background, backdrop, size)
             self._key = key
+            if shadow.enabled:
+                self._lookups(view, size)
             if post.fxaa:
                 if self._still_aa is None:
                     tex = ctx.texture(size, 4)
                     self._still_aa = ctx.framebuffer(color_attachments=[tex])
                 post.antialias(self._colour, self._still_aa)
+        self.last_rects, drummer = self._rects(view, frame, inst, body, shadow.enabled, size)
         ctx.copy_framebuffer(fbo, self._fbo)
         fbo.use()
         ctx.viewport = (0, 0, *size)
         shadow.bind()
-        self.last_rects, drummer = self._rects(view, frame, inst, body, shadow.enabled, size)
         grown = np.array([(x - FXAA_REACH_PX, y - FXAA_REACH_PX, x + w + FXAA_REACH_PX,
                            y + h + FXAA_REACH_PX) for x, y, w, h in self.last_rects],
                          np.int64).reshape(-1, 4)  # fmt: skip
@@ -195,19 +211,72 @@ class LayerPass:
             d_lo, d_hi = body.caster_boxes(frame, 0.0)
             drummer = box_rects(box_corners(d_lo, d_hi), view.view_proj, size)
         if shadows:
-            lo, hi = [], []
-            casting = self._casts[moved]
-            for corners in worlds:
-                lo.append(corners[casting].min(axis=1) - CASTER_PAD_M)
-                hi.append(corners[casting].max(axis=1) + CASTER_PAD_M)
-            if frame is not None:
-                b_lo, b_hi = body.caster_boxes(frame, CASTER_PAD_M)
-                lo.append(b_lo)
-                hi.append(b_hi)
-            light = np.asarray(view.uniforms["u_key_pos"], np.float64)
-            rects.append(shadow_rects(np.concatenate(lo), np.concatenate(hi), light,
-                                      *self._receivers, view.view_proj, size))  # fmt: skip
+            rects.append(self._shadowed_tiles(moved, inst, body, frame, size))
         return tile_cover(np.concatenate(rects), size), drummer
+
+    def _lookups(self, view: FrameView, size: tuple[int, int]) -> None:
+        """For the view just built: every (screen tile, shadow-map cell) pair where a still
+        surface of the layer looks the map up (its depth read back, unprojected, seen from the
+        key light)."""
+        w, h = size
+        depth = np.frombuffer(self._fbo.read(components=1, attachment=-1, dtype="f4"),
+                              np.float32).reshape(h, w)  # fmt: skip
+        ys, xs = np.nonzero(depth < 1.0)
+        z = depth[ys, xs].astype(np.float64) * 2 - 1
+        ndc = np.stack([(xs + 0.5) / w * 2 - 1, (ys + 0.5) / h * 2 - 1, z, np.ones(len(xs))],
+                       axis=1)  # fmt: skip
+        world = ndc @ np.linalg.inv(view.view_proj.astype(np.float64)).T
+        world /= world[:, 3:4]
+        light = world @ view.light_vp.astype(np.float64).T
+        keep = light[:, 3] > 1e-6
+        uv = light[keep, :2] / light[keep, 3:4] * 0.5 + 0.5
+        inside = (np.abs(uv - 0.5) < 0.55).all(axis=1)  # beyond the map: lit, never shadowed
+        texel = np.clip((uv[inside] * SHADOW_SIZE).astype(np.int64), 0, SHADOW_SIZE - 1)
+        cells = SHADOW_SIZE // CELL_TEXELS
+        cell = (texel[:, 1] // CELL_TEXELS) * cells + texel[:, 0] // CELL_TEXELS
+        cols = -(-w // TILE_PX)
+        tile = ((ys[keep][inside] // TILE_PX) * cols + xs[keep][inside] // TILE_PX).astype(np.int64)
+        pairs = np.unique(tile * cells * cells + cell)
+        self._pair_tile, self._pair_cell = pairs // (cells * cells), pairs % (cells * cells)
+
+    def _shadowed_tiles(self, moved: np.ndarray, inst: np.ndarray, body: BodyDraw,
+                        frame: SceneFrame | None, size: tuple[int, int]) -> np.ndarray:  # fmt: skip
+        """Pixel boxes (T, 4) of the tiles whose still surfaces look up shadow-map texels that
+        this frame's moving casters cover (or the moved pieces covered at rest): the drummer,
+        the sticks and the moved pieces in both poses drawn depth-only at the map's resolution
+        (the depth programs hold the key light's view already), read back, and grown by what
+        a lookup reaches (the normal offset and the filter's taps)."""
+        import moderngl
+
+        ctx = self._gpu.ctx
+        self._moved_map.use()
+        ctx.viewport = (0, 0, SHADOW_SIZE, SHADOW_SIZE)
+        ctx.enable(moderngl.DEPTH_TEST)
+        self._moved_map.clear(depth=1.0)
+        moving = set(moved[self._casts[moved]].tolist())
+        for idx, buf, vao in self._moved_draws:
+            rows = idx[[i in moving for i in idx]] if moving else idx[:0]
+            if len(rows):
+                buf.write(np.concatenate([self._rest[rows], inst[rows]]).tobytes())
+                vao.render(instances=2 * len(rows))
+        if frame is not None:
+            body.draw_depth()
+        texels = np.frombuffer(self._moved_map.read(components=1, attachment=-1, dtype="f4"),
+                               np.float32).reshape(SHADOW_SIZE, SHADOW_SIZE) < 1.0  # fmt: skip
+        if not texels.any():
+            return np.zeros((0, 4), np.int64)
+        grown = texels.copy()
+        for axis in (0, 1):
+            step = grown.copy()
+            for d in range(1, LOOKUP_REACH_TEXELS + 1):
+                step |= np.roll(grown, d, axis=axis) | np.roll(grown, -d, axis=axis)
+            grown = step
+        cells = SHADOW_SIZE // CELL_TEXELS
+        marked = grown.reshape(cells, CELL_TEXELS, cells, CELL_TEXELS).any(axis=(1, 3)).ravel()
+        tiles = np.unique(self._pair_tile[marked[self._pair_cell]])
+        cols = -(-size[0] // TILE_PX)
+        x0, y0 = (tiles % cols) * TILE_PX, (tiles // cols) * TILE_PX
+        return np.stack([x0, y0, x0 + TILE_PX, y0 + TILE_PX], axis=1).clip(0, [*size, *size])
 
     def _world_corners(self, inst: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """The world corners (R, 8, 3) of the unit-mesh boxes of ``inst``'s ``rows``."""
