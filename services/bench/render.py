@@ -27,6 +27,11 @@ still measured right), the medians and their ratio. Last, for each of ``--live-d
 :func:`services.bench.stage.draw_capacity`, in a fresh process per run), alternating the same
 way. A revision whose group camera frames the drummers differently draws different pixels:
 the live figure compares the code and what it shows together.
+
+``--layer CAMERAS`` times one frame's draw and I420 read-back at 1280x720 with the static layer
+(:mod:`services.display.passes.layer`) and without it, alternating frame by frame in one
+process (wall and CPU time, all threads: on a machine others share, CPU time is the steadier
+figure), and prints the share of the frame the layer redrew.
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -80,9 +86,15 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--live-drummers", default="1,4",
                         help="--compare: live stage drawing capacity for these drummer counts "
                         "('': skip)")  # fmt: skip
+    parser.add_argument("--layer", metavar="CAMERAS",
+                        help="draw+i420 ms a frame at 1280x720 (FXAA, shadows, character) with "
+                        "the static layer and without, alternating frame by frame, for these "
+                        "cameras (e.g. stage,front); --frames frames each")  # fmt: skip
     args = parser.parse_args(argv)
     if args.compare:
         return compare(args)
+    if args.layer:
+        return layer_compare(args.layer.split(","), args.frames)
 
     kit = load_kit("rock5")
     note_map = load_note_map(DEMO_MAP)
@@ -163,6 +175,49 @@ def main(argv: list[str]) -> int:
                                 fxaa=counts[0] == "fxaa")  # fmt: skip
                 print(f"  export 1280x720 @ {fps} fps: {report.frames} frames in "
                       f"{report.wall_s:.2f} s = {report.realtime:.2f}x real time")  # fmt: skip
+    return 0
+
+
+def layer_compare(cameras: list[str], count: int) -> int:
+    """``--layer``: the static layer (:mod:`services.display.passes.layer`) against the full
+    path, one renderer each, drawing the same frames alternately; medians and the share of the
+    frame the layer redrew."""
+    kit = load_kit("rock5")
+    note_map = load_note_map(DEMO_MAP)
+    body = BodyScene.perform(read_midi_file(demo_groove(), note_map), kit, note_map)
+    frames = list(body.frames(np.arange(count) / 30.0 + 4.0))
+    size = (1280, 720)
+    ctx = headless_context()
+    print(f"layer: {ctx.info['GL_RENDERER']}, 1280x720, FXAA, shadows, character; "
+          f"load average {os.getloadavg()[0]:.2f}")  # fmt: skip
+    for name in cameras:
+        cam = pick_camera(kit, name)
+        rs = [Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, fxaa=True,
+                       static_layer=on) for on in (False, True)]  # fmt: skip
+        took: list[list[float]] = [[], []]
+        cpu: list[list[float]] = [[], []]  # all threads' CPU time: steadier on a shared machine
+        shares = []
+        for r in rs:  # shaders compiled, the layer built
+            r.draw(frames[0], cam)
+            r.read_i420()
+        for f in frames:
+            for k, r in enumerate(rs):
+                t0, c0 = time.perf_counter(), time.process_time()
+                r.draw(f, cam)
+                r.read_i420()
+                took[k].append(time.perf_counter() - t0)
+                cpu[k].append(time.process_time() - c0)
+            layer = rs[1].layer
+            if layer is not None:
+                shares.append(sum(w * h for _x, _y, w, h in layer.last_rects) / (size[0] * size[1]))
+        full, cached = (statistics.median(t) * 1e3 for t in took)
+        full_cpu, cached_cpu = (statistics.median(t) * 1e3 for t in cpu)
+        share = statistics.mean(shares or [1.0])
+        print(f"  {name:>9}: wall full {full:7.1f} ms  layer {cached:7.1f} ms "
+              f"({full / cached:.2f}x)"
+              f"   CPU full {full_cpu:7.1f} ms  layer {cached_cpu:7.1f} ms "
+              f"({full_cpu / cached_cpu:.2f}x)   redrawn {share:.0%} of the frame")  # fmt: skip
+    ctx.release()
     return 0
 
 
@@ -250,21 +305,34 @@ def _alternate(title: str, command: list[str], before: Path, after: Path, rounds
     and print each real-time factor, the medians and their ratio."""
     print(title)
     factors: dict[str, list[float]] = {"before": [], "after": []}
+    cpu: dict[str, list[float]] = {"before": [], "after": []}
     for k in range(rounds):
         for label, root in (("before", before), ("after", after)):
             env = {**os.environ, "PYTHONPATH": str(root)}
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), _children_cpu_s()
             run = subprocess.run([sys.executable, "-m", "services", *command], cwd=cwd, env=env,
                                  capture_output=True, text=True)  # fmt: skip
             wall = time.perf_counter() - t0
+            used = _children_cpu_s() - c0
             found = _SUMMARY.search(run.stdout)
             if run.returncode != 0 or found is None:
                 print(f"  {label}: failed ({run.returncode}): {run.stderr.strip()[-200:]}")
                 continue
             video_s = float(found.group(2))
             factors[label].append(video_s / wall)
+            cpu[label].append(used)
             print(f"  round {k + 1} {label:>6}: {found.group(1)} frames, {video_s:.2f} s of "
-                  f"video in {wall:.2f} s = {video_s / wall:.2f}x real time")  # fmt: skip
+                  f"video in {wall:.2f} s = {video_s / wall:.2f}x real time, "
+                  f"{used:.1f} CPU s")  # fmt: skip
     if factors["before"] and factors["after"]:
         b, a = statistics.median(factors["before"]), statistics.median(factors["after"])
         print(f"  median before {b:.2f}x, after {a:.2f}x real time: after/before {a / b:.2f}")
+        cb, ca = statistics.median(cpu["before"]), statistics.median(cpu["after"])
+        print(f"  median CPU before {cb:.1f} s, after {ca:.1f} s: before/after {cb / ca:.2f} "
+              "(all threads: the steadier figure where others share the cores)")  # fmt: skip
+
+
+def _children_cpu_s() -> float:
+    """User and system CPU seconds of this process's finished children, all their threads."""
+    use = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return use.ru_utime + use.ru_stime

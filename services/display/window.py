@@ -52,7 +52,7 @@ from livedrummer.render.transport import KEYS, STEPS, Transport
 from livedrummer.timeline.performance import Performance
 
 from .audio_out import TrackPlayer, muted_reason
-from .context import DisplayError
+from .context import DisplayError, use_cpu_cores
 from .renderer import Renderer
 from .viewcontrol import ViewControl
 
@@ -216,6 +216,7 @@ def open_window(options: WindowOptions) -> Iterator[tuple[Any, Any, Any]]:
     import moderngl
 
     glfw.ERROR_REPORTING = "log"  # GLFW's complaints go to logging, not to warnings
+    use_cpu_cores()  # llvmpipe's threads, where the window's context is software
     if not glfw.init():
         raise DisplayError("no display for a window (is DISPLAY set?); use `livedrummer render`")
     try:
