@@ -132,8 +132,8 @@ class BeatTracker:
         ])  # fmt: skip
         self._comb = np.tensordot(self._tooth_w, self._kernel, axes=1)  # all teeth at once
         self._comb_norm = float(np.sum(self._tooth_w))
-        self._fit_key = b""  # which teeth fit each period in the cached partial comb
-        self._fit_comb = self._comb
+        self._fit = np.full(self._periods.size, -1)  # teeth that fit each row of the comb below
+        self._fit_comb = np.zeros_like(self._comb)
         self._fit_norm = np.zeros(self._periods.size)
         self._offsets = (np.arange(_PHASES) / _PHASES + 0.5) % 1.0 - 0.5  # in periods
         self.reset()
@@ -202,17 +202,18 @@ class BeatTracker:
     def _partial_comb(self, span: float) -> tuple[np.ndarray, np.ndarray]:
         """The comb of the teeth that fit ``span`` (per period: a tooth at ``m`` periods fits
         when ``m`` periods are shorter than the span) and its norm, for a window shorter than
-        the longest tooth. Rebuilt only when the teeth that fit change (a steady fast
-        stream's span stays the same), so each update is one product, as with every tooth
-        (the teeth one by one read the whole kernel, 13 MB, for every onset)."""
+        the longest tooth. A period's row is rebuilt only when the teeth that fit it change
+        (while the span grows, a few rows an onset; a steady fast stream's span stays the
+        same), so each update is one product, as with every tooth (the teeth one by one read
+        the whole kernel, 13 MB, for every onset)."""
         fit = np.sum(span > self._teeth[:, None] * self._periods[None, :], axis=0)
-        key = fit.tobytes()
-        if self._fit_key != key:
-            on = np.arange(self._teeth.size)[:, None] < fit[None, :]  # teeth x periods
+        changed = np.flatnonzero(fit != self._fit)
+        if changed.size:
+            on = np.arange(self._teeth.size)[:, None] < fit[None, changed]  # teeth x rows
             w = np.where(on, self._tooth_w[:, None], 0.0)
-            self._fit_comb = np.einsum("kp,kpb->pb", w, self._kernel)
-            self._fit_norm = w.sum(axis=0)
-            self._fit_key = key
+            self._fit_comb[changed] = np.einsum("kp,kpb->pb", w, self._kernel[:, changed])
+            self._fit_norm[changed] = w.sum(axis=0)
+            self._fit[changed] = fit[changed]
         return self._fit_comb, self._fit_norm
 
     def _update_period(self, t: np.ndarray) -> None:
