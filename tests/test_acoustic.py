@@ -286,9 +286,12 @@ def test_transcribe_cli_writes_a_drum_file_inspect_reads(held_out, tmp_path: Pat
     ex, mix, (stems, names) = held_out
     wav = _write_wav(tmp_path / "groove.wav", mix)
     out = tmp_path / "groove.mid"
-    r = _cli("transcribe", str(wav), "-o", str(out))
+    r = _cli("transcribe", str(wav), "-o", str(out), "--recogniser", "templates")
     assert r.returncode == 0, r.stderr
     assert "hits in 13.5 s (mix, profile general-midi)" in r.stdout
+    r = _cli("transcribe", str(wav), "-o", str(tmp_path / "default.mid"))
+    assert r.returncode == 0, r.stderr
+    assert "hits in 13.5 s (mix, model " in r.stdout  # a mix's default: the learned model
     r = _cli("inspect", str(out), "--json")
     assert r.returncode == 0, r.stderr
     summary = json.loads(r.stdout)

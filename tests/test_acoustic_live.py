@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from livedrummer.acoustic.detector import detect
+from livedrummer.acoustic.model import load_model
 from livedrummer.acoustic.pieces import GM_NOTES
 from livedrummer.acoustic.profile import load_profile
 from services.bench._audiolive import play_into_daemon
@@ -55,7 +56,7 @@ def test_audio_input_publishes_the_offline_hits_through_jack(jack_server: str, g
     _ex, mix, (stems, names) = groove
     profile = load_profile(None)
     run = play_into_daemon(mix, trace=True)
-    offline = detect(mix, SR, profile)
+    offline = detect(mix, SR, profile, model=load_model(None))  # a mix's default recogniser
     assert len(offline) > 10
     assert "input:" in run.stderr
     assert len(run.onsets) == len(offline), run.stderr
@@ -104,7 +105,7 @@ def test_the_live_bench_at_real_time_priority(jack_server: str, groove) -> None:
 
     _ex, mix, _stems = groove
     run = play_into_daemon(mix, realtime=10)
-    offline = detect(mix, SR, load_profile(None))
+    offline = detect(mix, SR, load_profile(None), model=load_model(None))
     assert len(run.onsets) == len(offline) > 10, run.stderr
     assert _same_hits(run.onsets, offline) >= 0.95
     if "no real-time scheduling" not in run.stderr:  # granted (a warning line where refused)

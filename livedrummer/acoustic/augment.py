@@ -81,7 +81,8 @@ def room_ir(rt60_s: float, wet: float, sr: int, rng: np.random.Generator) -> np.
     return tail
 
 
-def _eq_gain(c: Conditions, freqs: np.ndarray) -> np.ndarray:
+def eq_gain(c: Conditions, freqs: np.ndarray) -> np.ndarray:
+    """The microphone EQ of ``c`` as an amplitude gain at each of ``freqs`` (Hz)."""
     f = np.maximum(freqs, 1.0)
     lf = np.log2(f)
     low = c.low_db / (1 + np.exp(3 * (lf - np.log2(150.0))))
@@ -124,7 +125,7 @@ def apply(dry: np.ndarray, c: Conditions, sr: int, seed: int) -> np.ndarray:
     n = cols.shape[0]
     size = 1 << int(np.ceil(np.log2(n + len(ir))))
     spec = np.fft.rfft(cols, size, axis=0)
-    spec *= (np.fft.rfft(ir, size) * _eq_gain(c, np.fft.rfftfreq(size, 1 / sr)))[:, None]
+    spec *= (np.fft.rfft(ir, size) * eq_gain(c, np.fft.rfftfreq(size, 1 / sr)))[:, None]
     wet = np.fft.irfft(spec, size, axis=0)[:n]
     out = np.stack([_compress(wet[:, k], c, sr) for k in range(wet.shape[1])], axis=1)
     peak = float(np.max(np.abs(out))) or 1.0

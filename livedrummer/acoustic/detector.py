@@ -107,7 +107,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from livedrummer.acoustic.model import PICK_DELTA, PICK_FLOOR, HitModel, hit_features
+from livedrummer.acoustic.model import (
+    PICK_DELTA,
+    PICK_FLOOR,
+    HitModel,
+    RecordingNorm,
+    hit_features,
+    model_input,
+)
 from livedrummer.acoustic.pieces import CLASSES
 from livedrummer.acoustic.profile import AudioProfile
 from livedrummer.acoustic.spectrum import (
@@ -423,6 +430,8 @@ class OnlineDetector:
         self._pending = 0  # samples after the last frame end, at the end of _history
         self._frame = -1  # index of the newest frame
         self.frames_seen = 0
+        #: the model's running mean of this recording's onset spectra (see :mod:`.model`)
+        self._norm = None if self.model is None else RecordingNorm(self.model.prior)
 
     def process(self, block: np.ndarray) -> np.ndarray:
         """Hits decided by the samples of ``block`` (HIT_DTYPE, sorted by time)."""
@@ -560,14 +569,15 @@ class OnlineDetector:
         level = float(rise.sum())
         if self.candidates is not None:
             self.candidates.append((time_s, feature, level))
-        if self.model is None:
+        if self.model is None or self._norm is None:
             return []
-        prob = self.model.probabilities(feature)
+        prob = self.model.probabilities(model_input(feature, self._norm.mean))
+        self._norm.update(feature)
         if allowed is not None:
             prob[[c for c in range(len(CLASSES)) if c not in allowed]] = 0.0
         recent = p - self._last_hit < math.ceil(SAME_DRUM_S * self.sr / HOP)
         hits: list[tuple[float, int, int, float, int]] = []
-        for cls in np.flatnonzero((prob >= self.model.threshold) & ~recent).tolist():
+        for cls in np.flatnonzero((prob >= self.model.thresholds) & ~recent).tolist():
             self._last_hit[cls] = p
             ref = float(self.model.ref_level[cls])
             hits.append((time_s, cls, velocity_of(level, ref), level, 0))

@@ -22,15 +22,19 @@ import os
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ._kits import KitSource, renderer
 
+if TYPE_CHECKING:
+    from livedrummer.acoustic.train import TakeCandidates
+
 SR = 48_000
 GAP_S = 3.0
 #: Bump when rendering, conditions or features change: old cached candidates are then unused.
-CORPUS_VERSION = 2
+CORPUS_VERSION = 3
 LEAK_DB = -20.0
 
 
@@ -129,12 +133,13 @@ def render_stem_takes(kit: KitSource, exs: list, split: str) -> list[tuple[np.nd
     return out
 
 
-def take_candidates(take: Take) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The detector's candidates of one take: features, labels, band-rise totals."""
+def take_candidates(take: Take) -> TakeCandidates:
+    """The detector's candidates of one take, in order: features, labels, band-rise totals."""
     from livedrummer.acoustic.detector import OnlineDetector, tail_samples
     from livedrummer.acoustic.model import LOOKAHEAD, N_FEATURES
+    from livedrummer.acoustic.pieces import CLASSES
     from livedrummer.acoustic.profile import load_profile
-    from livedrummer.acoustic.train import label_candidates
+    from livedrummer.acoustic.train import TakeCandidates, label_candidates
 
     profile = load_profile(None)
     det = OnlineDetector(profile, SR)
@@ -142,30 +147,32 @@ def take_candidates(take: Take) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     audio = np.concatenate([take.audio, np.zeros(tail_samples(LOOKAHEAD), np.float32)])
     det.process(audio)
     if not det.candidates:
-        empty = np.zeros((0, N_FEATURES))
-        return empty, np.zeros((0, 9)), np.zeros(0)
+        return TakeCandidates(np.zeros((0, N_FEATURES)), np.zeros((0, len(CLASSES))), np.zeros(0))
     times = np.array([c[0] for c in det.candidates])
     feats = np.stack([c[1] for c in det.candidates])
     levels = np.array([c[2] for c in det.candidates])
     labels = label_candidates(times, feats[:, -1] > 0.5, take.ref_times, take.ref_classes)
-    return feats, labels, levels
+    return TakeCandidates(feats, labels, levels)
 
 
-def kit_candidates(
-    kit: KitSource, root: Path, count: int, seconds: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Candidates of ``count`` train-split takes of ``kit`` (cached, see the module docstring)."""
+def kit_candidates(kit: KitSource, root: Path, count: int, seconds: float) -> list[TakeCandidates]:
+    """Candidates of ``count`` train-split takes of ``kit``, one entry per take (cached, see
+    the module docstring)."""
+    from livedrummer.acoustic.train import TakeCandidates
+
     path = cache_dir() / f"{kit.name}-train-{count}-{seconds:g}-v{CORPUS_VERSION}.npz"
     if path.is_file():
         with np.load(path) as data:
-            return data["x"], data["y"], data["level"]
+            x, y, level, take = data["x"], data["y"], data["level"], data["take"]
+        return [TakeCandidates(x[take == i], y[take == i], level[take == i]) for i in
+                range(int(take.max()) + 1 if len(take) else 0)]  # fmt: skip
     parts = [take_candidates(t) for t in render_takes(kit, excerpts(root, "train", count, seconds),
                                                       "train")]  # fmt: skip
-    x = np.concatenate([p[0] for p in parts])
-    y = np.concatenate([p[1] for p in parts])
-    level = np.concatenate([p[2] for p in parts])
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, x=x, y=y, level=level)
+    take = np.concatenate([np.full(len(p.features), i) for i, p in enumerate(parts)])
+    np.savez(tmp, x=np.concatenate([p.features for p in parts]),
+             y=np.concatenate([p.labels for p in parts]),
+             level=np.concatenate([p.levels for p in parts]), take=take)  # fmt: skip
     tmp.replace(path)
-    return x, y, level
+    return parts

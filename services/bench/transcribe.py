@@ -142,6 +142,7 @@ def live(args: argparse.Namespace) -> int:
     import os
 
     from livedrummer.acoustic.detector import detect
+    from livedrummer.acoustic.model import load_model
     from livedrummer.acoustic.pieces import classes_of
     from livedrummer.acoustic.profile import load_profile
     from livedrummer.acoustic.score import Counts, score
@@ -152,6 +153,8 @@ def live(args: argparse.Namespace) -> int:
 
     root = corpus(args.corpus)
     profile = load_profile(args.audio_profile)
+    # the daemon's recogniser (input --recogniser auto): the model unless a profile is named
+    model = None if args.audio_profile is not None else load_model(None)
     latencies: list[float] = []
     stages: list[np.ndarray] = []
     tot: dict[str, Counts] = {}
@@ -165,7 +168,7 @@ def live(args: argparse.Namespace) -> int:
             run = play_into_daemon(mix, extra, trace=True, realtime=args.realtime)
             if args.realtime and run.daemon_policy != os.SCHED_FIFO:
                 print(f"  {path.name}: the daemon did not get SCHED_FIFO: {run.stderr.strip()}")
-            offline = np.sort(detect(mix, SR, profile)["time_s"])
+            offline = np.sort(detect(mix, SR, profile, model=model)["time_s"])
             if len(run.onsets) != len(offline):
                 print(f"  {path.name}: {len(run.onsets)} live hits, {len(offline)} offline")
                 continue

@@ -31,16 +31,19 @@ def add_audio_options(p: argparse.ArgumentParser) -> None:
         "kick snare hihat hihat_open tom_high tom_mid tom_low crash ride); default: a mix",
     )  # fmt: skip
     p.add_argument(
-        "--recogniser", choices=("templates", "model"), default="templates",
-        help="how a mix's hits are classified: the audio profile's templates (default), or "
-        "the learned model trained on many kits (livedrummer acoustic train; experimental: "
-        "below the templates on TimGM6mb, see issue 30's note)",
+        "--recogniser", choices=("auto", "templates", "model"), default="auto",
+        help="how a mix's hits are classified: the learned model trained on many kits "
+        "(livedrummer acoustic train; its worst unheard kit beats the templates' worst, see "
+        "docs/acoustic.md), or the audio profile's templates; auto (default): the templates "
+        "when --audio-profile names a learned kit, else the model",
     )  # fmt: skip
 
 
 def mix_model(args: argparse.Namespace):  # type: ignore[no-untyped-def]
     """The learned model a mix is classified by (None: the profile's templates)."""
-    if args.recogniser == "templates":
+    if args.recogniser == "templates" or (
+        args.recogniser == "auto" and args.audio_profile is not None
+    ):
         return None
     from livedrummer.acoustic.model import load_model
 
