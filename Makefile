@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: setup demo test test-narrow lint bench docs clean
+.PHONY: setup demo test test-fast test-narrow lint bench docs clean
 
 setup: $(STAMP)
 
@@ -25,6 +25,12 @@ test: $(STAMP)
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 	$(BIN)/pytest -q --durations=15
+
+# The units alone, for a developer between edits (about two minutes on two cores): no test that
+# starts processes, sockets, JACK or windows (e2e), none of the pure ones that take seconds
+# (slow); marks from tests/markers.py. `make test` runs everything.
+test-fast: $(STAMP)
+	$(BIN)/pytest -q -m "not e2e and not slow" --durations=10
 
 # The same tests with numpy's SIMD dispatch and OpenBLAS's kernels narrowed (see .ci/narrowed).
 test-narrow: $(STAMP)

@@ -1,6 +1,6 @@
 """Writing session journals, finding them again, and exporting them as Standard MIDI Files.
 
-The record format is :mod:`livedrummer.timeline.journal`; this module does the file I/O around it.
+The record format is :mod:`livedrummer.protocol.journal`; this module does the file I/O around it.
 
 Flush and fsync policy. The file is opened unbuffered (``os.open`` with ``O_APPEND``) and
 every batch is *one* ``os.write`` of a complete record, so as soon as ``append_*`` returns the
@@ -36,10 +36,7 @@ import numpy as np
 
 from livedrummer.errors import JournalError
 from livedrummer.protocol import Gap
-from livedrummer.resources import user_home
-from livedrummer.timeline.clock import Clock
-from livedrummer.timeline.events import ControlKind
-from livedrummer.timeline.journal import (
+from livedrummer.protocol.journal import (
     SUFFIX,
     Journal,
     controls_record,
@@ -50,6 +47,9 @@ from livedrummer.timeline.journal import (
     onsets_record,
     read_journal,
 )
+from livedrummer.resources import user_home
+from livedrummer.timeline.clock import Clock
+from livedrummer.timeline.events import ControlKind
 
 log = logging.getLogger(__name__)
 

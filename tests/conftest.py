@@ -1,4 +1,9 @@
-"""Shared fixtures: the Groove MIDI Dataset beside the checkout, and small MIDI file builders."""
+"""Shared fixtures: the Groove MIDI Dataset beside the checkout, and small MIDI file builders.
+
+Every test is also marked ``e2e`` (real processes, sockets, JACK, windows) or ``gpu`` (an
+OpenGL context) from what its code reaches (:mod:`markers`), so ``make test-fast`` can leave
+them out; ``slow`` is written by hand on the pure tests that take long.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +13,7 @@ from pathlib import Path
 
 import mido
 import pytest
+from markers import marks_of
 
 from livedrummer.body.rig import Rig, build_rig
 from livedrummer.kit.loader import load_kit
@@ -19,6 +25,18 @@ from services.cli.common import DEMO_MAP, demo_groove
 
 REPO = Path(__file__).resolve().parent.parent
 GROOVE = REPO.parent / "shared" / "data" / "groove"
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Add the ``e2e`` and ``gpu`` marks :func:`markers.marks_of` finds (see :mod:`markers`)."""
+    for item in items:
+        if not isinstance(item, pytest.Function):
+            continue
+        qualname = item.originalname
+        if item.cls is not None:
+            qualname = f"{item.cls.__name__}.{qualname}"
+        for mark in sorted(marks_of(item.path, qualname, item.fixturenames)):
+            item.add_marker(mark)
 
 
 @pytest.fixture(scope="session")

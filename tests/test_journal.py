@@ -17,7 +17,7 @@ from livedrummer.errors import JournalError
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
 from livedrummer.protocol import Gap, GapReason
-from livedrummer.timeline import journal as jr
+from livedrummer.protocol import journal as jr
 from livedrummer.timeline.clock import SteppedClock
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
 from services.cli.common import demo_groove

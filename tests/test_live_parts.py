@@ -7,13 +7,13 @@ import mido
 import numpy as np
 
 from livedrummer.body import quat
+from livedrummer.body.blend import blend_rows
 from livedrummer.body.perform import perform
 from livedrummer.body.rig import Rig
 from livedrummer.body.sample import sample_poses
 from livedrummer.body.skeleton import PARENTS, J
 from livedrummer.body.strike import to_local
 from livedrummer.kit.vocabulary import PieceKind
-from livedrummer.live.curves import blend_rows
 from livedrummer.live.ledger import SampleLedger
 from livedrummer.live.synth import LiveSynth, SynthParams
 from livedrummer.live.track import PoseTrack

@@ -22,8 +22,9 @@ from sf2_writer import write_sf2
 from test_render_export import choked_crash, crash_rms_around_the_grab, read_back
 
 from livedrummer.audio.mix import GRAB_FADE_S
-from livedrummer.audio.soundfont import check_soundfont, gm_note, render_soundfont
+from livedrummer.audio.soundfont import check_soundfont, render_soundfont
 from livedrummer.kit.loader import load_kit
+from livedrummer.midi.gm import gm_note
 from livedrummer.midi.notemap import load_note_map
 from livedrummer.timeline.events import ONSET_DTYPE, Onset
 from services.cli import main

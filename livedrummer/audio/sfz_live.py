@@ -24,10 +24,10 @@ from livedrummer.audio.live_mix import LiveMixer, Voice
 from livedrummer.audio.mix import GRAB_FADE_S, _pan
 from livedrummer.audio.sfz import SfzKit
 from livedrummer.audio.sfz_render import MIN_FADE_S, _pitched, choose, read_sample
-from livedrummer.audio.soundfont import gm_note, warm_note_tables
 from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES
+from livedrummer.midi.gm import gm_note, warm_note_tables
 
 
 class SfzLiveMixer(LiveMixer):

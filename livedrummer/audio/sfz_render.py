@@ -1,7 +1,7 @@
 """A drum track from an SFZ kit (``--sfz kit.sfz``): the regions of :mod:`~livedrummer.audio.sfz`
 played from their samples, sample-accurate at each onset.
 
-Which note: the onset's General MIDI note (:func:`~livedrummer.audio.soundfont.gm_notes`, as for
+Which note: the onset's General MIDI note (:func:`~livedrummer.midi.gm.gm_notes`, as for
 a SoundFont: SFZ drum kits are laid out on the GM drum map). Which regions: every region whose
 key and velocity ranges hold the stroke, less those whose round robin is elsewhere: a region
 with ``seq_length`` N plays on the strokes whose count on that note, modulo N, is its
@@ -105,8 +105,8 @@ def render_sfz(
     """Stereo float32 (N, 2), N = round(duration_s * sr): ``onsets`` played on the SFZ kit at
     ``path`` (see the module docstring); placement and length as :func:`mix_onsets`'s."""
     from livedrummer.audio.mix import _pan
-    from livedrummer.audio.soundfont import gm_notes
     from livedrummer.kit.vocabulary import INSTRUMENTS
+    from livedrummer.midi.gm import gm_notes
 
     sfz = check_sfz(path)
     n = round(duration_s * sr)

@@ -34,14 +34,8 @@ stroke's peak. A group spans every stroke of its piece since the previous grab, 
 piece is rendered twice: a 165 s GMD groove with 8 grabs took 4.5-5.3 s instead of 2.7-3.6 s
 (a busy two-core machine).
 
-Which note sounds (:func:`gm_notes`): the onset's own note when General MIDI means the same
-instrument, zone and hi-hat articulation by it (so a GM file keeps its 35-vs-36 kicks,
-electric snares and Latin percussion); otherwise, as for an e-kit's notes (a Roland TD sends
-22 for a closed hi-hat edge and 48 for its first tom), the GM note of the onset's instrument and
-zone, taken from the bundled ``general-midi`` map (lowest note when several fit), falling back
-to the instrument's note in any zone (cymbal edges sound as bows, tom rims as heads) and a
-half-open hi-hat to the open one (46). One choice differs from inverting the map: a snare rim
-shot sounds as the acoustic snare (38), not as the hand clap (39) that the map files under rim.
+Which note sounds: :func:`~livedrummer.midi.gm.gm_notes`, the General MIDI note that
+means the onset's instrument, zone and hi-hat articulation.
 
 Timing limit: FluidSynth starts a voice at the start of its next 64-sample block, so a note-on
 is sent at the block boundary nearest the onset: attacks land within 32 samples (0.67 ms at
@@ -68,7 +62,7 @@ from livedrummer.audio.mix import GRAB_FADE_S, STEP, choke_cut_s, fit_headroom, 
 from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.errors import LivedrummerError
 from livedrummer.kit.model import Kit
-from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
+from livedrummer.midi.gm import gm_notes
 from livedrummer.native.stderr import native_stderr_to_log
 
 log = logging.getLogger(__name__)
@@ -79,60 +73,10 @@ NOTE_HOLD_S = 0.1
 BLOCK = 64  # FluidSynth's rendering block (FLUID_BUFSIZE)
 FLUSH_S = 3.0  # silence rendered between choked groups: the default reverb falls 100 dB
 GAIN = 0.6  # FluidSynth's default 0.2 leaves a drum track quiet; clipping is scaled away
-_SNARE_RIM_NOTE = 38  # GM has no rim shot; 39 is a hand clap
 
 
 class SoundFontError(LivedrummerError):
     """A SoundFont cannot be used: no FluidSynth, no such file, not an SF2, no drum kit."""
-
-
-GmKey = tuple[str, Zone, HiHat]
-
-
-def warm_note_tables() -> None:
-    """Read the bundled General MIDI map that :func:`gm_note` uses now (it is read once and
-    kept): a live mixer calls this when it is made, so its first stroke is not late."""
-    _gm_tables()
-
-
-@cache
-def _gm_tables() -> tuple[dict[int, GmKey], dict[GmKey, int], dict[str, int]]:
-    from livedrummer.midi.notemap import load_note_map
-
-    gm = load_note_map("general-midi")
-    meaning = {n: (s.instrument, s.zone, s.hihat) for n, s in gm.notes.items()}
-    exact: dict[GmKey, int] = {}
-    anyzone: dict[str, int] = {}
-    for note in sorted(meaning):
-        exact.setdefault(meaning[note], note)
-        anyzone.setdefault(meaning[note][0], note)
-    exact[("snare", Zone.RIM, HiHat.NONE)] = _SNARE_RIM_NOTE
-    return meaning, exact, anyzone
-
-
-def gm_note(note: int, instrument: str, zone: Zone, hihat: HiHat) -> int:
-    """The General MIDI percussion note that sounds this stroke (see the module docstring)."""
-    meaning, exact, anyzone = _gm_tables()
-    key = (instrument, zone, hihat)
-    if meaning.get(note) == key:
-        return note
-    if key in exact:
-        return exact[key]
-    if instrument == "hihat":
-        wanted = HiHat.OPEN if hihat is HiHat.HALF else hihat
-        for (name, _zone, art), gm in sorted(exact.items(), key=lambda kv: kv[1]):
-            if name == "hihat" and art is wanted:
-                return gm
-    return anyzone[instrument]
-
-
-def gm_notes(onsets: np.ndarray) -> np.ndarray:
-    """:func:`gm_note` of every onset (uint8)."""
-    out = np.zeros(len(onsets), np.uint8)
-    for i, o in enumerate(onsets):
-        piece, zone = INSTRUMENTS[int(o["instrument"])], ZONES[int(o["zone"])]
-        out[i] = gm_note(int(o["note"]), piece, zone, HIHATS[int(o["hihat"])])
-    return out
 
 
 _errors: list[str] = []  # FluidSynth's error messages since the last load began

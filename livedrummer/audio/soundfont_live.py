@@ -50,12 +50,11 @@ from livedrummer.audio.soundfont import (
     NOTE_HOLD_S,
     _open,
     _render,
-    gm_note,
-    warm_note_tables,
 )
 from livedrummer.audio.synth import SAMPLE_RATE
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES
+from livedrummer.midi.gm import gm_note, warm_note_tables
 
 VOLUME, SOUNDS_OFF = -1, -2  # the kinds of queued event that are not notes
 DEFAULT_CC7 = 100  # General MIDI's channel volume at reset

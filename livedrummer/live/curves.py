@@ -8,12 +8,10 @@ the fade lasts, the fade itself, the clearance search's memo carried from one wi
 next, and how often the body was re-run. Everything else of the synth (which notes, which
 samples were published) lives elsewhere.
 
-The blend. Rotations are interpolated by slerp (:func:`~livedrummer.body.quat.slerp`), the
-root position linearly, and the joint positions are then rebuilt by forward kinematics from
-the blended rotations, so every bone keeps its length mid-fade (a linear blend of positions
-would shorten a bone whose two ends turn apart). The kit channels (swing, lift, glow) are
-blended linearly. A fade's weight rises linearly from its start to its end; the synth ends
-it at the next contact, so every contact is sampled from the new curves alone.
+The blend is :func:`~livedrummer.body.blend.blend_rows` (slerped rotations, bones rebuilt by
+forward kinematics, so every bone keeps its length mid-fade). A fade's weight rises linearly
+from its start to its end; the synth ends it at the next contact, so every contact is sampled
+from the new curves alone.
 
 :func:`sample_curves` is pure (a :class:`CurveView` is a frozen snapshot), so a quick
 contact can sample the curves without touching the set. Limits: the stick guard
@@ -38,8 +36,8 @@ from typing import Protocol
 
 import numpy as np
 
-from livedrummer.body import fk, quat
 from livedrummer.body.animation import Animation, ClearanceMemo, Openness, animate
+from livedrummer.body.blend import blend_rows
 from livedrummer.body.expression import Expression
 from livedrummer.body.rig import Rig
 from livedrummer.body.sample import sample_poses
@@ -112,25 +110,6 @@ def sample_curves(view: CurveView, times: np.ndarray, answer: Answer | None = No
     prev = sample_one(old, times[fading])
     rows[fading] = blend_rows(curves.anim.rig, prev, rows[fading], w[fading])
     return rows, False
-
-
-def blend_rows(rig: Rig, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Pose records ``a`` blended towards ``b`` by ``w`` (0: ``a``, 1: ``b``), as the module
-    docstring says: rotations by slerp, positions by forward kinematics from them (the root
-    linearly), channels linearly."""
-    out = a.copy()
-    wc = w.astype(np.float64)
-    for name in ("swing", "lift", "glow"):
-        shape = (-1,) + (1,) * (a[name].ndim - 1)
-        out[name] = a[name] + (b[name] - a[name]) * wc.reshape(shape).astype(np.float32)
-    q = quat.slerp(a["rotation"].astype(np.float64), b["rotation"].astype(np.float64),
-                   wc[:, None])  # fmt: skip
-    pa = a["position"][:, 0].astype(np.float64)
-    root = pa + (b["position"][:, 0].astype(np.float64) - pa) * wc[:, None]
-    _, pos = fk.forward(rig.skeleton, q, root)
-    out["rotation"] = q
-    out["position"] = pos
-    return out
 
 
 class Built(Protocol):

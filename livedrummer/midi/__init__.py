@@ -7,7 +7,7 @@ unchanged by the offline file path and the live input daemon:
 * :mod:`~livedrummer.midi.stream`: the incremental byte-stream parser for serial trigger boards;
 * :mod:`~livedrummer.midi.decode`: one channel message into onsets and control events;
 * :mod:`~livedrummer.midi.notemap`: note maps (note number → instrument and zone per module);
-* :mod:`~livedrummer.midi.tempo`: the tempo map and beat grid (ticks become seconds once);
+* :mod:`~livedrummer.midi.gm`: the General MIDI note that sounds a stroke (for GM samplers);
 * :mod:`~livedrummer.midi.drivertime`: a MIDI driver's delta times anchored on the shared clock.
 
 Limits: MIDI 1.0 only (no MIDI 2.0 UMP); the package imports no I/O (ports and serial lines

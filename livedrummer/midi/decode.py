@@ -18,14 +18,12 @@ the port, or the bass of a full-band song, are not drums).
 
 Nothing is dropped silently: note-ons the map does not know, notes the map lists as *ignored*
 (metronome clicks and other sounds with no place on a drum kit), notes on other channels,
-duplicates, and message types we do not use are all counted in :class:`DecodeStats`, which
-callers report.
+duplicates, and message types we do not use are all counted in
+:class:`~livedrummer.timeline.stats.DecodeStats`, which callers report.
 """
 
 from __future__ import annotations
 
-from collections import Counter
-from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -33,6 +31,7 @@ import numpy as np
 from livedrummer.kit.vocabulary import HiHat
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.timeline.events import Control, ControlKind, Onset
+from livedrummer.timeline.stats import DecodeStats
 
 STRIKE_POSITION_CCS = frozenset({16, 17, 18})
 #: Two onsets of one note this close (seconds, inclusive) are one hit.
@@ -52,22 +51,6 @@ class ChannelMessage(Protocol):
     velocity: int
     control: int
     value: int
-
-
-@dataclass
-class DecodeStats:
-    """Counts of everything the decoder saw, kept or not."""
-
-    note_ons: Counter[int] = field(default_factory=Counter)  # velocity > 0, per note, raw
-    unknown_notes: Counter[int] = field(default_factory=Counter)
-    ignored_notes: Counter[int] = field(default_factory=Counter)  # the map's *ignored* class
-    other_channel_notes: Counter[int] = field(default_factory=Counter)  # 0-based channel
-    duplicates_removed: int = 0
-    onsets: int = 0
-    hihat_pedal: int = 0
-    chokes: int = 0
-    strike_positions: int = 0
-    ignored: Counter[str] = field(default_factory=Counter)  # by message type
 
 
 class MessageDecoder:

@@ -6,7 +6,7 @@ the rest of the library needs when it is good:
 * Before mido sees the bytes, the chunk structure is checked here so that a truncated, empty
   or foreign file is reported with the byte offset and the chunk at fault (mido's own errors
   say neither). If mido still fails, the failing track is found by parsing tracks one by one.
-* Ticks become seconds once, through :class:`~livedrummer.midi.tempo.TempoMap`, for all tracks
+* Ticks become seconds once, through :class:`~livedrummer.timeline.tempo.TempoMap`, for all tracks
   merged in time order; every channel message then goes through the same
   :class:`~livedrummer.midi.decode.MessageDecoder` the live input daemon uses.
 
@@ -21,7 +21,7 @@ a few microseconds each), so the bounds are checked as early as they can be:
 * the length in seconds (:data:`MAX_DURATION_S`, 24 h): a delta time of 0x0FFFFFFF ticks,
   the largest a file can hold, is 78 hours at 480 ticks per beat and 120 bpm. Such a file is
   refused, naming the track and the tick, instead of yielding a day of silence to render;
-* zero tempo is an error, and grids are capped (:data:`livedrummer.midi.tempo.MAX_BEATS`).
+* zero tempo is an error, and grids are capped (:data:`livedrummer.timeline.tempo.MAX_BEATS`).
 
 Many notes at one tick are a correct, bounded result: one onset per note is kept and the
 rest are counted as duplicates.
@@ -62,9 +62,9 @@ from livedrummer.midi.chart import apply_tom_markers, drum_track
 from livedrummer.midi.decode import MessageDecoder, merge_doubled_notes
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.midi.repair import repair_track
-from livedrummer.midi.tempo import Grid, TempoMap
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, Control, Onset
 from livedrummer.timeline.performance import Performance
+from livedrummer.timeline.tempo import Grid, TempoMap
 
 log = logging.getLogger(__name__)
 

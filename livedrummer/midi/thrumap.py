@@ -2,7 +2,7 @@
 
 ``input --thru PORT --thru-map general-midi`` forwards what the kit sends with each note
 renamed to the General MIDI percussion note that sounds the same stroke
-(:func:`~livedrummer.audio.soundfont.gm_note`, the rule the SoundFont renderer uses: a
+(:func:`~livedrummer.midi.gm.gm_note`, the rule the SoundFont renderer uses: a
 Roland TD's 22, a closed hi-hat edge, becomes 42) and put on channel 10, where GM samplers
 play drums. Note-on, note-off and polyphonic aftertouch (the cymbal grab) are rewritten; a
 note the kit's map does not know, and every other message (the hi-hat pedal's controller, the
@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from livedrummer.midi.gm import gm_note
 from livedrummer.midi.notemap import NoteMap
 
 GM_CHANNEL = 9
@@ -24,8 +25,6 @@ Remap = Callable[[list[int]], list[int]]
 
 def gm_remap(note_map: NoteMap) -> Remap:
     """A function rewriting one raw MIDI message (a list of bytes) for a GM sampler."""
-    from livedrummer.audio.soundfont import gm_note
-
     table: dict[int, int] = {}
     for note in range(128):
         spec = note_map.lookup(note)

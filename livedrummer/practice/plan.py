@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from livedrummer.midi.tempo import Grid
+from livedrummer.timeline.tempo import Grid
 
 
 @dataclass(frozen=True)

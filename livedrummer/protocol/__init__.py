@@ -83,7 +83,8 @@ Modules, one concept each: :mod:`~livedrummer.protocol.spec` (the table, constan
 (the message and its bodies), :mod:`~livedrummer.protocol.rows` (row checks),
 :mod:`~livedrummer.protocol.codec` (encode/decode), :mod:`~livedrummer.protocol.sequence`
 (the one policy for gaps, restarts and duplicates seen in sequence numbers) and
-:mod:`~livedrummer.protocol.intake` (a subscriber's decode, filter and observe steps).
+:mod:`~livedrummer.protocol.intake` (a subscriber's decode, filter and observe steps);
+:mod:`~livedrummer.protocol.journal` is the same stream written to disk (the session journal).
 Import from the package: its names are the wire's API.
 """
 

@@ -7,7 +7,7 @@ changes it at given times. Rather than animate each section on its own (its stro
 start cold at the section's edge), the whole performance is animated with each expression a
 cue brings, and each pose is blended from the expression before a cue to the one after it
 along the same smoothstep ramp the live synth uses (:mod:`livedrummer.live.style`), with the
-same slerp blend (:func:`~livedrummer.live.curves.blend_rows`).
+same slerp blend (:func:`~livedrummer.body.blend.blend_rows`).
 
 Limits: one animation of the whole performance per style cue (each about what a plain
 render's animation costs).
@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from livedrummer.body.blend import blend_rows
 from livedrummer.body.perform import Performed
 from livedrummer.body.sample import sample_poses
-from livedrummer.live.curves import blend_rows
 from livedrummer.render.body_scene import BodyScene
 
 

@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 
 from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat
-from livedrummer.midi.decode import DecodeStats
-from livedrummer.midi.tempo import Grid, TempoMap
 from livedrummer.timeline.events import ControlKind
+from livedrummer.timeline.stats import DecodeStats
+from livedrummer.timeline.tempo import Grid, TempoMap
 
 
 @dataclass(frozen=True)

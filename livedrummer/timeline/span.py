@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from livedrummer.midi.tempo import Grid
+    from livedrummer.timeline.tempo import Grid
 
 _SECONDS = re.compile(r"(\d+(?:\.\d*)?|\.\d+)\s*s?")
 _BAR = re.compile(r"(?:bar|b)\s*(\d+)", re.IGNORECASE)

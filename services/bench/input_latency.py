@@ -28,8 +28,8 @@ import numpy as np
 import zmq
 
 from livedrummer import protocol as p
+from livedrummer.protocol.journal import read_journal
 from livedrummer.timeline.clock import MonotonicClock
-from livedrummer.timeline.journal import read_journal
 
 from ..program import program_argv
 from ._paths import WORKDIR

@@ -203,13 +203,17 @@ def run(args: argparse.Namespace) -> int:
             thru.close()
     summary = daemon.summary()
     timing = summary.get("remote_timing")
-    print(f"input: {summary['onsets']} onsets, {summary['controls']} controls, "
-          f"{summary['gaps']} gaps published"
-          + ("" if timing is None else
-             f"; remote clock {timing['offset_ms']:+.3f} ms (+/- {timing['uncertainty_ms']:.3f}),"
-             f" drift {timing['drift_ppm']:+.1f} ppm, played {timing['delay_ms']:.1f} ms behind"
-             f" the remote drummer, {timing['late']:.0f} hits late"),
-          file=sys.stderr)  # fmt: skip
+    line = (
+        f"input: {summary['onsets']} onsets, {summary['controls']} controls, "
+        f"{summary['gaps']} gaps published"
+    )
+    if timing is not None:
+        line += (
+            f"; remote clock {timing['offset_ms']:+.3f} ms (+/- {timing['uncertainty_ms']:.3f}),"
+            f" drift {timing['drift_ppm']:+.1f} ppm, played {timing['delay_ms']:.1f} ms behind"
+            f" the remote drummer, {timing['late']:.0f} hits late"
+        )
+    print(line, file=sys.stderr)
     if thru is not None:
         print(f"thru: {thru.sent} messages forwarded to {thru.port_name!r}, {thru.failed} failed",
               file=sys.stderr)  # fmt: skip

@@ -517,8 +517,8 @@ def add_drum_track(settings: ShowSettings, video: Path, sessions: Path, started:
 
     from livedrummer.kit.loader import load_kit
     from livedrummer.midi.notemap import load_note_map
+    from livedrummer.protocol.journal import SUFFIX
     from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
-    from livedrummer.timeline.journal import SUFFIX
 
     from ..display.record import Timing, mux_audio, recording_track
     from ..journal import load_journal

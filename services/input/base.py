@@ -26,10 +26,11 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from livedrummer.midi.decode import DecodeStats, MessageDecoder
+from livedrummer.midi.decode import MessageDecoder
 from livedrummer.protocol import Gap
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import Control, Onset
+from livedrummer.timeline.stats import DecodeStats
 
 log = logging.getLogger("livedrummer.input")
 

@@ -67,9 +67,9 @@ from livedrummer.protocol import (
     Stream,
     encode,
 )
+from livedrummer.protocol.journal import SUFFIX as JOURNAL_SUFFIX
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, Control, Onset
-from livedrummer.timeline.journal import SUFFIX as JOURNAL_SUFFIX
 
 from ..journal import JournalWriter, new_session_id, sessions_dir
 from ..net import Security, bind, socket

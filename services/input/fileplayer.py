@@ -22,11 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from livedrummer.midi.channels import ChannelChoice
-from livedrummer.midi.decode import DecodeStats
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.midi.smf import read_midi_file
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import Control, ControlKind, Onset
+from livedrummer.timeline.stats import DecodeStats
 
 from .base import Event, Problems, Source
 

@@ -6,8 +6,9 @@ record appended with one ``write``: a crash can only tear the *last* record, and
 recognises a torn tail (short prefix, length past the end, or a CRC that does not match) and
 stops there, reporting how many bytes it discarded, instead of failing the whole session.
 Rows are the same numpy record bytes as on the wire (:mod:`livedrummer.timeline.events`), so
-writing is a copy and reading is ``frombuffer``; the one JSON record (session metadata) is written
-once.
+writing is a copy and reading is ``frombuffer``; the one JSON record (session metadata) is
+written once. The rows are checked by the wire's row checks and a gap is the wire's GAP
+payload: the journal is the stream written to disk, so it lives beside the wire format.
 
 Layout (little-endian)::
 
@@ -45,7 +46,9 @@ from typing import Any
 import numpy as np
 
 from livedrummer.errors import JournalError, ProtocolError
-from livedrummer.protocol import GAP_PAYLOAD, Gap, GapReason, check_controls, check_onsets
+from livedrummer.protocol.bodies import Gap
+from livedrummer.protocol.rows import check_controls, check_onsets
+from livedrummer.protocol.spec import GAP_PAYLOAD, GapReason
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE
 
 MAGIC = b"LDJOURNL"
