@@ -43,6 +43,7 @@ NOT_SUB = {
     ("input/daemon.py", "pub"),  # subscriptions arriving on the daemon's XPUB
     ("input/remote.py", "self._probe"),  # the clock exchange's DEALER
     ("stream_rx.py", "sock"),  # the receiver itself
+    ("display/parallel.py", "conn"),  # render --jobs: a worker's frames over its own pipe
 }
 #: The subscribers, and the name each must use the receiver by.
 USERS = {
