@@ -246,5 +246,15 @@ class Renderer:
         :meth:`ReadbackPass.i420`); W must be a multiple of 8 (:func:`i420_ok`)."""
         return self.readback.i420(self.size)
 
+    def present(self, target: Any) -> None:
+        """Copy the finished off-screen frame (resolved, anti-aliased, with its overlays) into
+        ``target`` of the same size: one blit, e.g. into a window's framebuffer, so a window
+        can draw through the static layer (:mod:`.passes.layer`), which needs the renderer's
+        own target."""
+        if self.post.fbo is None:
+            raise ValueError("present on a renderer drawing into a window's framebuffer")
+        self.post.resolved()
+        self.ctx.copy_framebuffer(target, self.post.final)
+
     def finish(self) -> None:
         self.ctx.finish()
