@@ -113,8 +113,11 @@ def test_a_box_projects_inside_its_pixel_box() -> None:
 
 
 @pytest.mark.usefixtures("gl_ok")
-def test_a_window_frame_drawn_through_the_layer_and_presented_equals_the_full_path() -> None:
-    """The live window's renderer (``WindowSurface``: off screen, FXAA, the layer) presented into
+@pytest.mark.parametrize("fxaa", [True, False])
+def test_a_window_frame_drawn_through_the_layer_and_presented_equals_the_full_path(
+    fxaa: bool,
+) -> None:
+    """The live window's renderer (``WindowSurface``: off screen, the layer) presented into
     a screen-like framebuffer (colour and depth renderbuffers) by one blit: the same pixels as
     the full path presented the same way, and as its own read-back, overlays included."""
     from livedrummer.kit.loader import load_kit
@@ -138,7 +141,7 @@ def test_a_window_frame_drawn_through_the_layer_and_presented_equals_the_full_pa
         size = (256, 144)
         screen = ctx.framebuffer(color_attachments=[ctx.renderbuffer(size, 4)],
                                  depth_attachment=ctx.depth_renderbuffer(size))  # fmt: skip
-        kw: dict[str, Any] = {"samples": 0, "fxaa": True}
+        kw: dict[str, Any] = {"samples": 0, "fxaa": fxaa}
         layered = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, **kw)
         full = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, static_layer=False, **kw)
         assert layered.layer is not None and full.layer is None

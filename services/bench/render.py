@@ -216,6 +216,8 @@ def window_compare(count: int) -> int:
                                                 offscreen=False, avatar=avatar), screen(4)),
         "screen, no samples": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
                                         offscreen=False, avatar=avatar), shown),
+        "layer + blit, no AA": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
+                                         samples=0, avatar=avatar), None),
         "layer + FXAA + blit (now)": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
                                                samples=0, fxaa=True, avatar=avatar), None),
     }  # fmt: skip

@@ -16,11 +16,12 @@ name the strips shown in :attr:`overlays` and blend the live loop's strip image 
 soft) go out as MIDI notes into that input port (:mod:`services.display.keysend` says why
 this route), so the drummer plays them like a kit's strokes.
 
-The window's frame is drawn off screen, into the renderer's own target with FXAA, and copied
-into the window's framebuffer by one blit before the swap (:meth:`Renderer.present`): so the
-static kit layer (:mod:`services.display.passes.layer`) serves the window as it does a render,
-drawing again only what moved. The window is opened without multisampling (FXAA instead: 4
-samples cost 2.4x the CPU of this path at 720p, ``livedrummer bench render --live-window``).
+The window's frame is drawn off screen, into the renderer's own target, and copied into the
+window's framebuffer by one blit before the swap (:meth:`Renderer.present`): so the static kit
+layer (:mod:`services.display.passes.layer`) serves the window as it does a render, drawing
+again only what moved. The window is opened without multisampling: ``WindowOptions.samples``
+above 0 (``--aa N``) gives FXAA instead, 0 no anti-aliasing (4 samples cost about 2.4x the CPU
+of the FXAA path at 720p, ``livedrummer bench render --live-window``).
 A resize makes a new renderer (its targets have one size).
 
 Limits: recording and PNG frames are headless only.
@@ -140,12 +141,13 @@ class WindowSurface:
         self._view = ViewControl(glfw, window)
 
     def _renderer(self, size: tuple[int, int]) -> Renderer:
-        """The window's renderer: its own off-screen target of the window's size, FXAA, and
-        so the static layer (see the module docstring)."""
+        """The window's renderer: its own off-screen target of the window's size (FXAA where
+        the options ask for anti-aliasing), and so the static layer (see the module
+        docstring)."""
         options = self._options
         return Renderer(self._ctx, build_kit_mesh(self._kit), BODY_SKELETON, size, samples=0,
-                        fxaa=True, avatar=self._avatar, background=options.background,
-                        lights=options.lights)  # fmt: skip
+                        fxaa=options.samples > 0, avatar=self._avatar,
+                        background=options.background, lights=options.lights)  # fmt: skip
 
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
         self._now = now_s
