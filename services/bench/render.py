@@ -192,7 +192,8 @@ def window_compare(count: int) -> int:
     a screen-like framebuffer with 4 samples and resolved as a swap does (the window before),
     into a plain one, and as :class:`~services.display.surface.WindowSurface` draws now
     (off screen, FXAA, the static layer, :meth:`Renderer.present`: one blit). Each frame is
-    finished before the next is timed; CPU time is the process's, all threads."""
+    finished before the next is timed; CPU time is the process's, all threads. Then the idle
+    window: the same frame (the kit at rest) drawn again each time, against held."""
     from livedrummer.render.hud import hud_image, live_lines
 
     kit = load_kit("rock5")
@@ -244,6 +245,23 @@ def window_compare(count: int) -> int:
         w, c = statistics.median(wall[name]) * 1e3, statistics.median(cpu[name]) * 1e3
         print(f"  {name:<28} wall {w:6.1f} ms ({1e3 / w:5.1f} fps)   CPU {c:6.1f} ms "
               f"({1e3 / c:5.1f} fps)   CPU before/this {base * 1e3 / c:4.2f}x")  # fmt: skip
+    # the idle window (no poses yet: the kit at rest, the same frame each time), the frame
+    # drawn again each time (as before) against held (Renderer._held), alternating
+    now = ways["layer + FXAA + blit (now)"][0]
+    idle: dict[str, list[float]] = {"drawn again": [], "held": []}
+    for n in range(count + 2):
+        for name in idle:
+            if name == "drawn again":
+                now._held = None
+            c0 = time.process_time()
+            now.draw(None, cam)
+            now.draw_overlay(hud, rect)
+            now.present(shown)
+            ctx.finish()
+            if n >= 2:
+                idle[name].append(time.process_time() - c0)
+    figures = ", ".join(f"{k} {statistics.median(v) * 1e3:.1f} ms" for k, v in idle.items())
+    print(f"  idle (no poses: the kit at rest), layer + FXAA + blit: CPU a frame {figures}")
     ctx.release()
     return 0
 
