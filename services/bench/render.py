@@ -32,6 +32,12 @@ the live figure compares the code and what it shows together.
 (:mod:`services.display.passes.layer`) and without it, alternating frame by frame in one
 process (wall and CPU time, all threads: on a machine others share, CPU time is the steadier
 figure), and prints the share of the frame the layer redrew.
+
+``--live-window`` times the live window's frame (drawn and shown, the HUD over it) at
+1280x720 as it was (into a 4x multisampled or a plain screen) and as it is (off screen
+through the layer, FXAA or none, one blit: :meth:`Renderer.present`), alternating frame by
+frame in one process, wall and CPU; then the idle window's frame drawn again against held.
+Headless: the screen is a framebuffer of renderbuffers, the swap a blit (the resolve).
 """
 
 from __future__ import annotations
