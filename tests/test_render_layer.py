@@ -110,3 +110,69 @@ def test_a_box_projects_inside_its_pixel_box() -> None:
     assert (px[:, 1] >= y0).all() and (px[:, 1] <= y1).all()
     behind = np.array([[[0.0, -5.0, 2.0], [0.0, 0.0, 0.5]]])  # a point behind the eye
     assert box_rects(behind, vp, size).tolist() == [[0, 0, *size]]
+
+
+@pytest.mark.usefixtures("gl_ok")
+@pytest.mark.parametrize("fxaa", [True, False])
+def test_a_window_frame_drawn_through_the_layer_and_presented_equals_the_full_path(
+    fxaa: bool,
+) -> None:
+    """The live window's renderer (``WindowSurface``: off screen, the layer) presented into
+    a screen-like framebuffer (colour and depth renderbuffers) by one blit: the same pixels as
+    the full path presented the same way, and as its own read-back, overlays included."""
+    from livedrummer.kit.loader import load_kit
+    from livedrummer.midi.notemap import load_note_map
+    from livedrummer.midi.smf import read_midi_file
+    from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
+    from livedrummer.render.camera import pick_camera
+    from livedrummer.render.kitmesh import build_kit_mesh
+    from services.cli.common import DEMO_MAP
+    from services.display.context import headless_context
+    from services.display.renderer import Renderer
+
+    kit = load_kit("rock5")
+    note_map = load_note_map(DEMO_MAP)
+    body = BodyScene.perform(read_midi_file(GROOVE, note_map), kit, note_map)
+    frames = list(body.frames(np.array([3.0, 4.05, 6.1])))
+    hud = np.zeros((20, 60, 4), np.uint8)
+    hud[..., 0], hud[..., 3] = 250, 160
+    ctx = headless_context()
+    try:
+        size = (256, 144)
+        screen = ctx.framebuffer(color_attachments=[ctx.renderbuffer(size, 4)],
+                                 depth_attachment=ctx.depth_renderbuffer(size))  # fmt: skip
+        kw: dict[str, Any] = {"samples": 0, "fxaa": fxaa}
+        layered = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, **kw)
+        full = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, static_layer=False, **kw)
+        assert layered.layer is not None and full.layer is None
+        cam = pick_camera(kit, "stage")
+        calls = []
+        layer_draw = layered.layer.draw
+
+        def counted(*args: Any) -> None:
+            calls.append(1)
+            layer_draw(*args)
+
+        layered.layer.draw = counted  # type: ignore[method-assign, assignment]
+        shown, used = [], []
+        # the same frame twice, overlays between: with FXAA the second is not drawn again
+        for frame in [*frames, frames[-1], None, None]:
+            for r in (layered, full):
+                screen.clear(0.0, 0.0, 1.0, 1.0)
+                r.draw(frame, cam)
+                r.draw_overlay(hud, (8, 8, 60, 20))
+                r.present(screen)
+                got = np.frombuffer(screen.read(components=4), np.uint8).reshape(144, 256, 4)
+                assert np.array_equal(got, r.read_rgba())  # one copy, nothing lost
+                shown.append(got.copy())
+            assert np.array_equal(shown[-2], shown[-1]), None if frame is None else frame.time_s
+            area = sum(r[2] * r[3] for r in layered.layer.last_rects) / (size[0] * size[1])
+            used.append(layered.layer._key is not None and frame is not None and area < 0.8)
+        assert any(used)  # the frames came from the layer, a part redrawn: not the full path
+        layered_frames = 6 - 1  # the first frame builds nothing: the view has not held yet
+        assert len(calls) == (layered_frames - 2 if fxaa else layered_frames)
+        assert (shown[0][144 - 28 : 144 - 8, 8:68, 0] > 150).all()  # the HUD is in the copy
+        with pytest.raises(ValueError, match="window"):
+            Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False).present(screen)
+    finally:
+        ctx.release()

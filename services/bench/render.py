@@ -32,6 +32,12 @@ the live figure compares the code and what it shows together.
 (:mod:`services.display.passes.layer`) and without it, alternating frame by frame in one
 process (wall and CPU time, all threads: on a machine others share, CPU time is the steadier
 figure), and prints the share of the frame the layer redrew.
+
+``--live-window`` times the live window's frame (drawn and shown, the HUD over it) at
+1280x720 as it was (into a 4x multisampled or a plain screen) and as it is (off screen
+through the layer, FXAA or none, one blit: :meth:`Renderer.present`), alternating frame by
+frame in one process, wall and CPU; then the idle window's frame drawn again against held.
+Headless: the screen is a framebuffer of renderbuffers, the swap a blit (the resolve).
 """
 
 from __future__ import annotations
@@ -46,6 +52,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -90,11 +97,18 @@ def main(argv: list[str]) -> int:
                         help="draw+i420 ms a frame at 1280x720 (FXAA, shadows, character) with "
                         "the static layer and without, alternating frame by frame, for these "
                         "cameras (e.g. stage,front); --frames frames each")  # fmt: skip
+    parser.add_argument("--live-window", action="store_true",
+                        help="the live window's draw+present ms a frame at 1280x720, wall and "
+                        "CPU: into a 4x multisampled screen (before), a plain one, and off "
+                        "screen through the static layer with FXAA, then one blit (now); "
+                        "alternating frame by frame, --frames frames each")  # fmt: skip
     args = parser.parse_args(argv)
     if args.compare:
         return compare(args)
     if args.layer:
         return layer_compare(args.layer.split(","), args.frames)
+    if args.live_window:
+        return window_compare(args.frames)
 
     kit = load_kit("rock5")
     note_map = load_note_map(DEMO_MAP)
@@ -175,6 +189,86 @@ def main(argv: list[str]) -> int:
                                 fxaa=counts[0] == "fxaa")  # fmt: skip
                 print(f"  export 1280x720 @ {fps} fps: {report.frames} frames in "
                       f"{report.wall_s:.2f} s = {report.realtime:.2f}x real time")  # fmt: skip
+    return 0
+
+
+def window_compare(count: int) -> int:
+    """The live window's frame (character, shadows, the stage camera, the HUD readout) drawn
+    and shown at 1280x720, three ways alternating frame by frame in one process: straight into
+    a screen-like framebuffer with 4 samples and resolved as a swap does (the window before),
+    into a plain one, and as :class:`~services.display.surface.WindowSurface` draws now
+    (off screen, FXAA, the static layer, :meth:`Renderer.present`: one blit). Each frame is
+    finished before the next is timed; CPU time is the process's, all threads. Then the idle
+    window: the same frame (the kit at rest) drawn again each time, against held."""
+    from livedrummer.render.hud import hud_image, live_lines
+
+    kit = load_kit("rock5")
+    note_map = load_note_map(DEMO_MAP)
+    body = BodyScene.perform(read_midi_file(demo_groove(), note_map), kit, note_map)
+    avatar = build_character()
+    size = (1280, 720)
+    ctx = headless_context()
+    cam = pick_camera(kit, "stage")
+    hud = hud_image(live_lines("playing", "stage", False, False), 2)
+    rect = (8, 8, hud.shape[1], hud.shape[0])
+
+    def screen(samples: int) -> Any:
+        colour = ctx.renderbuffer(size, 4, samples=samples)
+        depth = ctx.depth_renderbuffer(size, samples=samples)
+        return ctx.framebuffer(color_attachments=[colour], depth_attachment=depth)
+
+    shown = screen(0)
+    ways: dict[str, tuple[Renderer, Any]] = {
+        "screen, 4 samples (before)": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
+                                                offscreen=False, avatar=avatar), screen(4)),
+        "screen, no samples": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
+                                        offscreen=False, avatar=avatar), shown),
+        "layer + blit, no AA": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
+                                         samples=0, avatar=avatar), None),
+        "layer + FXAA + blit (now)": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
+                                               samples=0, fxaa=True, avatar=avatar), None),
+    }  # fmt: skip
+    wall: dict[str, list[float]] = {k: [] for k in ways}
+    cpu: dict[str, list[float]] = {k: [] for k in ways}
+    frames = list(body.frames(4.0 + np.arange(count + 2) / 30.0))
+    for n, frame in enumerate(frames):
+        for name, (r, target) in ways.items():
+            t0, c0 = time.perf_counter(), time.process_time()
+            r.draw(frame, cam, target=target)
+            r.draw_overlay(hud, rect, target)
+            if target is None:
+                r.present(shown)
+            elif target is not shown:
+                ctx.copy_framebuffer(shown, target)  # the swap's resolve
+            ctx.finish()
+            if n >= 2:  # the first frames compile shaders and build the layer
+                wall[name].append(time.perf_counter() - t0)
+                cpu[name].append(time.process_time() - c0)
+    print(f"live window 1280x720, {count} frames, {ctx.info['GL_RENDERER']}, "
+          f"load average {os.getloadavg()[0]:.2f}")  # fmt: skip
+    base = statistics.median(cpu[next(iter(ways))])
+    for name in ways:
+        w, c = statistics.median(wall[name]) * 1e3, statistics.median(cpu[name]) * 1e3
+        print(f"  {name:<28} wall {w:6.1f} ms ({1e3 / w:5.1f} fps)   CPU {c:6.1f} ms "
+              f"({1e3 / c:5.1f} fps)   CPU before/this {base * 1e3 / c:4.2f}x")  # fmt: skip
+    # the idle window (no poses yet: the kit at rest, the same frame each time), the frame
+    # drawn again each time (as before) against held (Renderer._held), alternating
+    now = ways["layer + FXAA + blit (now)"][0]
+    idle: dict[str, list[float]] = {"drawn again": [], "held": []}
+    for n in range(count + 2):
+        for name in idle:
+            if name == "drawn again":
+                now._held = None
+            c0 = time.process_time()
+            now.draw(None, cam)
+            now.draw_overlay(hud, rect)
+            now.present(shown)
+            ctx.finish()
+            if n >= 2:
+                idle[name].append(time.process_time() - c0)
+    figures = ", ".join(f"{k} {statistics.median(v) * 1e3:.1f} ms" for k, v in idle.items())
+    print(f"  idle (no poses: the kit at rest), layer + FXAA + blit: CPU a frame {figures}")
+    ctx.release()
     return 0
 
 

@@ -74,7 +74,8 @@ def register(sub: Subparsers) -> None:
                    help="file window: its last frame as PNG at close (default none)")  # fmt: skip
     p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
     p.add_argument("--aa", type=int, default=4, metavar="N",
-                   help="multisample N: 0, 2, 4 or 8 (default 4)")  # fmt: skip
+                   help="multisample N: 0, 2, 4 or 8 (default 4; the live window: FXAA "
+                   "where N > 0)")  # fmt: skip
     add_renamed(p, "--quit-after", p.add_argument(
         "--seconds", type=float, metavar="S",
         help="stop after S seconds; --live: S seconds after the first frame with the drummer "

@@ -10,7 +10,7 @@ casters into the key light's shadow map (:class:`ShadowPass`, ``shadows``, on by
 the body and the kit lit and shadowed (:class:`ScenePass`), or, for the renderer's own
 off-screen frame, start from the kit at rest cached per view and draw only what differs from
 it (:class:`LayerPass`, ``static_layer``, on by default: the same pixels, fewer of them
-shaded); then, when asked, an overlay
+shaded; with FXAA, the same frame twice in a row is drawn once); then, when asked, an overlay
 (:meth:`Renderer.draw_overlay`, :class:`OverlayPass`), the resolve and FXAA (:class:`PostPass`)
 and a read-back (:class:`ReadbackPass`: :meth:`Renderer.read_rgb`, :meth:`Renderer.read_rgba`,
 :meth:`Renderer.read_i420`).
@@ -20,7 +20,8 @@ The drummer is a skinned avatar (``avatar``; by default the built-in character o
 with ``avatar="mannequin"`` or for a frame without rotations or a skeleton other than the body's
 24 joints, a capsule mannequin (:mod:`.passes.body`). Built once per (context, kit, skeleton,
 size): unit meshes are uploaded once; per frame only the instance buffers change. A window
-passes its framebuffer to :meth:`Renderer.draw` and must set :attr:`Renderer.size` when it is
+either draws off screen and copies the frame in (:meth:`Renderer.present`, the live window),
+or passes its framebuffer to :meth:`Renderer.draw` and sets :attr:`Renderer.size` when it is
 resized. Limits: one shadowed light; the kit's surfaces are opaque (the avatar's BLEND parts
 cast no shadow); every surface is lit by the same rig.
 """
@@ -62,6 +63,16 @@ __all__ = [
 ]
 
 BACKGROUND = HALL
+
+
+def _frame_bytes(frame: SceneFrame | None) -> bytes:
+    """What a frame's pixels depend on, as bytes (its time too: the face's weights follow it)."""
+    if frame is None:
+        return b""
+    rot = frame.rotations_q
+    parts = [frame.joints_m, frame.sticks_m, frame.channels, np.float64(frame.time_s),
+             np.zeros(0, np.float32) if rot is None else rot]  # fmt: skip
+    return b"|".join(np.ascontiguousarray(p).tobytes() for p in parts) + bytes([rot is None])
 
 
 class Renderer:
@@ -109,6 +120,11 @@ class Renderer:
         self._inst = np.zeros((0, 0), np.float32)  # the kit's instances uploaded last
         #: the still kit cached per view (:mod:`.passes.layer`); None where it cannot apply
         self.layer: LayerPass | None = None
+        #: the view key and the frame the layer drew last. With FXAA, overlays go over the
+        #: filtered copy, never into the scene's target, so the same frame again (an idle
+        #: show's kit at rest, a paused pose) is not drawn again: the target holds it still and
+        #: the next read-back or present filters it afresh, as for the frame drawn last.
+        self._held: tuple[bytes, bytes] | None = None
         body = self.scene.body
         if (static_layer and self.post.fbo is not None and samples == 0
                 and not kit_occludes_only and not body.has_blend):  # fmt: skip
@@ -178,6 +194,10 @@ class Renderer:
         layer = self.layer if target is None and clear and not self.kit_occludes_only else None
         key = self._layer_key(view) if layer is not None else b""
         if layer is not None and layer.still(key):
+            held = (key, _frame_bytes(frame))
+            if held == self._held and self.post.fxaa and self.post.reuse is not None:
+                return  # the same picture: the scene is in the target still (see _held)
+            self._held = held
             self.upload(frame)
             self.scene.floor_cell(self.floor_cell_others)
             self.gpu.set_uniforms(view.uniforms)
@@ -187,6 +207,7 @@ class Renderer:
                        self.background, self.backdrop, self.size, self.post)  # fmt: skip
             return
         self.post.reuse = None
+        self._held = None
         if clear:
             bg = self.background
             fbo.clear(*bg.rgb, bg.alpha, depth=1.0)
@@ -245,6 +266,16 @@ class Renderer:
         """The last off-screen frame as I420, (H*3/2, W) uint8, top row first (see
         :meth:`ReadbackPass.i420`); W must be a multiple of 8 (:func:`i420_ok`)."""
         return self.readback.i420(self.size)
+
+    def present(self, target: Any) -> None:
+        """Copy the finished off-screen frame (resolved, anti-aliased, with its overlays) into
+        ``target`` of the same size: one blit, e.g. into a window's framebuffer, so a window
+        can draw through the static layer (:mod:`.passes.layer`), which needs the renderer's
+        own target."""
+        if self.post.fbo is None:
+            raise ValueError("present on a renderer drawing into a window's framebuffer")
+        self.post.resolved()
+        self.ctx.copy_framebuffer(target, self.post.final)
 
     def finish(self) -> None:
         self.ctx.finish()

@@ -16,12 +16,21 @@ name the strips shown in :attr:`overlays` and blend the live loop's strip image 
 soft) go out as MIDI notes into that input port (:mod:`services.display.keysend` says why
 this route), so the drummer plays them like a kit's strokes.
 
-Limits: a window draws to its own framebuffer, so recording and PNG frames are headless only.
+The window's frame is drawn off screen, into the renderer's own target, and copied into the
+window's framebuffer by one blit before the swap (:meth:`Renderer.present`): so the static kit
+layer (:mod:`services.display.passes.layer`) serves the window as it does a render, drawing
+again only what moved. The window is opened without multisampling: ``WindowOptions.samples``
+above 0 (``--aa N``) gives FXAA instead, 0 no anti-aliasing (4 samples cost about 2.4x the CPU
+of the FXAA path at 720p, ``livedrummer bench render --live-window``).
+A resize makes a new renderer (its targets have one size).
+
+Limits: recording and PNG frames are headless only.
 """
 
 from __future__ import annotations
 
 from contextlib import ExitStack
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -95,16 +104,14 @@ class WindowSurface:
 
     def __init__(self, kit: Kit, options: WindowOptions, avatar: Avatar | None = None) -> None:
         self._stack = ExitStack()
-        try:
-            glfw, window, ctx = self._stack.enter_context(open_window(options))
+        try:  # no multisampled screen: the frame is drawn off screen and copied in
+            glfw, window, ctx = self._stack.enter_context(open_window(replace(options, samples=0)))
         except BaseException:
             self._stack.close()
             raise
         self._glfw, self._window, self._ctx = glfw, window, ctx
-        size = glfw.get_framebuffer_size(window)
-        self.renderer = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False,
-                                 avatar=avatar, background=options.background,
-                                 lights=options.lights)  # fmt: skip
+        self._kit, self._avatar, self._options = kit, avatar, options
+        self.renderer = self._renderer(glfw.get_framebuffer_size(window))
         self._cameras = kit_cameras(kit)
         start = self._cameras[options.camera]
         self._move = CameraMove(start, start, 0.0, 0.0)
@@ -119,7 +126,7 @@ class WindowSurface:
         self.overlays = frozenset(options.overlays)  # the strips drawn; O and G toggle them
         self.keys = KeySender(options.keys_port) if options.keys_port else None
         self.view: Camera | None = None  # the camera of the last frame drawn
-        self.target: Any = ctx.screen  # what the frame is drawn into
+        self.target: Any = None  # what the frame is drawn into (the renderer's own)
 
         def on_key(_w: Any, key: int, _scancode: int, action: int, mods: int) -> None:
             name = key_name(glfw, key, mods)
@@ -133,11 +140,22 @@ class WindowSurface:
         glfw.set_key_callback(window, on_key)
         self._view = ViewControl(glfw, window)
 
+    def _renderer(self, size: tuple[int, int]) -> Renderer:
+        """The window's renderer: its own off-screen target of the window's size (FXAA where
+        the options ask for anti-aliasing), and so the static layer (see the module
+        docstring)."""
+        options = self._options
+        return Renderer(self._ctx, build_kit_mesh(self._kit), BODY_SKELETON, size, samples=0,
+                        fxaa=options.samples > 0, avatar=self._avatar,
+                        background=options.background, lights=options.lights)  # fmt: skip
+
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
         self._now = now_s
         fb = self._glfw.get_framebuffer_size(self._window)
         if fb != self.renderer.size and fb[0] > 0 and fb[1] > 0:
-            self.renderer.size = fb
+            lights = self.renderer.lights
+            self.renderer = self._renderer(fb)  # its targets are made for one size
+            self.renderer.lights = lights
         stage = self.stage
         if stage is None:
             self._move = self._view.mouse(self._move, now_s, self.renderer.size)
@@ -146,21 +164,22 @@ class WindowSurface:
             view = stage.view(now_s)
             self.renderer.lights = stage.lights_at(now_s)
         self.view = view
-        self.renderer.draw(frame, view, target=self._ctx.screen)
+        self.renderer.draw(frame, view)
         if stage is not None:
-            darken(self.renderer, stage.darkness(now_s), self._ctx.screen)
+            darken(self.renderer, stage.darkness(now_s))
             self.camera = stage.camera
         if self._show_readout or self._show_help:
             from livedrummer.render.hud import live_lines
 
             lines = live_lines(self.state, self.camera, self._show_help, self.keys is not None)
-            self._readout.draw(self.renderer, lines, self._ctx.screen)
+            self._readout.draw(self.renderer, lines, None)
 
     def overlay(self, image: np.ndarray, rect: tuple[int, int, int, int]) -> None:
-        self.renderer.draw_overlay(image, rect, self._ctx.screen)
+        self.renderer.draw_overlay(image, rect)
 
     def present(self) -> bool:
         glfw = self._glfw
+        self.renderer.present(self._ctx.screen)
         glfw.swap_buffers(self._window)
         glfw.poll_events()
         for name in self._keys:
