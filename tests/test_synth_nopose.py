@@ -59,10 +59,12 @@ def test_every_note_has_a_contact_on_its_piece(
     on = stream(pattern, rate, stamps, seconds=0.6)
     on["time_s"] += START
     params = SynthParams()
-    track = play_live(LiveSynth(rig, params), on)
+    synth = LiveSynth(rig, params)
+    track = play_live(synth, on)
     sticking = stick_online(on, rig.kit, params.lookahead_s)
     merged = merged_notes(sticking)
     assert merged.sum() >= 10  # the stream has notes no two hands strike separately
+    assert synth.window.merged == merged.sum()  # what the service's warning counts
     played = np.flatnonzero(sticking.piece >= 0)
     assert (sticking.limb[played] >= 0).all(), "every note the kit has gets a limb"
     on_target: dict[tuple[float, int], list[bool]] = {}
