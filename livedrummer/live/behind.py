@@ -6,7 +6,9 @@ frame that should have shown them, and a headless recording can repeat frames fo
 :class:`BehindCounter` counts such events (late contacts in the synth, late pose samples
 and repeated frames in the display) in total and in the current window, and hands back one
 warning line when a window with any of them closes, so a service logs at most one line every
-``window_s`` however bad it gets, and its summary carries the totals.
+``window_s`` however bad it gets, and its summary carries the totals. The synth also counts,
+in a one-second window, the notes the sticking merged into another stroke (a flam or double
+stroke of the nearer hand: three hand notes within the chord window).
 
 Pure logic on an injected time (the caller's clock); nothing here logs.
 """

@@ -46,7 +46,7 @@ from livedrummer.live.beat import BeatTracker, downbeat_weights, onset_weights
 from livedrummer.live.predict import Guess, HandPredictor
 from livedrummer.midi.notemap import NoteMap
 from livedrummer.sticking.online import Decision, OnlineSticker
-from livedrummer.sticking.result import NOT_PLAYED, Sticking
+from livedrummer.sticking.result import MERGED, NOT_PLAYED, Sticking
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, ControlKind
 
 
@@ -114,6 +114,7 @@ class NoteWindow:
         self._first = 0  # stream index of self._notes[0]
         self._controls: list[np.ndarray] = []
         self._guesses: dict[int, Guess] = {}
+        self.merged = 0  # notes decided as merged into another stroke (a flam of its hand)
 
     # -- input ---------------------------------------------------------------------------------
 
@@ -164,6 +165,8 @@ class NoteWindow:
 
     def _apply(self, decisions: list[Decision]) -> None:
         for d in decisions:
+            if d.reason is not None and d.reason.startswith(MERGED):
+                self.merged += 1
             k = d.index - self._first
             if k < 0:
                 continue

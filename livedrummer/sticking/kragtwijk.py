@@ -22,7 +22,14 @@ import numpy as np
 
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import Limb, PieceKind
-from livedrummer.sticking.prepare import Routed, chords, lead_hand, reduce_chord, route
+from livedrummer.sticking.prepare import (
+    Routed,
+    apply_merged,
+    chords,
+    lead_hand,
+    reduce_chord,
+    route,
+)
 from livedrummer.sticking.result import LIMB_CODE, Sticking
 
 _RH, _LH = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH]
@@ -109,4 +116,5 @@ def kragtwijk_pair(
         value = total / count
         value = np.where(value == 0.0, default, value)
     routed.limb[hand] = np.where(value > 0, _RH, _LH)
+    apply_merged(routed)
     return Sticking(routed.onsets, routed.limb, routed.piece, reasons, "kragtwijk-pair", kit.name)

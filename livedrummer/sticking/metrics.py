@@ -23,6 +23,10 @@ by the mirrored rule.
 :func:`hard_notes` says, note by note and in words, which strokes are too fast for one hand or
 made with the arms crossed, as SMED showed the parts of a score too hard to play; the sticking
 sheet, ``sticking --json`` and ``check --json`` report it.
+
+A merged note (:func:`~.result.merged_notes`: a flam or double stroke folded into another
+stroke of its hand) is not a stroke of its own: it is neither judged too fast nor crossed, and
+it is not dropped; :func:`merged` counts them.
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ import numpy as np
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import Limb
 from livedrummer.sticking.prepare import chords
-from livedrummer.sticking.result import LIMB_CODE, LIMBS, NOT_PLAYED, Sticking
+from livedrummer.sticking.result import LIMB_CODE, LIMBS, NOT_PLAYED, Sticking, merged_notes
 
 STANCE_WINDOW_S = 0.5
 CROSS_TOL_M = 0.10
@@ -69,8 +73,9 @@ def _too_fast(sticking: Sticking, kit: Kit) -> tuple[np.ndarray, np.ndarray, np.
     since, needs = np.full(n, np.nan), np.full(n, np.nan)
     gap = np.array([p.min_time_gap_s for p in kit.pieces])
     t = sticking.onsets["time_s"]
+    limb = _stroke_limbs(sticking)
     for hand in (_RH, _LH):
-        idx = np.flatnonzero(sticking.limb == hand)
+        idx = np.flatnonzero(limb == hand)
         if idx.size < 2:
             continue
         dt = np.diff(t[idx])
@@ -97,11 +102,12 @@ def _crossings(sticking: Sticking, kit: Kit) -> tuple[np.ndarray, np.ndarray]:
     t = sticking.onsets["time_s"]
     depth, conventional = crossing_depth(kit)
     bad = (depth > 0) & ~conventional
-    hands = np.flatnonzero((sticking.limb == _RH) | (sticking.limb == _LH))
+    limb = _stroke_limbs(sticking)
+    hands = np.flatnonzero((limb == _RH) | (limb == _LH))
     chord_end = np.zeros(sticking.limb.size)
     for group in chords(t[hands]):
         chord_end[hands[group]] = t[hands[group[-1]]]
-    by_hand = {h: np.flatnonzero(sticking.limb == h) for h in (_RH, _LH)}
+    by_hand = {h: np.flatnonzero(limb == h) for h in (_RH, _LH)}
     for hand, other in ((_RH, _LH), (_LH, _RH)):
         mine, theirs = by_hand[hand], by_hand[other]
         if mine.size == 0 or theirs.size == 0:
@@ -144,6 +150,18 @@ def hard_notes(sticking: Sticking, kit: Kit) -> dict[int, str]:
                        f"{left[0].value} on {left[1]}")  # fmt: skip
         out[i] = "; ".join(why)
     return out
+
+
+def _stroke_limbs(sticking: Sticking) -> np.ndarray:
+    """The limbs with merged notes as not played: the strokes alone."""
+    limb = sticking.limb.copy()
+    limb[merged_notes(sticking)] = NOT_PLAYED
+    return limb
+
+
+def merged(sticking: Sticking) -> np.ndarray:
+    """Per onset: a note merged into another stroke of its hand (a flam or double stroke)."""
+    return merged_notes(sticking)
 
 
 def dropped(sticking: Sticking) -> np.ndarray:

@@ -13,8 +13,11 @@ Time only advances with the stream: :meth:`process` treats the new onset's time 
 live caller whose stream may pause should also call :meth:`advance` with its clock, so that no
 decision waits longer than the lookahead. A hand note arriving within the chord window of an
 already committed note joins its chord with the other hand (unless both would be on one hi-hat:
-then the newcomer is left out); when both hands are committed, a hi-hat goes to the pedal and
-anything else is left out (with the reason). Committed steps of the
+then the newcomer merges into the committed stroke, a double stroke of its hand); when both
+hands are committed, a hi-hat goes to the pedal and anything else merges into the committed
+stroke nearest to it (on its piece if one is: :func:`~.prepare.merge_into`), with the reason, so
+no note is ever without a limb. A merged note of a pending step takes its partner's
+provisional hand, and its decision when the step commits. Committed steps of the
 recursion are dropped, so its state stays a few steps long however long the show. The onsets
 themselves are kept (``onsets()``, a few dozen bytes each) unless ``keep_onsets=False``: then
 the notes no pending step needs are dropped whenever the arrays fill (their reasons with
@@ -37,9 +40,11 @@ from livedrummer.sticking.prepare import (
     BEAT_DTYPE,
     CHORD_WINDOW_S,
     Routed,
+    apply_merged,
     beat_features_at,
     foot_limb,
     kick_foot,
+    merge_into,
     piece_table,
     reduce_chord,
     to_pedal,
@@ -105,6 +110,7 @@ class OnlineSticker:
             np.full(_INITIAL, NOT_PLAYED, np.int8),
             np.zeros(_INITIAL, bool),
             {},
+            {},
         )
         self._strength = np.zeros(_INITIAL, BEAT_DTYPE)
         self._count = 0  # notes held, the first of them the stream's note number _base
@@ -149,6 +155,9 @@ class OnlineSticker:
         index -= self._base
         if not 0 <= index < self._count:
             return NOT_PLAYED, -1
+        partner = r.merged.get(index)
+        if partner is not None and r.limb[partner] == NOT_PLAYED:
+            return self.provisional(self._base + partner)[0], int(r.piece[index])
         if not r.hand[index] or r.limb[index] != NOT_PLAYED:
             return int(r.limb[index]), int(r.piece[index])
         path = self._trellis.best_path(self._pending)
@@ -215,6 +224,7 @@ class OnlineSticker:
             grow(r.limb, NOT_PLAYED),
             grow(r.hand, False),
             r.reasons,
+            r.merged,
         )
         self._strength = grow(self._strength, 0)
 
@@ -231,6 +241,9 @@ class OnlineSticker:
         reasons = {k - lo: v for k, v in r.reasons.items() if k >= lo}
         r.reasons.clear()
         r.reasons.update(reasons)
+        merged = {k - lo: v - lo for k, v in r.merged.items() if k >= lo}
+        r.merged.clear()
+        r.merged.update(merged)
         for s in self._steps:
             s.notes = [j - lo for j in s.notes]
             s.played = tuple(j - lo for j in s.played)
@@ -243,6 +256,7 @@ class OnlineSticker:
         r.hand[i] = True
         r.limb[i] = NOT_PLAYED
         r.reasons.pop(i, None)
+        r.merged.pop(i, None)
 
     def _join(self, step: _Step, i: int) -> list[Decision]:
         """A hand note joins the last chord; redo that step of the recursion if it can."""
@@ -257,19 +271,21 @@ class OnlineSticker:
             step.played = tuple(played)
             feed(self._trellis, r, step.played, self._strength)
             return []
-        if len(step.played) == 2:  # both hands committed: the pedal or nothing
+        if len(step.played) == 2:  # both hands committed: the pedal or a merge
             r.hand[i] = False
             if to_pedal(r, i, self.kit):
                 r.reasons[i] = "hi-hat played with the pedal: both hands were already committed"
             else:
-                r.reasons[i] = "left out: both hands were already committed at this instant"
+                merge_into(r, i, step.played)
+                r.reasons[i] = ("merged: both hands were already committed at this instant; "
+                                "a flam of the nearest stroke's hand")  # fmt: skip
             return [self._decision(i)]
         first = step.played[0]
         p = int(r.piece[i])
         if int(r.piece[first]) == p and self.kit.pieces[p].kind is PieceKind.HIHAT:
             # one hand on a hi-hat at a time (see prepare.reduce_chord)
-            r.hand[i] = False
-            r.reasons[i] = "left out: one hi-hat stroke at a time, and this one came later"
+            merge_into(r, i, (first,))
+            r.reasons[i] = "merged: one hi-hat stroke at a time; a double stroke of its hand"
             return [self._decision(i)]
         # one hand committed: the newcomer takes the other
         forced = 0 if int(r.limb[first]) == _RH else 1
@@ -291,6 +307,7 @@ class OnlineSticker:
         for k in range(self._pending, due):
             step = self._steps[k]
             apply_step(self._routed.limb, step.played, int(path[k - self._pending]), n)
+            apply_merged(self._routed, step.notes)
             step.committed = True
             out += [self._decision(j) for j in step.notes]
         self._settle(due - 1, int(path[due - 1 - self._pending]))

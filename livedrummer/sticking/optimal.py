@@ -40,6 +40,7 @@ from livedrummer.sticking.prepare import (
     UNANNOTATED,
     Routed,
     apply_explicit,
+    apply_merged,
     beat_features,
     chords,
     reduce_chord,
@@ -362,6 +363,7 @@ def optimal(
         feed(trellis, routed, notes, beat, forced_hand(notes, explicit))
     for notes, state in zip(steps, trellis.best_path().tolist(), strict=True):
         apply_step(routed.limb, notes, state, model.pieces)
+    apply_merged(routed)
     if explicit is not None:  # a score that gives one instant's two notes to one hand wins too
         marked = (explicit != UNANNOTATED) & (routed.piece >= 0)
         routed.limb[marked] = explicit[marked]

@@ -8,15 +8,20 @@ strategies comparable: they differ only in how they share the remaining notes be
 Hand notes closer together than :data:`CHORD_WINDOW_S` count as one instant (a *chord*): a real
 performance never lands two strokes on the same millisecond, and a drummer playing crash and
 snare "together" spreads them by a few milliseconds. A chord of more than two hand notes cannot
-be played; :func:`reduce_chord` resolves it as a drummer would (the hi-hat moves to the pedal,
-else the least audible note is left out), always with a reason.
+be played as separate strokes; :func:`reduce_chord` resolves it as a drummer would (the hi-hat
+moves to the pedal), and a note still beyond two hands, or a second stroke on one hi-hat, is
+*merged*: it follows the kept note nearest to it in time (on the same piece if one is), as a
+flam or double stroke of that note's hand, shortened to the gap (:attr:`Routed.merged`,
+:func:`apply_merged`). Nothing a user played is lost: a merged note keeps its own onset, gets
+a limb, and has its reason. Its limb is known once its partner's is, so every strategy calls
+:func:`apply_merged` after deciding the hands.
 """
 
 from __future__ import annotations
 
 import math
 from bisect import bisect_right
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import pairwise
 
 import numpy as np
@@ -41,6 +46,8 @@ class Routed:
     limb: np.ndarray  # int8: feet filled in, everything else NOT_PLAYED
     hand: np.ndarray  # bool: notes the hands must play
     reasons: dict[int, str]
+    #: merged note -> the kept note of its chord whose hand strikes it too (see the module doc)
+    merged: dict[int, int] = field(default_factory=dict)
 
 
 def piece_table(kit: Kit) -> np.ndarray:
@@ -114,49 +121,85 @@ def chords(times: np.ndarray, window_s: float = CHORD_WINDOW_S) -> list[np.ndarr
 
 
 def reduce_chord(members: list[int], routed: Routed, kit: Kit) -> tuple[list[int], dict[int, str]]:
-    """Keep at most two hand notes of one chord, and one hand on each hi-hat, as a drummer would.
+    """Keep at most two separate hand strokes in one chord, and one hand on each hi-hat.
 
     Two hands cannot strike one hi-hat at one instant (Kragtwijk et al. §4.2: only one hi-hat
-    event at a time), so of several strokes on the same hi-hat the loudest stays (the first of
-    equals) and the others are left out. Then, while more than two notes remain, a hi-hat
-    stroke moves to the pedal (its onset's zone becomes ``pedal``, its limb the hi-hat foot);
-    if more than two still remain, the quietest notes are left out. Returns the notes the hands
-    still play and the reasons for every changed note. ``routed`` is updated in place.
+    event at a time), so of several strokes on the same hi-hat the loudest is the stroke (the
+    first of equals) and the others merge into it (a double stroke of its hand). Then, while
+    more than two notes remain, a hi-hat stroke moves to the pedal (its onset's zone becomes
+    ``pedal``, its limb the hi-hat foot); if more than two still remain, the quietest notes
+    merge into the kept note nearest in time (:func:`merge_into`). Returns the notes the hands
+    play as strokes and the reasons for every changed note. ``routed`` is updated in place.
     """
     keep = list(members)
     reasons: dict[int, str] = {}
     on = routed.onsets
     if len(keep) > 1:
-        for i in _second_hihat_strokes(keep, routed, kit):
+        for i, loudest in _second_hihat_strokes(keep, routed, kit):
             keep.remove(i)
             routed.hand[i] = False
-            reasons[i] = "left out: one hi-hat stroke at a time, and this the quieter"
+            routed.merged[i] = loudest
+            reasons[i] = "merged: one hi-hat stroke at a time; a double stroke of the louder's hand"
     if len(keep) <= 2:
         return keep, reasons
     for i in list(keep):
         if len(keep) > 2 and to_pedal(routed, i, kit):
             keep.remove(i)
             reasons[i] = "hi-hat played with the pedal: more than two hand notes at once"
+    for i in members:  # a double stroke of a hi-hat stroke that went to the pedal
+        if i in routed.merged and routed.merged[i] not in keep:
+            merge_into(routed, i, keep)
+            reasons[i] = ("merged: one hi-hat stroke at a time, and that one went to the pedal; "
+                          "a flam of the nearest stroke's hand")  # fmt: skip
+    extra: list[int] = []
     while len(keep) > 2:
         quietest = min(keep, key=lambda j: (int(on["velocity"][j]), -j))
         keep.remove(quietest)
-        routed.hand[quietest] = False
-        reasons[quietest] = "left out: more than two hand notes at once, and this the quietest"
+        extra.append(quietest)
+    for i in extra:
+        merge_into(routed, i, keep)
+        reasons[i] = ("merged: more than two hand notes at once, and this the quietest; "
+                      "a flam of the nearest stroke's hand")  # fmt: skip
     return keep, reasons
 
 
-def _second_hihat_strokes(members: list[int], routed: Routed, kit: Kit) -> list[int]:
-    """Strokes of a chord on a hi-hat that another, louder stroke of it already plays."""
+def merge_into(routed: Routed, i: int, kept: list[int] | tuple[int, ...]) -> int:
+    """Merge hand note ``i`` into the note of ``kept`` on its piece, else the nearest in time;
+    returns that partner. Its limb is the partner's, written by :func:`apply_merged`."""
+    t = float(routed.onsets["time_s"][i])
+    p = int(routed.piece[i])
+    times = routed.onsets["time_s"]
+    partner = min(kept, key=lambda j: (int(routed.piece[j]) != p, abs(float(times[j]) - t), j))
+    routed.hand[i] = False
+    routed.limb[i] = routed.limb[partner]
+    routed.merged[i] = partner
+    for j, into in routed.merged.items():  # a note merged into i follows i: no chains
+        if into == i:
+            routed.merged[j] = partner
+            routed.limb[j] = routed.limb[partner]
+    return partner
+
+
+def apply_merged(routed: Routed, notes: list[int] | None = None) -> None:
+    """Give every merged note (of ``notes``, else all) its partner's limb."""
+    merged = routed.merged
+    for i in merged if notes is None else (j for j in notes if j in merged):
+        routed.limb[i] = routed.limb[merged[i]]
+
+
+def _second_hihat_strokes(members: list[int], routed: Routed, kit: Kit) -> list[tuple[int, int]]:
+    """Strokes of a chord on a hi-hat that another, louder stroke of it already plays, each
+    with that louder stroke."""
     on_hat: dict[int, list[int]] = {}
     for i in members:
         p = int(routed.piece[i])
         if kit.pieces[p].kind is PieceKind.HIHAT:
             on_hat.setdefault(p, []).append(i)
-    out: list[int] = []
+    out: list[tuple[int, int]] = []
     for strokes in on_hat.values():
         if len(strokes) > 1:
             loudest = max(strokes, key=lambda j: (int(routed.onsets["velocity"][j]), -j))
-            out += [j for j in strokes if j != loudest]
+            out += [(j, loudest) for j in strokes if j != loudest]
     return out
 
 

@@ -22,7 +22,14 @@ import numpy as np
 
 from livedrummer.kit.model import Kit
 from livedrummer.kit.vocabulary import Limb, PieceKind
-from livedrummer.sticking.prepare import beat_position, chords, lead_hand, reduce_chord, route
+from livedrummer.sticking.prepare import (
+    apply_merged,
+    beat_position,
+    chords,
+    lead_hand,
+    reduce_chord,
+    route,
+)
 from livedrummer.sticking.result import LIMB_CODE, NOT_PLAYED, Sticking
 
 _RH, _LH = LIMB_CODE[Limb.RH], LIMB_CODE[Limb.LH]
@@ -90,4 +97,5 @@ def smed(onsets: np.ndarray, kit: Kit, *, beat_s: np.ndarray | None = None) -> S
         if h[k] == _NONE:
             h[k] = _other(h[k - 1]) if k > 0 else lead
     routed.limb[hand] = h
+    apply_merged(routed)
     return Sticking(routed.onsets, routed.limb, routed.piece, reasons, "smed", kit.name)

@@ -25,11 +25,14 @@ sample. Measured per note, on the shared clock, from the moment the note-on is s
   them though planned further apart, with how many of those got no pose: on a loaded
   machine the sender and JACK's non-realtime dummy server deliver notes in bursts, their
   stamps are close together, and the sticking, which gives two hands one stroke each per
-  instant, leaves the third out (the 100 notes/s runs' "no pose" notes are these).
+  instant, merges the third into the nearer stroke (a flam of that hand: it has a pose; the
+  synth's summary line counts these "notes merged into a stroke"). Before that merge, it
+  left the third out (the 100 notes/s runs' "no pose" notes were these).
 
 Prints p50/p99 per stage and rate and the counts lost at each stage (sent vs on the bus, on
-the bus vs contact samples; a note the sticking leaves out, e.g. a third hand note of a
-chord, has no contact sample). Figures from one run; no assertions.
+the bus vs contact samples; a note the sticking merges into another stroke, e.g. a third
+hand note of a chord, has the contact sample of its own onset, struck by the nearer hand).
+Figures from one run; no assertions.
 
 Show control on: ``--osc`` gives the synth and the display an OSC port each (read every tick
 and every frame, as in a show), ``--overlay score,joints`` has the display draw SMED's strips
@@ -227,7 +230,7 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
     after_bus = (contact_at - got_t[:n])[~np.isnan(contact_at)]
     late_mask = contact_at - stamps[:n] > d
     # notes stamped within the sticking's chord window of the two before them, though planned
-    # further apart: a third hand note "at once" that the sticking must leave out
+    # further apart: a third hand note "at once" that the sticking merges into a stroke
     plan = np.array(planned[:n])
     bunched = np.zeros(n, dtype=bool)
     if n > 2:

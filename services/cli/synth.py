@@ -130,7 +130,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"synth: {s['onsets']} onsets ({s['missing']} lost upstream), "
           f"{s['pose_samples']} pose samples in {s['pose_messages']} messages, "
           f"{s['animations']} re-animations, {s['quick_contacts']} quick contacts, "
-          f"answered in {p50}/{p99} ms p50/p99, {s['late_contacts']} contacts late; "
+          f"answered in {p50}/{p99} ms p50/p99, {s['late_contacts']} contacts late, "
+          f"{s['merged_notes']} notes merged into a stroke; "
           f"played with preset {args.preset or 'neutral'}, {args.strokes} strokes",
           file=sys.stderr)  # fmt: skip
     return code

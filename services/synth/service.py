@@ -185,6 +185,14 @@ class SynthService(Service):
             "measured on this machine: it answered those hits later than the show delay "
             "(--delay-ms), so the drummer reached them late on screen; the sound is on time",
         )
+        self.merged = BehindCounter(
+            "notes merged into another stroke (three hand notes within the chord window: "
+            "shown as a flam or double stroke of the nearer hand)",
+            "notes that close together, or stamped together by a loaded machine, cannot be "
+            "separate strokes of two hands",
+            window_s=1.0,
+        )
+        self._merged_seen = 0  # the window's merged notes already counted
         self._ticked = 0  # onsets heard when the last tick began
         self.osc: OscEndpoint | None = None
         self.preset = config.preset
@@ -339,6 +347,9 @@ class SynthService(Service):
         self._publish(self.synth.poses_until(now, answer=self._lock.wait_answered,
                                              lock=self._lock))  # fmt: skip
         self._say(self.late.poll(now))
+        merged = self.synth.window.merged
+        self._say(self.merged.add(merged - self._merged_seen, now))
+        self._merged_seen = merged
 
     def _fire_bar_cues(self, now: float) -> None:
         """The cue list's ``bar`` cues whose bar the beat tracker has heard start: their style
@@ -474,6 +485,7 @@ class SynthService(Service):
             "animations": self.synth.animations,
             "quick_contacts": self.synth.quick_contacts,
             "late_contacts": self.late.total,
+            "merged_notes": self.merged.total,
             "stage_cues": s.stage_cues,
             "answer_ms": [
                 round(float(np.percentile(s.answer_s, q)) * 1000, 2) if s.answer_s else None
