@@ -316,6 +316,9 @@ def layer_compare(cameras: list[str], count: int) -> int:
 
 
 _SUMMARY = re.compile(r"(\d+) frames, ([\d.]+) s")
+#: ``render -v``'s last line: its own CPU and its workers'. The workers of ``render --jobs``
+#: are a fork server's children, which RUSAGE_CHILDREN of this process never sees.
+_WORKERS = re.compile(r"render: ([\d.]+) s of CPU here, ([\d.]+) s in \d+ workers")
 
 
 def compare(args: argparse.Namespace) -> int:
@@ -404,10 +407,13 @@ def _alternate(title: str, command: list[str], before: Path, after: Path, rounds
         for label, root in (("before", before), ("after", after)):
             env = {**os.environ, "PYTHONPATH": str(root)}
             t0, c0 = time.perf_counter(), _children_cpu_s()
-            run = subprocess.run([sys.executable, "-m", "services", *command], cwd=cwd, env=env,
-                                 capture_output=True, text=True)  # fmt: skip
+            run = subprocess.run([sys.executable, "-m", "services", "-v", *command], cwd=cwd,
+                                 env=env, capture_output=True, text=True)  # fmt: skip
             wall = time.perf_counter() - t0
             used = _children_cpu_s() - c0
+            told = _WORKERS.search(run.stderr)
+            if told is not None:  # the workers' CPU, which the children's count leaves out
+                used = max(used, float(told.group(1)) + float(told.group(2)))
             found = _SUMMARY.search(run.stdout)
             if run.returncode != 0 or found is None:
                 print(f"  {label}: failed ({run.returncode}): {run.stderr.strip()[-200:]}")

@@ -129,7 +129,7 @@ def export(
     (None: one a core; :mod:`.parallel`), the same frames as one process draws."""
     if out is None and frames_dir is None:
         raise DisplayError("nothing to write: give an output video or a frames folder")
-    start, cpu0 = time.perf_counter(), _cpu_s()
+    start, cpu0 = time.perf_counter(), process_cpu_s()
     fps = settings.fps
     first_s, end_s = span if span is not None else (0.0, performance.duration_s + tail_s)
     n = frame_count(end_s - first_s, fps)
@@ -169,11 +169,11 @@ def export(
                             writer.frames, n, writer.path)  # fmt: skip
     wall_s = time.perf_counter() - start
     log.info("render: %.2f s of CPU here, %.2f s in %d workers, %.2f s wall",
-             _cpu_s() - cpu0, sum(stream.cpu_s), stream.workers, wall_s)  # fmt: skip
+             process_cpu_s() - cpu0, sum(stream.cpu_s), stream.workers, wall_s)  # fmt: skip
     return ExportReport(n, n / fps, wall_s)
 
 
-def _cpu_s() -> float:
+def process_cpu_s() -> float:
     """This process's CPU seconds so far, every thread's (user + system)."""
     usage = resource.getrusage(resource.RUSAGE_SELF)
     return usage.ru_utime + usage.ru_stime
