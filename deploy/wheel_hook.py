@@ -4,7 +4,7 @@ The repository keeps the pure library (``livedrummer/``) and the processes with 
 (``services/``) side by side. A wheel must put nothing but ``livedrummer`` into
 site-packages, so ``pyproject.toml`` copies ``services/`` into the wheel as
 ``livedrummer/_services`` (every module there imports its siblings relatively, so the code
-runs unchanged under that name; see ``services/program.py``). In a checkout and an editable
+runs unchanged under that name; see ``services/process/program.py``). In a checkout and an editable
 install the command's entry point is ``services.cli:main``; this hook rewrites it, for the
 standard wheel only, to the name the same code has inside the wheel. Editable installs keep
 the checkout's name (hatch cannot remap a package's prefix in editable mode).

@@ -21,7 +21,7 @@ from livedrummer.midi.notemap import load_note_map
 from livedrummer.midi.smf import read_midi_file
 from livedrummer.timeline.performance import Performance
 from services.bench._jack import JackError, dummy_jack, jack_env
-from services.cli.common import DEMO_MAP, demo_groove
+from services.cli.files import DEMO_MAP, demo_groove
 
 REPO = Path(__file__).resolve().parent.parent
 GROOVE = REPO.parent / "shared" / "data" / "groove"

@@ -123,7 +123,7 @@ def test_the_readme_is_short_and_its_links_into_docs_exist() -> None:
 
 
 def test_the_osc_page_names_every_address_served() -> None:
-    from services.osc import DISPLAY_ADDRESSES, STATE, SYNTH_ADDRESSES
+    from services.show.osc import DISPLAY_ADDRESSES, STATE, SYNTH_ADDRESSES
 
     page = (REPO / "docs" / "reference" / "osc.md").read_text(encoding="utf-8")
     documented = set(re.findall(r"^\| `(/livedrummer/[^`]*)`", page, re.M))

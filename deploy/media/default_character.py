@@ -15,7 +15,7 @@ from livedrummer.midi.smf import read_midi_file
 from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
-from services.cli.common import DEMO_MAP, demo_groove
+from services.cli.files import DEMO_MAP, demo_groove
 from services.display.context import headless_context
 from services.display.png import write_png
 from services.display.renderer import Renderer

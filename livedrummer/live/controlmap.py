@@ -18,7 +18,7 @@ binds a controller (``cc = N``) or a pad (``note = N``), on one channel or any, 
 
 Why this shape. A binding turns a MIDI message into the same OSC command a cue desk would
 send (:meth:`ControlMap.commands` gives address and arguments), so a controller steers the
-show through the one routing of :mod:`services.osc` and a mapping can be checked without
+show through the one routing of :mod:`services.show.osc` and a mapping can be checked without
 any device. The one table :data:`TARGETS` names the targets, what they take and their OSC
 address.
 

@@ -1,6 +1,6 @@
 """The show's settings, resolved once by the launcher and handed to every process whole.
 
-A live rig is several processes (input daemon, synth, display; :mod:`services.supervisor`)
+A live rig is several processes (input daemon, synth, display; :mod:`services.process.supervisor`)
 that must agree on what they play: the note map that turns MIDI notes into pieces, the kit,
 the avatar and how it is fitted, the show delay D and the lookahead L, and the sound. When
 each process derived these from its own flags and defaults they drifted (``up --keys`` gave

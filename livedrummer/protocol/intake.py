@@ -19,7 +19,7 @@ order, so that the order is the same everywhere too:
 
 A bad message is dropped before its sequence number is read, so junk never shows as loss
 or as a restart. :attr:`StreamIntake.bad` counts drops by kind; the I/O side
-(``services.stream_rx``) reads sockets, logs and feeds this class.
+(``services.wire.stream_rx``) reads sockets, logs and feeds this class.
 
 Kinds of drop, from the ``field`` a :class:`~livedrummer.protocol.WireError` names:
 

@@ -31,7 +31,7 @@ subscriber's log can be matched. A record's CRC covers its whole body.
 Limits: a record is at most :data:`MAX_RECORD` bytes. Corruption *inside* the file (not at
 the tail) also stops the reader, at the first bad record: records have no resync marker,
 since after a crash only the tail can be torn. What the writer flushes when is its own
-policy (``services/journal.py``).
+policy (``services/input/journal.py``).
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ line. Our parser accepts exactly that: comments (``#``), blank lines, the sectio
 naming the file and line. Nothing here evaluates or unpickles anything.
 
 Limits: the parser does not check that a secret key matches its public key (that needs
-libzmq's ``curve_public``; :mod:`services.net` does it when loading a secret); metadata
+libzmq's ``curve_public``; :mod:`services.wire.net` does it when loading a secret); metadata
 entries are ignored, not kept.
 """
 

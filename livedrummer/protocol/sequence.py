@@ -4,7 +4,7 @@ Every message on a (performer, stream) takes the next number (heartbeats too), a
 stamps its send time on the shared clock. From those two header fields alone, with no extra
 message, a receiver tells apart the four things that happen to a ZeroMQ stream. This module
 is the one place that decides which is which; every subscriber reads it through
-:class:`SequenceTracker` (and the services through ``services.stream_rx``).
+:class:`SequenceTracker` (and the services through ``services.wire.stream_rx``).
 
 The policy, per (performer, stream), against ``expected`` (the number after the last
 message taken) and the newest send time taken:
@@ -38,7 +38,7 @@ stream of restarts). A sender whose clock went back (another machine rebooted) a
 rejoin after its first messages, within ``REORDER_WINDOW`` of the old numbers, has up to that
 many messages dropped as duplicates before its numbers pass the old ones. A receiver that
 filters kinds (a subscription to two kinds only) sees the others' numbers as gaps, so such a
-receiver must not count them (``services.stream_rx`` has ``sequenced=False``).
+receiver must not count them (``services.wire.stream_rx`` has ``sequenced=False``).
 """
 
 from __future__ import annotations

@@ -113,7 +113,7 @@ def play_into_daemon(
             time.sleep(0.3)  # the subscription settles (nothing is played yet)
             policy = os.sched_getscheduler(daemon.pid)
             if realtime:  # this thread only: the daemon and the player are already started
-                from ..realtime import request_realtime
+                from ..process.realtime import request_realtime
 
                 request_realtime(realtime, "bench subscriber")
             assert player.stdin is not None

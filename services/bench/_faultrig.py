@@ -16,7 +16,7 @@ technician has:
 
 One thread only: :meth:`Rig.pump` writes notes at a steady rate and drains both sockets
 between writes; a reader thread collects the launcher's output lines. Used by
-``tests/test_faults.py`` (assertions) and ``services/bench/recovery.py`` (figures).
+``tests/services/process/test_faults.py`` (assertions) and ``services/bench/recovery.py`` (figures).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ from livedrummer import protocol as p
 from livedrummer.body.pose import pose_dtype
 from livedrummer.kit.loader import load_kit
 
-from ..program import program_argv
+from ..process.program import program_argv
 from ._paths import WORKDIR
 
 REPO = WORKDIR  # child processes start in the checkout (or the user's folder)

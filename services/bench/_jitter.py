@@ -115,10 +115,10 @@ def remote_session(seconds: float, *, control: bool, offset_s: float, home: str,
     from livedrummer import protocol as p
     from livedrummer.midi.notemap import load_note_map
 
-    from ..cli.common import DEMO_MAP, demo_groove
+    from ..cli.files import DEMO_MAP, demo_groove
     from ..input.daemon import DaemonConfig, InputDaemon
     from ..input.fileplayer import FileSource
-    from ..program import program_argv
+    from ..process.program import program_argv
 
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     remote_clock = AheadClock(offset_s)

@@ -30,6 +30,8 @@ from ._kits import KitSource, renderer
 
 if TYPE_CHECKING:
     from livedrummer.acoustic.train import TakeCandidates
+import csv
+from typing import TYPE_CHECKING
 
 SR = 48_000
 GAP_S = 3.0
@@ -61,7 +63,6 @@ def _seed(*parts: object) -> int:
 
 def excerpts(root: Path, split: str, count: int, seconds: float) -> list[object]:
     from ._drumaudio import excerpt
-    from .transcribe import pick_files
 
     return [excerpt(p, 5.0, seconds) for p in pick_files(root, split, count, seed=7)]
 
@@ -176,3 +177,22 @@ def kit_candidates(kit: KitSource, root: Path, count: int, seconds: float) -> li
              level=np.concatenate([p.levels for p in parts]), take=take)  # fmt: skip
     tmp.replace(path)
     return parts
+
+
+GROUPS_MIX = {
+    "kick": ("kick",), "snare": ("snare",), "hihat": ("hihat_closed", "hihat_open"),
+    "toms": ("tom_high", "tom_mid", "tom_low"), "cymbals": ("crash", "ride"),
+}  # fmt: skip
+
+
+def pick_files(root: Path, split: str, count: int | None, seed: int = 1) -> list[Path]:
+    """``count`` beat (not fill) performances of ``split`` longer than 25 s, seeded choice
+    (``None``: all of them)."""
+    with (root / "info.csv").open() as f:
+        rows = [r for r in csv.DictReader(f) if r["split"] == split
+                and r["beat_type"] == "beat" and float(r["duration"]) > 25]  # fmt: skip
+    if count is None:
+        return [root / r["midi_filename"] for r in rows]
+    rng = np.random.default_rng(seed)
+    chosen = rng.choice(len(rows), min(count, len(rows)), replace=False)
+    return [root / rows[i]["midi_filename"] for i in sorted(chosen.tolist())]

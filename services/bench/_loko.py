@@ -127,8 +127,7 @@ def _row(kit, model, tests: list, no_mics: bool, worst: dict[str, float]) -> str
     from livedrummer.acoustic.score import Counts, score
 
     from ._drumaudio import MICS
-    from ._kitcorpus import SR, render_stem_takes, render_takes
-    from .transcribe import GROUPS_MIX
+    from ._kitcorpus import GROUPS_MIX, SR, render_stem_takes, render_takes
 
     profile = load_profile(None)
     takes = render_takes(kit, tests, "test")

@@ -149,7 +149,7 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--groove", type=float, default=20.0, metavar="S",
                         help="also the first S s of the demo groove (0: not)")  # fmt: skip
     args = parser.parse_args(argv)
-    from ..cli.common import DEMO_MAP, demo_groove
+    from ..cli.files import DEMO_MAP, demo_groove
 
     note_map = load_note_map(DEMO_MAP)
     rig = build_rig(load_kit("rock5"))

@@ -21,7 +21,7 @@ RSS (``/proc/PID/status``), the bytes waiting in the pty (``FIONREAD``) and the 
 flight (sent, not yet received). A subscriber counts every onset and checks the sequence
 numbers; after the daemon stopped, its journal is read and its onsets counted.
 
-Figures only, no assertions (``tests/test_flood.py`` asserts on counts and bounds).
+Figures only, no assertions (``tests/services/bench/test_flood.py`` asserts on counts and bounds).
 """
 
 from __future__ import annotations
@@ -47,9 +47,9 @@ import zmq
 from livedrummer import protocol as p
 from livedrummer.timeline.clock import MonotonicClock
 
-from ..journal import load_journal
-from ..program import program_argv
-from ..stream_rx import StreamReceiver
+from ..input.journal import load_journal
+from ..process.program import program_argv
+from ..wire.stream_rx import StreamReceiver
 from ._paths import WORKDIR
 
 REPO = WORKDIR  # child processes start in the checkout (or the user's folder)

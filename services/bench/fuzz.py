@@ -10,7 +10,8 @@ Prints the figures of docs/benchmarks/reliability.md, all from one seed:
   :func:`~livedrummer.midi.smf.read_midi_bytes`; how many ended in a named error and how many
   in a result, per kind, anything else raised (must be 0), and the median and maximum time.
 
-Nothing here asserts: ``tests/test_fuzz_serial.py`` and ``tests/test_fuzz_midifile.py`` do.
+Nothing here asserts: ``tests/services/input/test_fuzz_serial.py`` and
+``tests/livedrummer/midi/test_fuzz_midifile.py`` do.
 """
 
 from __future__ import annotations

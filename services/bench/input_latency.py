@@ -31,7 +31,7 @@ from livedrummer import protocol as p
 from livedrummer.protocol.journal import read_journal
 from livedrummer.timeline.clock import MonotonicClock
 
-from ..program import program_argv
+from ..process.program import program_argv
 from ._paths import WORKDIR
 
 REPO = WORKDIR  # child processes start in the checkout (or the user's folder)

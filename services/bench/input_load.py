@@ -45,7 +45,7 @@ import zmq
 from livedrummer import protocol as p
 from livedrummer.timeline.clock import MonotonicClock
 
-from ..program import PACKAGE
+from ..process.program import PACKAGE
 from ._hogs import hog_levels, hogs
 from ._jack import JackError, dummy_jack, jack_env
 from ._paths import HERE, WORKDIR

@@ -69,7 +69,7 @@ from livedrummer.kit.loader import load_kit
 from livedrummer.sticking.prepare import CHORD_WINDOW_S
 from livedrummer.timeline.clock import MonotonicClock
 
-from ..program import program_argv
+from ..process.program import program_argv
 from ._compare import run_compare
 from ._jack import dummy_jack, jack_env
 from ._paths import CHECKOUT, WORKDIR
@@ -275,7 +275,7 @@ def groove_schedule(seconds: float) -> list[tuple[float, int, int]]:
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.midi.smf import read_midi_file
 
-    from ..cli.common import demo_groove
+    from ..cli.files import demo_groove
 
     on = read_midi_file(demo_groove(), load_note_map("roland-td")).onsets
     on = on[on["time_s"] < seconds]

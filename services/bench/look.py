@@ -28,7 +28,8 @@ from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.lights import LightRig, look_rig
 from livedrummer.render.litshare import background_luma, hall_luma, lit_share
 
-from ..cli.common import DEMO_MAP, demo_groove, rig_for
+from ..cli.files import DEMO_MAP, demo_groove
+from ..cli.performer import rig_for
 from ..cli.render import parse_size
 from ..display.context import headless_context
 from ..display.png import write_png

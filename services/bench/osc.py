@@ -21,8 +21,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from ..osc import encode
-from ..program import program_argv
+from ..process.program import program_argv
+from ..show.osc import encode
 from ._ports import free_port_base
 
 

@@ -25,7 +25,7 @@ from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay import OVERLAYS, OverlayModels
 from livedrummer.render.overlay_raster import overlay_image
 
-from ..cli.common import DEMO_MAP, demo_groove
+from ..cli.files import DEMO_MAP, demo_groove
 from ..cli.render import parse_size
 from ..display.context import headless_context
 from ..display.renderer import Renderer

@@ -26,7 +26,7 @@ from livedrummer.midi.smf import read_midi_file
 from livedrummer.practice.teacher import PassTime
 from livedrummer.render.body_scene import BodyScene
 
-from ..cli.common import demo_groove
+from ..cli.files import demo_groove
 from ..cli.render import parse_size
 from ..display.practice_view import PracticeView, TeacherMode
 from ..display.surface import HeadlessSurface

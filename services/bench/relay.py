@@ -36,7 +36,7 @@ from livedrummer.body.pose import pose_dtype
 from livedrummer.kit.loader import load_kit
 from livedrummer.timeline.clock import MonotonicClock
 
-from ..program import program_argv
+from ..process.program import program_argv
 from ._paths import WORKDIR
 
 CLK_TCK = os.sysconf("SC_CLK_TCK")

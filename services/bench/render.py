@@ -64,7 +64,7 @@ from livedrummer.render.body_scene import BODY_SKELETON, BodyScene
 from livedrummer.render.camera import pick_camera
 from livedrummer.render.kitmesh import build_kit_mesh
 
-from ..cli.common import DEMO_MAP, demo_groove
+from ..cli.files import DEMO_MAP, demo_groove
 from ..cli.render import first_seconds, parse_size
 from ..display.context import headless_context
 from ..display.export import export

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..program import program_argv
+from ..process.program import program_argv
 from ._paths import WORKDIR
 
 NOTES = (38, 42, 36, 42, 48, 42, 45, 42, 38, 46)  # all in the roland-td map
@@ -61,7 +61,7 @@ def draw_capacity(performers: int, size: tuple[int, int], frames: int) -> np.nda
     from livedrummer.stage.formation import Formation, place
 
     from ..cli import build_parser
-    from ..cli.common import DEMO_MAP, demo_groove, read_performance
+    from ..cli.files import DEMO_MAP, demo_groove, read_performance
     from ..cli.render import body_scene
     from ..display.context import headless_context
     from ..display.stage_export import StagePainter

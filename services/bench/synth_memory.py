@@ -55,7 +55,7 @@ from livedrummer.resources import data_dir
 from livedrummer.timeline.clock import MonotonicClock
 from livedrummer.timeline.events import CONTROL_DTYPE, ControlKind
 
-from ..program import program_argv
+from ..process.program import program_argv
 from ._paths import WORKDIR
 
 REPO = WORKDIR  # child processes start in the checkout (or the user's folder)

@@ -25,7 +25,6 @@ player's and the daemon's callbacks, then run at JACK's real-time priority too).
 from __future__ import annotations
 
 import argparse
-import csv
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -38,24 +37,7 @@ if TYPE_CHECKING:
     from livedrummer.acoustic.profile import DetectorSettings
 
     from ._audiolive import LiveRun
-
-GROUPS_MIX = {
-    "kick": ("kick",), "snare": ("snare",), "hihat": ("hihat_closed", "hihat_open"),
-    "toms": ("tom_high", "tom_mid", "tom_low"), "cymbals": ("crash", "ride"),
-}  # fmt: skip
-
-
-def pick_files(root: Path, split: str, count: int | None, seed: int = 1) -> list[Path]:
-    """``count`` beat (not fill) performances of ``split`` longer than 25 s, seeded choice
-    (``None``: all of them)."""
-    with (root / "info.csv").open() as f:
-        rows = [r for r in csv.DictReader(f) if r["split"] == split
-                and r["beat_type"] == "beat" and float(r["duration"]) > 25]  # fmt: skip
-    if count is None:
-        return [root / r["midi_filename"] for r in rows]
-    rng = np.random.default_rng(seed)
-    chosen = rng.choice(len(rows), min(count, len(rows)), replace=False)
-    return [root / rows[i]["midi_filename"] for i in sorted(chosen.tolist())]
+from ._kitcorpus import GROUPS_MIX, pick_files
 
 
 def main(argv: list[str]) -> int:

@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import Subparsers, add_command
+from .parsing import Subparsers, add_command
 
 #: :data:`services.bench._kits.HELD_OUT`, spelt out (the parser loads no numpy; a test checks
 #: that the two agree).

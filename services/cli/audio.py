@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .common import Subparsers, add_command
+from .parsing import Subparsers, add_command
 
 if TYPE_CHECKING:
     from livedrummer.acoustic.profile import DetectorSettings
@@ -113,7 +113,7 @@ def run_learn(args: argparse.Namespace) -> int:
 def run_profile(args: argparse.Namespace) -> int:
     from livedrummer.acoustic.learn import soundfont_profile
 
-    from ..audiofile import SAMPLE_RATE
+    from ..input.audiofile import SAMPLE_RATE
 
     profile = soundfont_profile(args.soundfont, SAMPLE_RATE, args.output.stem, _settings(args))
     _write(args.output, profile.to_toml())

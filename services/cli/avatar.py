@@ -18,7 +18,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from .common import FITS, Subparsers, add_command
+from .parsing import Subparsers, add_command
+from .performer import FITS
 
 
 def register(sub: Subparsers) -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from .common import Subparsers, add_command
+from .parsing import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:

@@ -10,7 +10,7 @@ import argparse
 import importlib
 import pkgutil
 
-from .common import Subparsers, add_command
+from .parsing import Subparsers, add_command
 
 
 def available() -> list[str]:

@@ -24,7 +24,8 @@ import sys
 import time
 from typing import Any
 
-from .common import Subparsers, add_api_option, add_command, kit_source
+from .devices import add_api_option, kit_source
+from .parsing import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:

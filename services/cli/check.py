@@ -33,17 +33,9 @@ from typing import TYPE_CHECKING, Any
 
 from livedrummer.errors import LivedrummerError
 
-from .common import (
-    Subparsers,
-    add_channel_option,
-    add_command,
-    add_kit_option,
-    add_map_option,
-    add_motion_options,
-    midi_files,
-    read_performance,
-    sticking_of,
-)
+from .files import add_channel_option, add_map_option, midi_files, read_performance
+from .parsing import Subparsers, add_command
+from .performer import add_kit_option, add_motion_options, sticking_of
 
 if TYPE_CHECKING:
     import numpy as np
@@ -62,7 +54,7 @@ def register(sub: Subparsers) -> None:
     add_map_option(p)
     add_channel_option(p)
     add_motion_options(p)
-    from .common import add_avatar_option
+    from .performer import add_avatar_option
 
     add_avatar_option(p)
     p.add_argument("--fps", type=float, default=200.0, help="frames per second checked")
@@ -87,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.sticking.metrics import crossings, too_fast
 
     kit = load_kit(args.kit)
-    from .common import avatar_of, fitting_of, rig_for
+    from .performer import avatar_of, fitting_of, rig_for
 
     fitting = fitting_of(args, kit, avatar_of(args))
     kit, avatar = fitting.kit, fitting.avatar
@@ -246,7 +238,7 @@ def run_stage(args: argparse.Namespace) -> int:
     from livedrummer.kit.loader import load_kit
     from livedrummer.stage.stagefile import load_stage
 
-    from .common import rig_for
+    from .performer import rig_for
     from .staging import stage_parts
 
     stage = load_stage(args.stage)
@@ -256,7 +248,7 @@ def run_stage(args: argparse.Namespace) -> int:
         kit = load_kit(p.kit)
         avatar = None
         if p.avatar is not None:
-            from .common import avatar_of, fitted
+            from .performer import avatar_of, fitted
 
             avatar = avatar_of(argparse.Namespace(avatar=p.avatar))
             kit, avatar = fitted(args, kit, avatar)

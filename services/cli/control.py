@@ -16,7 +16,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import Subparsers, add_api_option, add_command
+from .devices import add_api_option
+from .parsing import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:

@@ -27,15 +27,10 @@ from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .common import (
-    DEMO_MAP,
-    Subparsers,
-    add_command,
-    add_kit_option,
-    add_renamed,
-    demo_groove,
-    has_screen,
-)
+from .devices import has_screen
+from .files import DEMO_MAP, demo_groove
+from .parsing import Subparsers, add_command, add_renamed
+from .performer import add_kit_option
 
 if TYPE_CHECKING:
     from livedrummer.sticking.result import Sticking

@@ -22,7 +22,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from .common import Subparsers, add_command
+from .parsing import Subparsers, add_command
 
 UNIT_NAME = "livedrummer-rig.service"
 
@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.errors import ConfigError
     from livedrummer.live.profile import RigProfile, default_path
 
-    from ..program import program_argv
+    from ..process.program import program_argv
 
     rig = (args.rig or default_path()).expanduser().resolve()
     if rig.exists():

@@ -27,31 +27,14 @@ from typing import TYPE_CHECKING, Any
 
 from livedrummer.render.camera import CAMERA_NAMES
 
-from .common import (
-    DEMO_MAP,
-    Subparsers,
-    add_avatar_option,
-    add_background_option,
-    add_channel_option,
-    add_command,
-    add_kit_option,
-    add_look_option,
-    add_motion_options,
-    add_osc_options,
-    add_renamed,
-    avatar_of,
-    background_of,
-    check_aa,
-    cues_of,
-    demo_groove,
-    fitted,
-    lights_of,
-    osc_allow,
-    read_performance,
-)
+from .files import DEMO_MAP, add_channel_option, demo_groove, read_performance
 from .keys import add_curve_options, security_from_args
+from .parsing import Subparsers, add_command, add_renamed
+from .performer import add_avatar_option, add_kit_option, add_motion_options, avatar_of, fitted
+from .picture import add_background_option, add_look_option, background_of, check_aa, lights_of
 from .render import body_scene, parse_size
 from .settings import add_settings_option, played_by, settings_of
+from .show_control import add_osc_options, cues_of, osc_allow
 
 if TYPE_CHECKING:
     from ..display.audio_out import TrackPlayer
@@ -236,7 +219,7 @@ def run_live(args: argparse.Namespace) -> int:
         LiveDisplay,
         MonotonicFrameClock,
     )
-    from ..service import serve
+    from ..process.service import serve
 
     # --settings FILE (from up): kit, avatar and sound as resolved there; a practice display's
     # --map is its teacher's reference, not the kit's

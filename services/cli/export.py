@@ -18,16 +18,9 @@ from pathlib import Path
 
 from livedrummer.errors import LivedrummerError
 
-from .common import (
-    Subparsers,
-    add_channel_option,
-    add_command,
-    add_kit_option,
-    add_map_option,
-    add_motion_options,
-    read_performance,
-    sticking_of,
-)
+from .files import add_channel_option, add_map_option, read_performance
+from .parsing import Subparsers, add_command
+from .performer import add_kit_option, add_motion_options, sticking_of
 
 
 def register(sub: Subparsers) -> None:
@@ -40,7 +33,7 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
     add_kit_option(p)
-    from .common import add_avatar_option
+    from .performer import add_avatar_option
 
     add_avatar_option(p)
     add_map_option(p)
@@ -65,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     if not performance.onsets.size:  # said on stderr: no motion to write
         return 0
     kit = load_kit(args.kit)
-    from .common import avatar_of, fitted, rig_for
+    from .performer import avatar_of, fitted, rig_for
 
     kit, avatar = fitted(args, kit, avatar_of(args))
     rig = rig_for(kit, avatar)

@@ -12,8 +12,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import DEMO_MAP, Subparsers, add_api_option, add_channel_option, add_command
+from .devices import add_api_option
+from .files import DEMO_MAP, add_channel_option
 from .keys import add_curve_options, security_from_args
+from .parsing import Subparsers, add_command
 from .settings import add_settings_option, settings_of
 
 AUDIO_MAP = "general-midi"  # the notes an --audio source writes
@@ -89,13 +91,13 @@ def run(args: argparse.Namespace) -> int:
 
     from ..input.base import Source
     from ..input.daemon import DaemonConfig, InputDaemon
-    from ..service import serve
+    from ..process.service import serve
 
     if not 0 <= args.performer <= 0xFFFF:
         raise ConfigError(f"--performer: expected 0..65535 (got {args.performer})")
     security = security_from_args(args)
     if args.realtime:
-        from ..realtime import request_realtime
+        from ..process.realtime import request_realtime
 
         try:  # before any thread starts, so they inherit it
             request_realtime(args.realtime, "input")
@@ -115,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.map != "auto":
         note_map = load_note_map(args.map)
     elif args.file is not None:  # the file's own best map, said in one line as render says it
-        from .common import read_performance
+        from .files import read_performance
 
         note_map = read_performance(args, args.file, quiet=True)[1]
     else:

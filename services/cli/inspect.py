@@ -10,13 +10,8 @@ import argparse
 import json
 from typing import Any
 
-from .common import (
-    Subparsers,
-    add_channel_option,
-    add_command,
-    add_map_option,
-    read_performance,
-)
+from .files import add_channel_option, add_map_option, read_performance
+from .parsing import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:

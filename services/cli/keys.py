@@ -8,7 +8,7 @@ list`` shows the public keys in that folder. The file format is described in
 
 This module also holds the CURVE options the network commands share (``--curve-secret``,
 ``--server-key``, ``--allow``, ``--insecure``) and their translation into a
-:class:`services.net.Security`, so ``input``, ``synth`` and ``display --live`` spell and
+:class:`services.wire.net.Security`, so ``input``, ``synth`` and ``display --live`` spell and
 check them the same way.
 """
 
@@ -29,10 +29,10 @@ from livedrummer.protocol.keys import (
 )
 from livedrummer.resources import user_home
 
-from .common import Subparsers, add_command, add_renamed
+from .parsing import Subparsers, add_command, add_renamed
 
 if TYPE_CHECKING:
-    from ..net import Security
+    from ..wire.net import Security
 
 
 def register(sub: Subparsers) -> None:
@@ -124,8 +124,8 @@ def add_curve_options(parser: argparse.ArgumentParser, *, server: bool, client: 
 
 
 def security_from_args(args: argparse.Namespace) -> Security:
-    """The :class:`services.net.Security` the parsed CURVE options describe."""
-    from ..net import Security
+    """The :class:`services.wire.net.Security` the parsed CURVE options describe."""
+    from ..wire.net import Security
 
     return Security.from_files(
         secret=args.curve_secret,

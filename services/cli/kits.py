@@ -12,7 +12,7 @@ from livedrummer.kit.catalog import entries
 from livedrummer.kit.loader import load_extension, load_kit_file
 from livedrummer.midi.notemap import load_note_map_file
 
-from .common import Subparsers, add_command
+from .parsing import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:

@@ -17,7 +17,8 @@ import argparse
 import json
 import sys
 
-from .common import Subparsers, add_api_option, add_command, kit_source
+from .devices import add_api_option, kit_source
+from .parsing import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from .common import Subparsers, add_api_option, add_command
+from .devices import add_api_option
+from .parsing import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:

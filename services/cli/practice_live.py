@@ -52,11 +52,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .common import add_api_option, add_channel_option, add_map_option
+from .devices import add_api_option
+from .files import add_channel_option, add_map_option
 
 
 def add_live_options(p: argparse.ArgumentParser) -> None:
-    from .practice import add_db_option, add_judge_options, add_pass_options
+    from .practice_setup import add_db_option, add_judge_options, add_pass_options
 
     p.add_argument("reference", type=Path, metavar="REF.mid", help="the reference to play along")
     src = p.add_mutually_exclusive_group(required=True)
@@ -157,8 +158,9 @@ def run_live(args: argparse.Namespace) -> int:
     from livedrummer.timeline.events import ONSET_DTYPE, Onset
 
     from ..practice.take import on_take_grid
-    from .common import kit_source, read_performance
-    from .practice import judge_settings, pass_setup, summary_lines
+    from .devices import kit_source
+    from .files import read_performance
+    from .practice_setup import judge_settings, pass_setup, summary_lines
     from .practice_show import Show, check_show, show_mode, show_settings
 
     window_ms, pieces, level = judge_settings(args)

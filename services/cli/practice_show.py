@@ -4,7 +4,7 @@
 ``WAYLAND_DISPLAY``), the player's drummer driven live through the pipeline ``up`` runs: an
 input daemon owns the kit's port and publishes its hits, a synth turns them into poses, a live
 display draws them; each a process, started in order after the one before said it is ready and
-restarted when it dies (:mod:`services.supervisor`). The rig itself subscribes to the input
+restarted when it dies (:mod:`services.process.supervisor`). The rig itself subscribes to the input
 daemon's stream (:mod:`services.practice.bus`) and judges the hits with their driver stamps, as
 when it reads the port itself, and sends the display its readout and plans
 (:mod:`services.practice.readout_out`), from which the display draws the readout and moves the
@@ -35,13 +35,15 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .common import add_avatar_option, add_kit_option, add_look_option, has_screen
+from .devices import has_screen
+from .performer import add_avatar_option, add_kit_option
+from .picture import add_look_option
 from .settings import write_settings
 
 if TYPE_CHECKING:
     from livedrummer.live.settings import ShowSettings
 
-    from ..supervisor import Supervisor
+    from ..process.supervisor import Supervisor
 
 SHOW_SUBSCRIBERS = 2  # the synth and the rig subscribe to the input daemon's stream
 #: D: the synth shows a hit this long after its stamp (``up``'s default); the recording's drum
@@ -94,7 +96,7 @@ def check_show(args: argparse.Namespace, mode: str) -> None:
     from livedrummer.errors import ConfigError
     from livedrummer.practice.teacher import parse_teacher
 
-    from .common import avatar_of
+    from .performer import avatar_of
     from .render import parse_size
 
     try:
@@ -134,8 +136,8 @@ def frame_size(args: argparse.Namespace, mode: str) -> str:
 def specs(args: argparse.Namespace, mode: str, readout: str, settings: Path) -> list[Any]:
     """The input, synth and display of the rig (see the module docstring), each given the
     ``settings`` file (:func:`show_settings`)."""
-    from ..program import program_argv
-    from ..supervisor import ServiceSpec
+    from ..process.program import program_argv
+    from ..process.supervisor import ServiceSpec
 
     base = args.port_base
     ep = [f"tcp://127.0.0.1:{base + k}" for k in range(4)]
@@ -208,7 +210,7 @@ class Show:
 
         from ..practice.bus import OnsetBus
         from ..practice.readout_out import ReadoutOut
-        from ..supervisor import Supervisor
+        from ..process.supervisor import Supervisor
 
         self.mode = mode
         self.ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()

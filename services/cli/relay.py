@@ -1,4 +1,5 @@
-"""``livedrummer relay``: fan a synth's pose stream out to many displays (see services.relay).
+"""``livedrummer relay``: fan a synth's pose stream out to many displays (see
+services.relay.service).
 
 Once bound it prints one JSON line on stdout (``{"service": "relay", "pub": ..., "control":
 ..., "upstream": ...}``), tells a launcher or systemd it is ready, and forwards until Ctrl-C /
@@ -10,12 +11,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import Subparsers, add_command
 from .keys import add_curve_options, security_from_args
+from .parsing import Subparsers, add_command
 
 
 def register(sub: Subparsers) -> None:
-    from ..relay import DEFAULT_CONTROL, DEFAULT_PUB
+    from ..relay.service import DEFAULT_CONTROL, DEFAULT_PUB
 
     p = add_command(sub, "relay", run)
     p.add_argument("--upstream", required=True, metavar="ENDPOINT",
@@ -36,8 +37,8 @@ def run(args: argparse.Namespace) -> int:
 
     from livedrummer.timeline.clock import MonotonicClock
 
-    from ..relay import RelayConfig, RelayService
-    from ..service import serve
+    from ..process.service import serve
+    from ..relay.service import RelayConfig, RelayService
 
     config = RelayConfig(upstream=args.upstream, upstream_control=args.upstream_control,
                          pub=args.pub, control=args.control,

@@ -32,27 +32,18 @@ from livedrummer.render.camera import CAMERA_NAMES
 from livedrummer.render.frame_split import parse_jobs
 from livedrummer.timeline.span import Position, parse_position, span_seconds
 
-from .common import (
-    DEMO_MAP,
-    Subparsers,
+from .files import DEMO_MAP, add_channel_option, demo_groove, read_performance
+from .parsing import Subparsers, add_command, add_renamed
+from .performer import (
     add_avatar_option,
-    add_background_option,
-    add_channel_option,
-    add_command,
     add_kit_option,
-    add_look_option,
     add_motion_options,
-    add_renamed,
     avatar_of,
-    background_of,
-    demo_groove,
     fitted,
-    lights_of,
-    parse_aa,
-    read_performance,
     rig_for,
     sticking_of,
 )
+from .picture import add_background_option, add_look_option, background_of, lights_of, parse_aa
 
 if TYPE_CHECKING:
     from livedrummer.avatar.model import Avatar

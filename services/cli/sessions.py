@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import Subparsers, add_command, add_renamed
+from .parsing import Subparsers, add_command, add_renamed
 
 
 def register(sub: Subparsers) -> None:
@@ -31,7 +31,7 @@ def _usage(args: argparse.Namespace) -> int:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    from ..journal import list_sessions, sessions_dir
+    from ..input.journal import list_sessions, sessions_dir
 
     infos = list_sessions(args.sessions_dir)
     if not infos:
@@ -50,7 +50,7 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def run_export(args: argparse.Namespace) -> int:
-    from ..journal import export_session, find_session
+    from ..input.journal import export_session, find_session
 
     path = find_session(args.session, args.sessions_dir)
     detect = args.tempo is None

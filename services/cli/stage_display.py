@@ -27,9 +27,9 @@ def run_stage_live(args: argparse.Namespace) -> int:
     from livedrummer.stage.stagefile import load_stage
 
     from ..display.stage_live import StageConfig, StageDisplay, StagePerformer
-    from ..service import serve
-    from .common import lights_of
+    from ..process.service import serve
     from .keys import security_from_args
+    from .picture import lights_of
     from .render import parse_size
     from .staging import check_room
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from livedrummer.errors import LivedrummerError
 
-from .common import read_performance
+from .files import read_performance
 
 if TYPE_CHECKING:
     from livedrummer.midi.notemap import NoteMap

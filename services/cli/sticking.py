@@ -17,15 +17,9 @@ import argparse
 import json
 from typing import TYPE_CHECKING, Any
 
-from .common import (
-    Subparsers,
-    add_channel_option,
-    add_command,
-    add_kit_option,
-    add_map_option,
-    add_sticking_options,
-    read_performance,
-)
+from .files import add_channel_option, add_map_option, read_performance
+from .parsing import Subparsers, add_command
+from .performer import add_kit_option, add_sticking_options
 
 if TYPE_CHECKING:
     from livedrummer.kit.model import Kit

@@ -13,19 +13,11 @@ import sys
 from contextlib import nullcontext
 from typing import TYPE_CHECKING
 
-from .common import (
-    Subparsers,
-    add_avatar_option,
-    add_command,
-    add_kit_option,
-    add_osc_options,
-    add_style_options,
-    cues_of,
-    osc_allow,
-    rig_for,
-)
 from .keys import add_curve_options, security_from_args
+from .parsing import Subparsers, add_command
+from .performer import add_avatar_option, add_kit_option, add_style_options, rig_for
 from .settings import add_settings_option, played_by, settings_of
+from .show_control import add_osc_options, cues_of, osc_allow
 
 if TYPE_CHECKING:
     from livedrummer.live.settings import Delay
@@ -84,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.timeline.clock import MonotonicClock
 
-    from ..service import serve
+    from ..process.service import serve
     from ..synth.curveworker import CurveWorker
     from ..synth.service import SynthConfig, SynthService
 

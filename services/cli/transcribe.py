@@ -14,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import Subparsers, add_command
+from .parsing import Subparsers, add_command
 
 SILENCE_DBFS = -70.0
 
@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     from livedrummer.acoustic.transcribe import hits_to_midi
     from livedrummer.errors import LivedrummerError
 
-    from ..audiofile import SAMPLE_RATE, read_audio
+    from ..input.audiofile import SAMPLE_RATE, read_audio
 
     profile = load_profile(args.audio_profile)
     mapping = parse_channel_map(args.channels) if args.channels else None

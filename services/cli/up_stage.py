@@ -6,7 +6,7 @@ synth (its kit, map, avatar, ``--performer K``), on ports of their own; then ONE
 drawing the whole stage (``display --live --stage``, :mod:`services.display.stage_live`),
 subscribed to every synth. Performer K's services use ``--port-base + 20*K`` + 0, 1 (input
 pub, control) and + 10, 11 (synth pub, control). Everything runs under the
-:mod:`services.supervisor` as ``up`` runs it: started in order, each after the previous one
+:mod:`services.process.supervisor` as ``up`` runs it: started in order, each after the previous one
 said ready, a dead service restarted alone, all stopped on Ctrl-C, ``--seconds`` or when the
 window closes; ``--headless``, ``--frames-dir``, ``--video``, ``--wait``, ``--curve-secret``
 mean what they mean for ``up``.
@@ -46,14 +46,14 @@ import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..program import program_argv
+from ..process.program import program_argv
 
 if TYPE_CHECKING:
     from livedrummer.live.settings import Delay, ShowSettings
     from livedrummer.stage.stagefile import Performer
     from livedrummer.stage.variation import Variation
 
-    from ..supervisor import ServiceSpec
+    from ..process.supervisor import ServiceSpec
 
 PORTS_PER_PERFORMER = 20
 
@@ -66,9 +66,9 @@ def stage_specs(
     that its input daemon and its synths are given."""
     from livedrummer.stage.stagefile import load_stage
 
-    from ..supervisor import ServiceSpec
+    from ..process.supervisor import ServiceSpec
     from .staging import check_room
-    from .up import curve_argv, frame_size, recorded, windowed
+    from .up_launch import curve_argv, frame_size, recorded, windowed
 
     stage = load_stage(stage_file)
     check_room(stage)
@@ -139,7 +139,7 @@ def performer_settings(performer: Performer, stage_file: Path, delay: Delay) -> 
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.stage.source import parse_source
 
-    from .common import DEMO_MAP, read_performance
+    from .files import DEMO_MAP, read_performance
 
     note_map = performer.map
     if note_map == AUTO:
@@ -160,7 +160,7 @@ def _input(args: argparse.Namespace, stage_file: Path, k: int, performer: Perfor
     """Performer ``k``'s input daemon, waiting for its ``copies`` synths to subscribe."""
     from livedrummer.stage.source import parse_source
 
-    from ..supervisor import ServiceSpec
+    from ..process.supervisor import ServiceSpec
 
     source = parse_source(performer.source or "", stage_file.parent)
     src = source.input_argv()
@@ -177,7 +177,7 @@ def run_stage(args: argparse.Namespace) -> int:
     """``up --stage``: check everything, then supervise the stage's services."""
     from livedrummer.errors import ConfigError
 
-    from .up import check_before_start, resolve
+    from .up_launch import check_before_start, resolve
 
     if args.seconds is not None and not args.seconds > 0:
         raise ConfigError(f"--seconds: expected > 0 (got {args.seconds})")
@@ -193,8 +193,8 @@ def run_stage(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace, specs: list[ServiceSpec]) -> int:
     from livedrummer.errors import ConfigError
 
-    from ..supervisor import Supervisor
-    from .up import _supervise
+    from ..process.supervisor import Supervisor
+    from .up_launch import supervise
 
     last = max(int(s.argv[s.argv.index("--performer") + 1]) for s in specs
                if "--performer" in s.argv)  # fmt: skip
@@ -204,4 +204,4 @@ def _run(args: argparse.Namespace, specs: list[ServiceSpec]) -> int:
         args.video.parent.mkdir(parents=True, exist_ok=True)
     performers = sum(1 for s in specs if s.name.startswith("synth-"))
     print(f"up: a stage of {performers} live performers from {args.stage}", flush=True)
-    return _supervise(args, Supervisor(specs))
+    return supervise(args, Supervisor(specs))

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 
     from livedrummer.avatar.model import Avatar
 
-    from ..net import Security
+    from ..wire.net import Security
 
 log = logging.getLogger("livedrummer.display")
 
@@ -52,7 +52,7 @@ def check_synth_avatar(
 ) -> str | None:
     """Ask the synth at ``endpoint`` for READY and warn (log and return the line) when its
     avatar is not ``avatar``; None when they agree."""
-    from ..net import request_ready
+    from ..wire.net import request_ready
 
     hello = Hello("display", "frames", avatar="" if avatar is None else avatar.digest)
     try:

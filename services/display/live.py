@@ -20,13 +20,13 @@ its render time, its show time, the show time of the pose drawn and of the newes
 received by then, so a test or a bench can check contacts and latency without pixels.
 
 Bad input. The stream is read by a :class:`~services.display.pose_stream.PoseStream` (the
-stage display's too), on the one :class:`~services.stream_rx.StreamReceiver`: the SUB socket
+stage display's too), on the one :class:`~services.wire.stream_rx.StreamReceiver`: the SUB socket
 takes every message that starts with the protocol magic (so a synth of another protocol
 version is seen and counted, not filtered into silence); a message that fails to decode, or a
 valid one that is not a POSE (or a SHOWN_ONSET or SHOWN_CONTROL, the onsets and controls the
 synth forwards: counted, sequence-checked and left to the sound process, which subscribes to
 them on its own socket, :mod:`~services.display.live_sound`), is dropped and counted per kind
-in ``bad`` (:class:`~services.badmsg.BadMessages`, logged once per kind, totals logged when
+in ``bad`` (:class:`~services.wire.badmsg.BadMessages`, logged once per kind, totals logged when
 the loop ends and in ``summary()``), and the next one is read. Sequence numbers follow the
 one policy of :mod:`livedrummer.protocol.sequence`: a gap is counted in ``missing``, a
 restarted synth is taken, a duplicate is dropped.
@@ -64,7 +64,7 @@ forwarded onsets and the poses received (:class:`~livedrummer.render.live_overla
 a deferred recording keeps the onsets with their arrival times and replays both into fresh
 strips, so each frame shows what had arrived by its render time.
 
-Life cycle: the service base's (:mod:`services.service`); readiness comes after the first
+Life cycle: the service base's (:mod:`services.process.service`); readiness comes after the first
 frame that drew the drummer, and a control socket answering HELLO with READY (service
 "display", role "frames", the pose format) is bound only when ``config.control`` names one,
 since ``up`` may run several displays.
@@ -101,8 +101,8 @@ from livedrummer.render.background import Background
 from livedrummer.render.body_scene import frame_from_pose
 from livedrummer.render.live_overlay import LiveStrips
 
-from ..net import Security
-from ..service import OnReady, Service
+from ..process.service import OnReady, Service
+from ..wire.net import Security
 from .pose_stream import PoseStream
 from .record import LiveRecorder
 from .showctl import DisplayShow, replay_stage

@@ -20,7 +20,7 @@ pedal closing), held and placed the same way: the mixer applies it on the sample
 show time, and the ringing cymbal or hi-hat stops when the picture's does.
 
 One loop, no Python in the audio thread: wait on the socket (the one
-:class:`~services.stream_rx.StreamReceiver`, its sequence numbers not read: the subscription
+:class:`~services.wire.stream_rx.StreamReceiver`, its sequence numbers not read: the subscription
 takes two kinds of the stream only) for up to a millisecond, read what came, look at the
 FIFO, top it up. :class:`LiveSound` starts and stops the process from the display; it waits
 for the output to open and, where there is none, says so in one line and the display runs
@@ -46,8 +46,8 @@ import zmq
 
 from livedrummer.protocol import Kind, topic
 
-from ..net import Security
-from ..stream_rx import StreamReceiver
+from ..wire.net import Security
+from ..wire.stream_rx import StreamReceiver
 from .output_latency import output_latency_s, output_period
 
 log = logging.getLogger("livedrummer.display")

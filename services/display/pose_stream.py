@@ -6,7 +6,7 @@ the same stream the same way: a synth's POSE messages go into a
 stage cues the synth forwards on that stream (SHOWN_ONSET, SHOWN_CONTROL, STAGE_CUE) share its
 numbers, so they are taken and numbered too, never counted as bad or as loss. Both used to
 keep a near-copy of that loop with different restart rules; :class:`PoseStream` is it once,
-on the one :class:`~services.stream_rx.StreamReceiver`. What a display does with the forwarded
+on the one :class:`~services.wire.stream_rx.StreamReceiver`. What a display does with the forwarded
 messages (sound, strips, cues) stays the display's: :meth:`PoseStream.drain` hands them back.
 
 A restarted synth (its numbers begin again) is taken and counted in ``restarts``; its poses go
@@ -26,9 +26,9 @@ from livedrummer.kit.model import Kit
 from livedrummer.live.track import PoseTrack
 from livedrummer.protocol import Kind, Message, Pose, PoseFormat
 
-from ..badmsg import BadMessages
-from ..net import Security
-from ..stream_rx import DRAIN_BUDGET, StreamReceiver
+from ..wire.badmsg import BadMessages
+from ..wire.net import Security
+from ..wire.stream_rx import DRAIN_BUDGET, StreamReceiver
 
 POSE_STREAM_KINDS = (Kind.POSE, Kind.SHOWN_ONSET, Kind.SHOWN_CONTROL, Kind.STAGE_CUE)
 

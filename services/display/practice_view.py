@@ -6,7 +6,7 @@
 SUB socket on loopback carrying one JSON object a message (``{"plan": ...}``,
 ``{"plan_again": ...}``, ``{"hit": ...}``, ``{"summary": ...}``: sent by
 :mod:`services.practice.readout_out`); a message that is not JSON or not one of those is
-dropped and counted (:class:`~services.badmsg.BadMessages`), never fatal. Plans also feed the
+dropped and counted (:class:`~services.wire.badmsg.BadMessages`), never fatal. Plans also feed the
 teacher's clock (:class:`~livedrummer.practice.teacher.TeacherClock`).
 
 The teacher is the reference animated offline (``teacher``: a
@@ -55,9 +55,9 @@ from livedrummer.render.kitmesh import build_kit_mesh
 from livedrummer.render.overlay_raster import draw_text
 from livedrummer.render.practice_hud import PracticePanel, panel_image
 
-from ..badmsg import BadMessages
-from ..net import connect, socket
-from ..stream_rx import DRAIN_BUDGET, waiting
+from ..wire.badmsg import BadMessages
+from ..wire.net import connect, socket
+from ..wire.stream_rx import DRAIN_BUDGET, waiting
 from .renderer import Renderer
 
 log = logging.getLogger("livedrummer.display")

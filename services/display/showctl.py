@@ -4,7 +4,7 @@ applied frame by frame.
 Why here and not in the loop. The display's loop draws frames; what the audience sees besides
 the drummer (the camera, the blackout, the show lights) is the pure
 :class:`~livedrummer.live.stage.Stage`, fed by this module from two sources: an
-:class:`~services.osc.OscEndpoint` (``display --osc PORT``, or ``up --osc``'s forwarding), and
+:class:`~services.show.osc.OscEndpoint` (``display --osc PORT``, or ``up --osc``'s forwarding), and
 the synth's STAGE_CUE messages (a ``bar`` cue's camera and blackout, sent when the synth's beat
 tracker reaches the bar, stamped with the bar's show time; the loop hands them to
 :meth:`DisplayShow.schedule`, which takes a bar cue's lights from its own copy of the cue list,
@@ -48,7 +48,7 @@ from livedrummer.kit.model import Kit
 from livedrummer.live.cues import Cue, CuedStage, fire_stage, stage_cue_of, with_lights_of
 from livedrummer.live.stage import Stage, camera_name
 
-from ..osc import (
+from ..show.osc import (
     CUE,
     DISPLAY_ADDRESSES,
     LIGHT,

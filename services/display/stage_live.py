@@ -52,8 +52,8 @@ from livedrummer.live.ahead import RenderAhead
 from livedrummer.render.body_scene import frame_from_pose
 from livedrummer.stage.formation import Placement
 
-from ..net import Security
-from ..service import OnReady, Service
+from ..process.service import OnReady, Service
+from ..wire.net import Security
 from .live import FrameClock
 from .pose_stream import PoseStream
 from .stage_export import StagePainter

@@ -10,8 +10,8 @@ socket subscribed to k topics counts k), which is how a launcher or a test gets 
 from the first one without sleeping. Start-up, the control socket (a second thread answering
 HELLO with READY: service "input", role "source", performer, endpoints, so a client can wait
 for the daemon instead of guessing), readiness (once bound) and shutdown are the service
-base's (:mod:`services.service`); :meth:`InputDaemon.open` binds the pub socket and opens the
-journal, :meth:`InputDaemon.release` closes the source, the journal (END record with the
+base's (:mod:`services.process.service`); :meth:`InputDaemon.open` binds the pub socket and opens
+the journal, :meth:`InputDaemon.release` closes the source, the journal (END record with the
 summary) and the socket.
 
 Stream. Every message on the events stream (ONSET, CONTROL, GAP, HEARTBEAT) takes the next
@@ -26,7 +26,7 @@ returns, a GAP (reason SOURCE_LOST, dropped 0: unknown) spans the outage. Device
 remote messages, unmapped notes and journal write errors are logged once per kind and
 counted; the counts go to the log and into the journal's END record at shutdown. Bad
 messages on the control socket (and, for a remote source, on its SUB socket) are counted per
-kind by :class:`~services.badmsg.BadMessages` (``bad_control``; ``summary()["bad_messages"]``).
+kind by :class:`~services.wire.badmsg.BadMessages` (``bad_control``; ``summary()["bad_messages"]``).
 The daemon keeps running through all of them.
 
 Load and shedding. The daemon holds no queue of its own on the serial and file paths: the main
@@ -34,14 +34,14 @@ thread reads what the device delivered, journals it and publishes it, so a flood
 the device (a tty's bounded kernel buffer; a real UART at 31,250 baud cannot flood at all)
 and never in our memory. The rtmidi path has one bounded queue, rtmidi's own (see
 :mod:`services.input.midiport`: 65,536 messages, drained every 0.5 ms). Publication never
-blocks: past the high-water mark (``services.net.DEFAULT_HWM`` messages per subscriber)
+blocks: past the high-water mark (``services.wire.net.DEFAULT_HWM`` messages per subscriber)
 ZeroMQ drops messages for that slow subscriber only, which it sees as a sequence gap; every
 event was journaled before it was offered to ZeroMQ, so the journal stays complete.
 ``services/bench/flood.py`` measures this at 10,000 notes/s.
 
 Security. With ``config.security`` holding a key pair, both sockets are CURVE servers; with
 an allow folder, a ZAP authenticator (started and stopped by the service base) lets in only the
-clients whose public keys are there (see :mod:`services.net`).
+clients whose public keys are there (see :mod:`services.wire.net`).
 """
 
 from __future__ import annotations
@@ -71,10 +71,10 @@ from livedrummer.protocol.journal import SUFFIX as JOURNAL_SUFFIX
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import CONTROL_DTYPE, ONSET_DTYPE, Control, Onset
 
-from ..journal import JournalWriter, new_session_id, sessions_dir
-from ..net import Security, bind, socket
-from ..service import OnReady, Service
+from ..process.service import OnReady, Service
+from ..wire.net import Security, bind, socket
 from .base import Event, Source
+from .journal import JournalWriter, new_session_id, sessions_dir
 from .remote import RemoteSource
 
 #: While the source is absent, one status line this often (seconds).

@@ -1,20 +1,20 @@
 """Remote source: another site's input daemon, for a remote jam.
 
-Subscribes (SUB, the one :class:`~services.stream_rx.StreamReceiver`: sequence numbers by the
+Subscribes (SUB, the one :class:`~services.wire.stream_rx.StreamReceiver`: sequence numbers by the
 policy of :mod:`livedrummer.protocol.sequence`) to the remote daemon's event stream and turns
 its ONSET/CONTROL messages
 back into events, restamped with the local shared clock at arrival: the remote clock is
 another machine's, and the local pipeline must see the hit when it arrives here. Every
 message is validated by :func:`livedrummer.protocol.decode`; bad ones are dropped, counted
-per kind in ``bad`` (a :class:`~services.badmsg.BadMessages`, logged once per kind) and in
+per kind in ``bad`` (a :class:`~services.wire.badmsg.BadMessages`, logged once per kind) and in
 total in the problems report. The SUB socket takes every message that starts with the
-protocol magic (:func:`~services.net.subscribe_protocol`), so a remote site speaking another
+protocol magic (:func:`~services.wire.net.subscribe_protocol`), so a remote site speaking another
 protocol version is counted as such rather than heard as silence; a valid message of a kind
 not carried on an events stream (HELLO, READY) is counted as "unexpected". A sequence gap
 on the remote stream, or a GAP the remote published, becomes a local GAP with reason
 UPSTREAM, so loss stays visible end to end.
 
-Security: with a :class:`~services.net.Security` holding our key pair and the remote
+Security: with a :class:`~services.wire.net.Security` holding our key pair and the remote
 daemon's public key, the SUB socket is a CURVE client (encrypted; refused by a daemon whose
 allow folder lacks our key, which looks like silence here).
 
@@ -61,8 +61,8 @@ from livedrummer.protocol import (
 from livedrummer.timeline.clock import Clock
 from livedrummer.timeline.events import Control, ControlKind, Onset
 
-from ..net import Security, check_endpoint, connect, socket
-from ..stream_rx import StreamReceiver
+from ..wire.net import Security, check_endpoint, connect, socket
+from ..wire.stream_rx import StreamReceiver
 from .base import Event, Problems, Source
 
 log = logging.getLogger("livedrummer.input")

@@ -9,9 +9,9 @@ the shared clock, unchanged, so a hit is judged at the same time as when the rig
 itself. The rig connects before it starts the daemon, and the daemon waits for its subscribers
 (``input --wait-subscribers``), so no hit is published before the rig listens.
 
-Bad input: the stream is read by the one :class:`~services.stream_rx.StreamReceiver`; a
+Bad input: the stream is read by the one :class:`~services.wire.stream_rx.StreamReceiver`; a
 message that does not decode, or is not an onset, control, gap or heartbeat, is counted and
-logged (:class:`~services.badmsg.BadMessages`), never fatal; a gap in the sequence numbers
+logged (:class:`~services.wire.badmsg.BadMessages`), never fatal; a gap in the sequence numbers
 (hits lost on the way) is counted in :attr:`OnsetBus.missing` and logged, a restarted daemon
 is taken and a duplicate dropped (:mod:`livedrummer.protocol.sequence`).
 
@@ -31,7 +31,7 @@ import zmq
 from livedrummer.protocol import Kind
 from livedrummer.timeline.events import Onset
 
-from ..stream_rx import StreamReceiver
+from ..wire.stream_rx import StreamReceiver
 
 log = logging.getLogger("livedrummer.practice")
 _KINDS = (Kind.ONSET, Kind.CONTROL, Kind.GAP, Kind.HEARTBEAT)

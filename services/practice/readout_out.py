@@ -24,7 +24,7 @@ from typing import Any
 
 import zmq
 
-from ..net import bind, socket
+from ..wire.net import bind, socket
 
 REPEAT_S = 1.0
 

@@ -37,22 +37,22 @@ it then (``display --live --sound``), a score strip can draw it. Each control (a
 the hi-hat pedal) is forwarded likewise as SHOWN_CONTROL, so the display's sound stops a
 grabbed cymbal or a closing hi-hat at the show time the picture's stops (an ensemble copy's
 ``vary`` shift is not applied to controls: a grab stays where it was played).
-The input stream is read by the one :class:`~services.stream_rx.StreamReceiver`: its sequence
+The input stream is read by the one :class:`~services.wire.stream_rx.StreamReceiver`: its sequence
 numbers follow :mod:`livedrummer.protocol.sequence` (a gap upstream is counted in ``missing``
 and logged, a restarted input daemon is taken, a duplicate dropped). The
-service base (:mod:`services.service`) runs the control socket (a second thread answering HELLO
-with READY; the READY carries the pose format, which a display checks against its own), start-up
-and shutdown; the synth tells a launcher or systemd it is ready once its first poses are
+service base (:mod:`services.process.service`) runs the control socket (a second thread answering
+HELLO with READY; the READY carries the pose format, which a display checks against its own),
+start-up and shutdown; the synth tells a launcher or systemd it is ready once its first poses are
 published (it is ready when it does its job, not when its sockets are bound).
 
 Bad input. Every message on the SUB socket (subscribed to the protocol magic, so another
 protocol version is seen, not filtered away) and on the control socket is decoded and
 checked; a bad one is dropped, counted per kind (``bad_events``, ``bad_control``:
-:class:`~services.badmsg.BadMessages`, logged once per kind, totals logged at exit and in
+:class:`~services.wire.badmsg.BadMessages`, logged once per kind, totals logged at exit and in
 ``summary()["bad_messages"]``) and the loop carries on with the next message.
 
 Show control. With ``config.osc_port`` the loop also reads an OSC port
-(:mod:`services.osc`) before each tick: a preset, a parameter or a cue changes the style
+(:mod:`services.show.osc`) before each tick: a preset, a parameter or a cue changes the style
 (eased in, :mod:`livedrummer.live.style`), ``/livedrummer/state`` is answered with the preset,
 every parameter and the performer's state. A cue list's ``bar`` cues fire when the beat
 tracker (:mod:`livedrummer.live.beat`) hears their bar start
@@ -66,7 +66,7 @@ mark; it sees the gap in the sequence numbers); one performer per synth.
 
 Security: ``config.security`` with a key pair makes the pose and control sockets CURVE
 servers (an allow folder starts a ZAP authenticator, stopped at shutdown); with the input
-daemon's public key too, the SUB socket is a CURVE client of it (see :mod:`services.net`).
+daemon's public key too, the SUB socket is a CURVE client of it (see :mod:`services.wire.net`).
 """
 
 from __future__ import annotations
@@ -97,10 +97,10 @@ from livedrummer.protocol import (
 from livedrummer.stage.variation import Variation, vary_live
 from livedrummer.timeline.clock import Clock
 
-from ..net import Security, bind, socket
-from ..osc import CUE, PREFIX, STATE, SYNTH_ADDRESSES, Command, OscEndpoint, state_pairs
-from ..service import OnReady, Service
-from ..stream_rx import StreamReceiver
+from ..process.service import OnReady, Service
+from ..show.osc import CUE, PREFIX, STATE, SYNTH_ADDRESSES, Command, OscEndpoint, state_pairs
+from ..wire.net import Security, bind, socket
+from ..wire.stream_rx import StreamReceiver
 from .answerlock import AnswerFirstLock
 
 log = logging.getLogger("livedrummer.synth")
@@ -131,7 +131,7 @@ class SynthConfig:
     input_offset_s: float = 0.0
     security: Security = field(default_factory=Security)
     avatar: str = ""  # digest of the avatar whose proportions the rig has, announced in READY
-    osc_port: int | None = None  # OSC show control (services.osc): preset, param, state
+    osc_port: int | None = None  # OSC show control (services.show.osc): preset, param, state
     osc_allow: tuple[str, ...] = ()  # OSC senders besides loopback
     preset: str = "neutral"  # the expression's name, for the state reply
     cues: dict[str, Cue] = field(default_factory=dict)  # fired by OSC /livedrummer/cue
@@ -288,7 +288,7 @@ class SynthService(Service):
                         next_tick = max(next_tick + period, now)
 
     def command(self, cmd: Command) -> None:
-        """One OSC command (see :mod:`services.osc`): a preset, a parameter or the state."""
+        """One OSC command (see :mod:`services.show.osc`): a preset, a parameter or the state."""
         from livedrummer.body.expression import load_expression
         from livedrummer.errors import LivedrummerError
 

@@ -20,14 +20,15 @@ cell, the size), and each frame starts from a copy of it (a blit of colour and d
   same depth there, so an untouched tile's shadows are the layer's;
 * the drummer and the sticks, over everything, depth-tested against the copied depth.
 
-Same shaders, same uniforms, so the same pixels as the full path: ``tests/test_render_layer.py``
-compares the two frame for frame. The floor is blended; in the full path it is drawn after
-the drummer, here before it. Both give the nearer surface where the drummer stands in front of
-the floor, and nothing is ever below it. Limits: only for the renderer's own off-screen target,
-without multisampling, when it clears the frame, not for the kit drawn as an occluder only, and
-not for an avatar with transparent (BLEND) parts, whose blending depends on draw order: the
-renderer takes the full path there; and while the view changes every frame (a camera move):
-the layer is rebuilt once the view has held for two frames (:meth:`LayerPass.still`).
+Same shaders, same uniforms, so the same pixels as the full path:
+``tests/services/display/test_render_layer.py`` compares the two frame for frame. The floor is
+blended; in the full path it is drawn after the drummer, here before it. Both give the nearer
+surface where the drummer stands in front of the floor, and nothing is ever below it. Limits: only
+for the renderer's own off-screen target, without multisampling, when it clears the frame, not for
+the kit drawn as an occluder only, and not for an avatar with transparent (BLEND) parts, whose
+blending depends on draw order: the renderer takes the full path there; and while the view changes
+every frame (a camera move): the layer is rebuilt once the view has held for two frames
+(:meth:`LayerPass.still`).
 """
 
 from __future__ import annotations

@@ -1,0 +1,3 @@
+"""The relay service (:mod:`.service`): one synth's pose stream fanned out to many
+displays, over several machines.
+"""
