@@ -33,22 +33,24 @@ BONES: dict[str, tuple[str | None, tuple[float, float, float]]] = {
     "hair": ("head", (0.0, 1.70, -0.05)),
 }
 for _side, _sx in (("left", 1.0), ("right", -1.0)):
-    BONES.update({
-        f"{_side}Shoulder": ("chest", (_sx * 0.04, 1.40, 0.0)),
-        f"{_side}UpperArm": (f"{_side}Shoulder", (_sx * 0.18, 1.40, 0.0)),
-        f"{_side}LowerArm": (f"{_side}UpperArm", (_sx * 0.47, 1.40, 0.0)),
-        f"{_side}Hand": (f"{_side}LowerArm", (_sx * 0.73, 1.40, 0.0)),
-        f"{_side}MiddleProximal": (f"{_side}Hand", (_sx * 0.82, 1.40, 0.0)),
-        f"{_side}MiddleIntermediate": (f"{_side}MiddleProximal", (_sx * 0.865, 1.40, 0.0)),
-        f"{_side}MiddleDistal": (f"{_side}MiddleIntermediate", (_sx * 0.89, 1.40, 0.0)),
-        f"{_side}ThumbMetacarpal": (f"{_side}Hand", (_sx * 0.75, 1.39, 0.03)),
-        f"{_side}ThumbProximal": (f"{_side}ThumbMetacarpal", (_sx * 0.78, 1.39, 0.06)),
-        f"{_side}ThumbDistal": (f"{_side}ThumbProximal", (_sx * 0.80, 1.39, 0.08)),
-        f"{_side}UpperLeg": ("hips", (_sx * 0.09, 0.90, 0.0)),
-        f"{_side}LowerLeg": (f"{_side}UpperLeg", (_sx * 0.09, 0.50, 0.01)),
-        f"{_side}Foot": (f"{_side}LowerLeg", (_sx * 0.09, 0.08, 0.0)),
-        f"{_side}Toes": (f"{_side}Foot", (_sx * 0.09, 0.02, 0.14)),
-    })  # fmt: skip
+    BONES.update(
+        {
+            f"{_side}Shoulder": ("chest", (_sx * 0.04, 1.40, 0.0)),
+            f"{_side}UpperArm": (f"{_side}Shoulder", (_sx * 0.18, 1.40, 0.0)),
+            f"{_side}LowerArm": (f"{_side}UpperArm", (_sx * 0.47, 1.40, 0.0)),
+            f"{_side}Hand": (f"{_side}LowerArm", (_sx * 0.73, 1.40, 0.0)),
+            f"{_side}MiddleProximal": (f"{_side}Hand", (_sx * 0.82, 1.40, 0.0)),
+            f"{_side}MiddleIntermediate": (f"{_side}MiddleProximal", (_sx * 0.865, 1.40, 0.0)),
+            f"{_side}MiddleDistal": (f"{_side}MiddleIntermediate", (_sx * 0.89, 1.40, 0.0)),
+            f"{_side}ThumbMetacarpal": (f"{_side}Hand", (_sx * 0.75, 1.39, 0.03)),
+            f"{_side}ThumbProximal": (f"{_side}ThumbMetacarpal", (_sx * 0.78, 1.39, 0.06)),
+            f"{_side}ThumbDistal": (f"{_side}ThumbProximal", (_sx * 0.80, 1.39, 0.08)),
+            f"{_side}UpperLeg": ("hips", (_sx * 0.09, 0.90, 0.0)),
+            f"{_side}LowerLeg": (f"{_side}UpperLeg", (_sx * 0.09, 0.50, 0.01)),
+            f"{_side}Foot": (f"{_side}LowerLeg", (_sx * 0.09, 0.08, 0.0)),
+            f"{_side}Toes": (f"{_side}Foot", (_sx * 0.09, 0.02, 0.14)),
+        }
+    )
 
 #: leaf ends of the boxes (a bone with no child in BONES)
 ENDS = {"head": (0.0, 1.75, 0.0), "hair": (0.0, 1.70, -0.12)}
@@ -77,13 +79,22 @@ _UNREAL_LIMB = {"Shoulder": "clavicle", "UpperArm": "upperarm", "LowerArm": "low
                 "middle_02", "MiddleDistal": "middle_03", "ThumbMetacarpal": "thumb_01",
                 "ThumbProximal": "thumb_02", "ThumbDistal": "thumb_03"}  # fmt: skip
 _TORSO_NAMES = {
-    "mixamo": {"hips": "Hips", "spine": "Spine", "chest": "Spine1", "neck": "Neck",
-               "head": "Head"},
-    "blender": {"hips": "spine", "spine": "spine.001", "chest": "spine.002", "neck": "spine.004",
-                "head": "spine.006"},
-    "unreal": {"hips": "pelvis", "spine": "spine_01", "chest": "spine_02", "neck": "neck_01",
-               "head": "head"},
-}  # fmt: skip
+    "mixamo": {"hips": "Hips", "spine": "Spine", "chest": "Spine1", "neck": "Neck", "head": "Head"},
+    "blender": {
+        "hips": "spine",
+        "spine": "spine.001",
+        "chest": "spine.002",
+        "neck": "spine.004",
+        "head": "spine.006",
+    },
+    "unreal": {
+        "hips": "pelvis",
+        "spine": "spine_01",
+        "chest": "spine_02",
+        "neck": "neck_01",
+        "head": "head",
+    },
+}
 
 
 def node_name(bone: str, naming: str) -> str:
@@ -116,12 +127,20 @@ def png_rgba(pixels: np.ndarray) -> bytes:
     raw = b"".join(b"\x00" + pixels[r].astype(np.uint8).tobytes() for r in range(h))
 
     def chunk(kind: bytes, data: bytes) -> bytes:
-        return struct.pack(">I", len(data)) + kind + data + struct.pack(
-            ">I", zlib.crc32(kind + data) & 0xFFFFFFFF)  # fmt: skip
+        return (
+            struct.pack(">I", len(data))
+            + kind
+            + data
+            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+        )
 
     ihdr = struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw))
-            + chunk(b"IEND", b""))  # fmt: skip
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", ihdr)
+        + chunk(b"IDAT", zlib.compress(raw))
+        + chunk(b"IEND", b"")
+    )
 
 
 TEXTURE = np.zeros((4, 4, 4), np.uint8)
@@ -181,11 +200,19 @@ def _child(bone: str) -> str | None:
         return main[bone]
     side = "left" if bone.startswith("left") else "right"
     limb = bone[len(side) :]
-    nxt = {"Shoulder": "UpperArm", "UpperArm": "LowerArm", "LowerArm": "Hand",
-           "Hand": "MiddleProximal", "MiddleProximal": "MiddleIntermediate",
-           "MiddleIntermediate": "MiddleDistal", "ThumbMetacarpal": "ThumbProximal",
-           "ThumbProximal": "ThumbDistal", "UpperLeg": "LowerLeg", "LowerLeg": "Foot",
-           "Foot": "Toes"}.get(limb)  # fmt: skip
+    nxt = {
+        "Shoulder": "UpperArm",
+        "UpperArm": "LowerArm",
+        "LowerArm": "Hand",
+        "Hand": "MiddleProximal",
+        "MiddleProximal": "MiddleIntermediate",
+        "MiddleIntermediate": "MiddleDistal",
+        "ThumbMetacarpal": "ThumbProximal",
+        "ThumbProximal": "ThumbDistal",
+        "UpperLeg": "LowerLeg",
+        "LowerLeg": "Foot",
+        "Foot": "Toes",
+    }.get(limb)
     return f"{side}{nxt}" if nxt else None
 
 
@@ -200,8 +227,20 @@ def _box(a: np.ndarray, b: np.ndarray, thick: float) -> tuple[np.ndarray, np.nda
     v = np.cross(d, u)
     h = thick / 2
     corners = [end + su * h * u + sv * h * v for end in (a, b) for su in (-1, 1) for sv in (-1, 1)]
-    faces = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1),
-             (2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]  # fmt: skip
+    faces = [
+        (0, 1, 3),
+        (0, 3, 2),
+        (4, 6, 7),
+        (4, 7, 5),
+        (0, 4, 5),
+        (0, 5, 1),
+        (2, 3, 7),
+        (2, 7, 6),
+        (0, 2, 6),
+        (0, 6, 4),
+        (1, 5, 7),
+        (1, 7, 3),
+    ]
     return np.array(corners), np.array(faces)
 
 
@@ -218,9 +257,18 @@ def _segments(
         end = pos[child] if child is not None else pos.get(f"END:{bone}")
         if end is None:
             continue
-        thick = THICK.get(bone, 0.03 if "Middle" in bone or "Thumb" in bone else
-                          0.04 if "Shoulder" in bone else 0.07 if "Arm" in bone or "Hand" in bone
-                          else 0.04 if "Foot" in bone or "Toes" in bone else 0.10)  # fmt: skip
+        thick = THICK.get(
+            bone,
+            0.03
+            if "Middle" in bone or "Thumb" in bone
+            else 0.04
+            if "Shoulder" in bone
+            else 0.07
+            if "Arm" in bone or "Hand" in bone
+            else 0.04
+            if "Foot" in bone or "Toes" in bone
+            else 0.10,
+        )
         out.append((bone, pos[bone], end, thick * k))
     return out
 
@@ -233,16 +281,26 @@ class _Writer:
     def view(self, data: bytes, target: int | None = None) -> int:
         while len(self.blob) % 4:
             self.blob.append(0)
-        self.g.bufferViews.append(pygltflib.BufferView(buffer=0, byteOffset=len(self.blob),
-                                                       byteLength=len(data), target=target))  # fmt: skip
+        self.g.bufferViews.append(
+            pygltflib.BufferView(
+                buffer=0, byteOffset=len(self.blob), byteLength=len(data), target=target
+            )
+        )
         self.blob.extend(data)
         return len(self.g.bufferViews) - 1
 
-    def accessor(self, arr: np.ndarray, kind: str, component: int, target: int | None = None,
-                 minmax: bool = False) -> int:  # fmt: skip
+    def accessor(
+        self,
+        arr: np.ndarray,
+        kind: str,
+        component: int,
+        target: int | None = None,
+        minmax: bool = False,
+    ) -> int:
         view = self.view(arr.tobytes(), target)
-        acc = pygltflib.Accessor(bufferView=view, componentType=component, count=int(arr.shape[0]),
-                                 type=kind)  # fmt: skip
+        acc = pygltflib.Accessor(
+            bufferView=view, componentType=component, count=int(arr.shape[0]), type=kind
+        )
         if minmax:
             acc.min = arr.min(axis=0).tolist()
             acc.max = arr.max(axis=0).tolist()
@@ -260,8 +318,9 @@ def build(spec: Spec) -> bytes:
     for bone in names:
         parent = BONES[bone][0]
         local = pos[bone] - (pos[parent] if parent else 0.0)
-        g.nodes.append(pygltflib.Node(name=node_name(bone, spec.naming),
-                                      translation=[float(x) for x in local]))  # fmt: skip
+        g.nodes.append(
+            pygltflib.Node(name=node_name(bone, spec.naming), translation=[float(x) for x in local])
+        )
     for bone in names:
         kids = [index[b] for b, (p, _) in BONES.items() if p == bone]
         if kids:
@@ -272,21 +331,38 @@ def build(spec: Spec) -> bytes:
     g.samplers.append(pygltflib.Sampler())
     g.textures.append(pygltflib.Texture(source=0, sampler=0))
     g.materials = [
-        pygltflib.Material(name="cloth", pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
-            baseColorFactor=[0.2, 0.3, 0.8, 1.0], baseColorTexture=pygltflib.TextureInfo(index=0))),
-        pygltflib.Material(name="skin", pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
-            baseColorFactor=[0.9, 0.7, 0.6, 1.0])),
-        pygltflib.Material(name="hair", alphaMode="MASK", alphaCutoff=0.4, doubleSided=True,
-                           pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
-                               baseColorFactor=[0.1, 0.05, 0.0, 1.0])),
-    ]  # fmt: skip
+        pygltflib.Material(
+            name="cloth",
+            pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
+                baseColorFactor=[0.2, 0.3, 0.8, 1.0],
+                baseColorTexture=pygltflib.TextureInfo(index=0),
+            ),
+        ),
+        pygltflib.Material(
+            name="skin",
+            pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
+                baseColorFactor=[0.9, 0.7, 0.6, 1.0]
+            ),
+        ),
+        pygltflib.Material(
+            name="hair",
+            alphaMode="MASK",
+            alphaCutoff=0.4,
+            doubleSided=True,
+            pbrMetallicRoughness=pygltflib.PbrMetallicRoughness(
+                baseColorFactor=[0.1, 0.05, 0.0, 1.0]
+            ),
+        ),
+    ]
     k = spec.height_m / HEIGHT_M * spec.unit
     forward = np.array([0.0, 0.0, 1.0 if spec.facing == "+z" else -1.0])
     head, top = pos["head"], pos["END:head"]
     nose_a = head + np.array([0, 0.05, 0]) * k + forward * 0.05 * k
-    head_parts = [("head", head, top, 0.18 * k, 1), ("head", nose_a, nose_a + forward * 0.05 * k,
-                                                      0.03 * k, 1),
-                  ("hair", pos["hair"], pos["END:hair"], 0.05 * k, 2)]  # fmt: skip
+    head_parts = [
+        ("head", head, top, 0.18 * k, 1),
+        ("head", nose_a, nose_a + forward * 0.05 * k, 0.03 * k, 1),
+        ("hair", pos["hair"], pos["END:hair"], 0.05 * k, 2),
+    ]
     body = [(b, a, e, t, 0) for b, a, e, t in _segments(spec, pos)]
     roots = [index["hips"]]
     if spec.rigid:
@@ -302,8 +378,9 @@ def build(spec: Spec) -> bytes:
         skin_joints = list(range(len(names)))
         ibm = np.stack([np.linalg.inv(_translation(pos[b])).T for b in names]).astype(np.float32)
         ibm_acc = w.accessor(ibm.reshape(len(names), 16), "MAT4", 5126)
-        g.skins.append(pygltflib.Skin(joints=skin_joints, inverseBindMatrices=ibm_acc,
-                                      skeleton=index["hips"]))  # fmt: skip
+        g.skins.append(
+            pygltflib.Skin(joints=skin_joints, inverseBindMatrices=ibm_acc, skeleton=index["hips"])
+        )
         head_joints = [index["neck"], index["head"], index["hair"]]
         hibm = np.stack([np.linalg.inv(_translation(pos[names[j]])).T for j in head_joints])
         hibm_acc = w.accessor(hibm.astype(np.float32).reshape(3, 16), "MAT4", 5126)
@@ -312,8 +389,10 @@ def build(spec: Spec) -> bytes:
         g.nodes.append(pygltflib.Node(name="Body", mesh=_mesh(w, parts, skinned=True), skin=0))
         roots.append(len(g.nodes) - 1)
         local = {index["head"]: 1, index["hair"]: 2}
-        hparts = [(*_box(a, e, t), np.full(8, local[index[bone]]), mat)
-                  for bone, a, e, t, mat in head_parts]  # fmt: skip
+        hparts = [
+            (*_box(a, e, t), np.full(8, local[index[bone]]), mat)
+            for bone, a, e, t, mat in head_parts
+        ]
         k_face = spec.height_m / HEIGHT_M * spec.unit
         targets = tuple(tuple(k_face * c for c in t) for t in FACE_TARGETS) if spec.faces else ()
         face_mesh = _mesh(w, hparts, skinned=True, targets=targets)  # type: ignore[arg-type]
@@ -328,27 +407,43 @@ def build(spec: Spec) -> bytes:
 
         def vrm0(bone: str) -> str:
             for side in ("left", "right"):
-                for new, old in (("ThumbMetacarpal", "ThumbProximal"),
-                                 ("ThumbProximal", "ThumbIntermediate")):  # fmt: skip
+                for new, old in (
+                    ("ThumbMetacarpal", "ThumbProximal"),
+                    ("ThumbProximal", "ThumbIntermediate"),
+                ):
                     if bone == f"{side}{new}":
                         return f"{side}{old}"
             return bone
 
         ext["VRM"] = {
             "specVersion": "0.0",
-            "humanoid": {"humanBones": [{"bone": vrm0(b), "node": index[b],
-                                         "useDefaultValues": True} for b in human]},
+            "humanoid": {
+                "humanBones": [
+                    {"bone": vrm0(b), "node": index[b], "useDefaultValues": True} for b in human
+                ]
+            },
             "materialProperties": [{"name": "skin", "shader": "VRM/MToon"}],
-        }  # fmt: skip
+        }
         if spec.faces:
-            ext["VRM"]["blendShapeMaster"] = {"blendShapeGroups": [
-                {"name": "Blink", "presetName": "blink",
-                 "binds": [{"mesh": face_mesh, "index": 0, "weight": 100}]},
-                {"name": "Joy", "presetName": "joy",
-                 "binds": [{"mesh": face_mesh, "index": 1, "weight": 50}]},
-                {"name": "O", "presetName": "o",
-                 "binds": [{"mesh": face_mesh, "index": 2, "weight": 100}]},
-            ]}  # fmt: skip
+            ext["VRM"]["blendShapeMaster"] = {
+                "blendShapeGroups": [
+                    {
+                        "name": "Blink",
+                        "presetName": "blink",
+                        "binds": [{"mesh": face_mesh, "index": 0, "weight": 100}],
+                    },
+                    {
+                        "name": "Joy",
+                        "presetName": "joy",
+                        "binds": [{"mesh": face_mesh, "index": 1, "weight": 50}],
+                    },
+                    {
+                        "name": "O",
+                        "presetName": "o",
+                        "binds": [{"mesh": face_mesh, "index": 2, "weight": 100}],
+                    },
+                ]
+            }
         g.extensionsUsed = ["VRM"]
     elif spec.vrm == "1":
         ext["VRMC_vrm"] = {
@@ -356,12 +451,15 @@ def build(spec: Spec) -> bytes:
             "humanoid": {"humanBones": {b: {"node": index[b]} for b in human}},
         }
         if spec.faces:
-            ext["VRMC_vrm"]["expressions"] = {"preset": {
-                "blink": {"morphTargetBinds": [{"node": face_node, "index": 0, "weight": 1.0}]},
-                "happy": {"morphTargetBinds": [{"node": face_node, "index": 1, "weight": 0.5}]},
-                "surprised": {"morphTargetBinds": [{"node": face_node, "index": 2,
-                                                    "weight": 1.0}]},
-            }}  # fmt: skip
+            ext["VRMC_vrm"]["expressions"] = {
+                "preset": {
+                    "blink": {"morphTargetBinds": [{"node": face_node, "index": 0, "weight": 1.0}]},
+                    "happy": {"morphTargetBinds": [{"node": face_node, "index": 1, "weight": 0.5}]},
+                    "surprised": {
+                        "morphTargetBinds": [{"node": face_node, "index": 2, "weight": 1.0}]
+                    },
+                }
+            }
         g.materials[1].extensions = {"VRMC_materials_mtoon": {"specVersion": "1.0"}}
         g.extensionsUsed = ["VRMC_vrm", "VRMC_materials_mtoon"]
     ext.update(spec.extra)
@@ -385,8 +483,12 @@ def _translation(p: np.ndarray) -> np.ndarray:
 FACE_TARGETS = ((0.0, -0.01, 0.0), (0.02, 0.0, 0.0), (0.0, 0.0, 0.03))
 
 
-def _mesh(w: _Writer, parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]],
-          skinned: bool, targets: tuple[tuple[float, float, float], ...] = ()) -> int:  # fmt: skip
+def _mesh(
+    w: _Writer,
+    parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]],
+    skinned: bool,
+    targets: tuple[tuple[float, float, float], ...] = (),
+) -> int:
     """One mesh, one primitive per material, from (corners, faces, joint per corner, material);
     ``targets``: morph targets moving every vertex of every primitive by one vector each."""
     prims = []
@@ -411,12 +513,22 @@ def _mesh(w: _Writer, parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]
             wt[:, 0] = 1.0
             attrs.JOINTS_0 = w.accessor(j, "VEC4", 5123, 34962)
             attrs.WEIGHTS_0 = w.accessor(wt, "VEC4", 5126, 34962)
-        morphs = [pygltflib.Attributes(POSITION=w.accessor(
-            np.tile(np.float32(t), (p.shape[0], 1)), "VEC3", 5126, 34962, minmax=True))
-            for t in targets]  # fmt: skip
-        prims.append(pygltflib.Primitive(attributes=attrs, material=mat,
-                                         indices=w.accessor(f.reshape(-1, 1), "SCALAR", 5125,
-                                                            34963), targets=morphs or None))  # fmt: skip
+        morphs = [
+            pygltflib.Attributes(
+                POSITION=w.accessor(
+                    np.tile(np.float32(t), (p.shape[0], 1)), "VEC3", 5126, 34962, minmax=True
+                )
+            )
+            for t in targets
+        ]
+        prims.append(
+            pygltflib.Primitive(
+                attributes=attrs,
+                material=mat,
+                indices=w.accessor(f.reshape(-1, 1), "SCALAR", 5125, 34963),
+                targets=morphs or None,
+            )
+        )
     w.g.meshes.append(pygltflib.Mesh(primitives=prims))
     return len(w.g.meshes) - 1
 

@@ -34,16 +34,24 @@ class Planted:
 
 def note_for(piece: str) -> int:
     spec = next(
-        s for s in load_note_map(MAP).notes.values()
+        s
+        for s in load_note_map(MAP).notes.values()
         if s.instrument == piece and s.zone.value in ("head", "bow")
-    )  # fmt: skip
+    )
     return spec.note
 
 
 def plant_take(
-    reference: Path, out: Path, seed: int = 1, deleted: int = 7, moved: int = 5, extra: int = 4,
-    mean_ms: float = 6.0, sd_ms: float = 9.0, limit_s: float | None = None,
-) -> Planted:  # fmt: skip
+    reference: Path,
+    out: Path,
+    seed: int = 1,
+    deleted: int = 7,
+    moved: int = 5,
+    extra: int = 4,
+    mean_ms: float = 6.0,
+    sd_ms: float = 9.0,
+    limit_s: float | None = None,
+) -> Planted:
     rng = np.random.default_rng(seed)
     ref = read_midi_file(reference, load_note_map(MAP)).onsets
     if limit_s is not None:
@@ -83,6 +91,10 @@ def plant_take(
     take = np.concatenate([take[keep], extras])
     write_take(out, take)
     return Planted(
-        reference_notes=int(ref.size), hits=int(hit.sum()), missed=deleted, wrong_piece=moved,
-        extra=extra, mean_offset_ms=float(offsets[hit].mean()),
-    )  # fmt: skip
+        reference_notes=int(ref.size),
+        hits=int(hit.sum()),
+        missed=deleted,
+        wrong_piece=moved,
+        extra=extra,
+        mean_offset_ms=float(offsets[hit].mean()),
+    )

@@ -44,8 +44,13 @@ def _name(text: str) -> bytes:
     return text.encode("ascii")[:19].ljust(20, b"\0")
 
 
-def sf2_bytes(sample: np.ndarray, sr: int = 48_000, root_key: int = 60, bank: int = 128,
-              release_s: float | None = None) -> bytes:  # fmt: skip
+def sf2_bytes(
+    sample: np.ndarray,
+    sr: int = 48_000,
+    root_key: int = 60,
+    bank: int = 128,
+    release_s: float | None = None,
+) -> bytes:
     """The whole file: ``sample`` (int16) played by every key 35..81 of the preset at ``bank``
     (128: the GM drum kit), preset 0; ``release_s``: the volume envelope's release (SoundFont
     default: 1 ms), so a voice may ring on after its note-off as a cymbal's does."""
@@ -79,10 +84,16 @@ def sf2_bytes(sample: np.ndarray, sr: int = 48_000, root_key: int = 60, bank: in
     shdr += struct.pack("<20sIIIIIBbHH", _name("EOS"), 0, 0, 0, 0, 0, 0, 0, 0, 0)
     pdta = _list(
         b"pdta",
-        _chunk(b"phdr", phdr), _chunk(b"pbag", pbag), _chunk(b"pmod", pmod),
-        _chunk(b"pgen", pgen), _chunk(b"inst", inst), _chunk(b"ibag", ibag),
-        _chunk(b"imod", imod), _chunk(b"igen", igen), _chunk(b"shdr", shdr),
-    )  # fmt: skip
+        _chunk(b"phdr", phdr),
+        _chunk(b"pbag", pbag),
+        _chunk(b"pmod", pmod),
+        _chunk(b"pgen", pgen),
+        _chunk(b"inst", inst),
+        _chunk(b"ibag", ibag),
+        _chunk(b"imod", imod),
+        _chunk(b"igen", igen),
+        _chunk(b"shdr", shdr),
+    )
     return _chunk(b"RIFF", b"sfbk" + info + sdta + pdta)
 
 

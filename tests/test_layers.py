@@ -219,9 +219,23 @@ def test_no_two_process_packages_import_each_other() -> None:
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("wheel")
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
-                    "--no-build-isolation", "-w", str(out), str(REPO)],
-                   check=True, capture_output=True, timeout=300)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--quiet",
+            "--no-deps",
+            "--no-build-isolation",
+            "-w",
+            str(out),
+            str(REPO),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
     (built,) = out.glob("livedrummer-*.whl")
     return built
 
@@ -232,27 +246,49 @@ def installed(wheel: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
     env = tmp_path_factory.mktemp("venv")
     subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(env)], check=True)
     python = env / "bin" / "python"
-    purelib = subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_paths()"
-                              "['purelib'])"], capture_output=True, text=True, check=True)  # fmt: skip
+    purelib = subprocess.run(
+        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     # A plain path line: the dependencies' folder is on sys.path, but its .pth files (the
     # editable install of this checkout among them) are not run.
     Path(purelib.stdout.strip(), "deps.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
-    subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "--quiet",
-                    "--no-deps", str(wheel)], check=True, capture_output=True, timeout=300)  # fmt: skip
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "--python",
+            str(python),
+            "install",
+            "--quiet",
+            "--no-deps",
+            str(wheel),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=300,
+    )
     return env
 
 
 def test_the_wheel_puts_only_livedrummer_into_site_packages(wheel: Path) -> None:
     names = zipfile.ZipFile(wheel).namelist()
-    assert {n.split("/")[0] for n in names} == {"livedrummer", wheel.name.split("-py")[0]
-                                                + ".dist-info"}  # fmt: skip
+    assert {n.split("/")[0] for n in names} == {
+        "livedrummer",
+        wheel.name.split("-py")[0] + ".dist-info",
+    }
     assert "livedrummer/_services/cli/__init__.py" in names
     assert "livedrummer/_services/bench/jack_ref.c" in names
     assert "livedrummer/_data/kits/rock5.toml" in names
     assert not [n for n in names if "__pycache__" in n]
     entry = next(n for n in names if n.endswith("entry_points.txt"))
-    assert "livedrummer = livedrummer._services.cli:main" in zipfile.ZipFile(wheel).read(
-        entry).decode()  # fmt: skip
+    assert (
+        "livedrummer = livedrummer._services.cli:main"
+        in zipfile.ZipFile(wheel).read(entry).decode()
+    )
 
 
 #: The environment of the installed runs: no PYTHONPATH, which could lead back to a checkout.
@@ -260,13 +296,24 @@ CLEAN_ENV = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
 
 
 def run_installed(env: Path, *args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([str(env / "bin" / "livedrummer"), *args], capture_output=True,
-                          text=True, timeout=120, cwd=cwd, env=CLEAN_ENV)  # fmt: skip
+    return subprocess.run(
+        [str(env / "bin" / "livedrummer"), *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=cwd,
+        env=CLEAN_ENV,
+    )
 
 
 def test_the_installed_command_works_without_the_checkout(installed: Path, tmp_path: Path) -> None:
-    probe = subprocess.run([str(installed / "bin" / "python"), "-c", "import services"],
-                           capture_output=True, text=True, cwd=tmp_path, env=CLEAN_ENV)  # fmt: skip
+    probe = subprocess.run(
+        [str(installed / "bin" / "python"), "-c", "import services"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env=CLEAN_ENV,
+    )
     assert probe.returncode != 0  # the checkout is not reachable from this environment
     assert run_installed(installed, "--help", cwd=tmp_path).returncode == 0
     kits = run_installed(installed, "kits", cwd=tmp_path)

@@ -95,8 +95,11 @@ def test_a_gl_context_is_gpu(tmp_path: Path) -> None:
 def test_helpers_imported_from_other_test_and_process_modules_are_followed() -> None:
     # tests/test_layers.py's wheel tests build and install a wheel through subprocess
     layers = REPO / "tests" / "test_layers.py"
-    assert "e2e" in marks_of(layers, "test_the_installed_command_works_without_the_checkout",
-                             ["installed", "tmp_path", "wheel"])  # fmt: skip
+    assert "e2e" in marks_of(
+        layers,
+        "test_the_installed_command_works_without_the_checkout",
+        ["installed", "tmp_path", "wheel"],
+    )
     assert marks_of(layers, "test_cycles_finds_a_loop_and_nothing_else", []) == frozenset()
     assert markers._source_of("services.no_such_module") is None
     assert markers._source_of("livedrummer.kit") is None  # the library is not followed
@@ -104,8 +107,10 @@ def test_helpers_imported_from_other_test_and_process_modules_are_followed() -> 
 
 def test_a_name_imported_from_services_is_read_in_its_own_module(tmp_path: Path) -> None:
     # the flood benchmark starts an input daemon and a subscriber
-    path = write(tmp_path, "from services.bench.flood import run_flood\n\n\n"
-                 "def test_floods():\n    run_flood()\n")  # fmt: skip
+    path = write(
+        tmp_path,
+        "from services.bench.flood import run_flood\n\n\ndef test_floods():\n    run_flood()\n",
+    )
     assert marks_of(path, "test_floods", []) == {"e2e"}
 
 

@@ -421,8 +421,10 @@ class OnlineDetector:
         if self.channel_class is None:
             self._chans = [_Channel(self.sr, look, mode, high=mode == "mix")]
         else:
-            self._chans = [_Channel(self.sr, look, mode, main_hz=MIC_HIGH_HZ * (c in HIGH_CLASSES))
-                           for c in self.channel_class]  # fmt: skip
+            self._chans = [
+                _Channel(self.sr, look, mode, main_hz=MIC_HIGH_HZ * (c in HIGH_CLASSES))
+                for c in self.channel_class
+            ]
         #: onset thresholds of each channel, a share of the profile's (MIC_HIGH_SCALE)
         self._scale = [MIC_SCALE if ch.main_from == 0 else MIC_HIGH_SCALE for ch in self._chans]
         self._last_hit = np.full(len(CLASSES), -(10**9))  # frame of each drum's last hit
@@ -441,8 +443,9 @@ class OnlineDetector:
         if self.channel_class is None and data.shape[1] != 1:
             data = data.mean(axis=1, keepdims=True)
         elif self.channel_class is not None and data.shape[1] != len(self.channel_class):
-            raise ValueError(f"block has {data.shape[1]} channels, expected "
-                             f"{len(self.channel_class)}")  # fmt: skip
+            raise ValueError(
+                f"block has {data.shape[1]} channels, expected {len(self.channel_class)}"
+            )
         signal = np.concatenate([self._history, data])
         start = self._history.shape[0] - self._pending  # first new sample after a frame end
         n_frames = (self._pending + data.shape[0]) // HOP
@@ -454,8 +457,13 @@ class OnlineDetector:
                 self._frame += 1
                 for c, ch in enumerate(self._chans):
                     flux, high, band, level, level_high = per_chan[c]
-                    ch.push(float(flux[i]), float(high[i]), band[i], float(level[i]),
-                            float(level_high[i]))  # fmt: skip
+                    ch.push(
+                        float(flux[i]),
+                        float(high[i]),
+                        band[i],
+                        float(level[i]),
+                        float(level_high[i]),
+                    )
                 out.extend(self._decide())
         self.frames_seen = self._frame + 1
         self._pending = (self._pending + data.shape[0]) % HOP

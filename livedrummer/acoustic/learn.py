@@ -128,8 +128,13 @@ def build_profile(
                 shape = (other / other.sum(axis=1, keepdims=True)).mean(axis=0)
                 templates.append(shape / shape.sum())
                 owners.append(code)
-    return AudioProfile(name, np.array(templates), np.array(owners, np.int64), levels,
-                        settings or DetectorSettings())  # fmt: skip
+    return AudioProfile(
+        name,
+        np.array(templates),
+        np.array(owners, np.int64),
+        levels,
+        settings or DetectorSettings(),
+    )
 
 
 #: Velocities each note of a SoundFont is struck at to make its profile (loud to soft).
@@ -173,8 +178,9 @@ def soundfont_profile(
             own.setdefault(code, []).append(found)
         else:
             rises.setdefault(code, []).extend(found)
-    return build_profile(name, {c: np.array(r) for c, r in rises.items()}, settings,
-                         other_sounds=own)  # fmt: skip
+    return build_profile(
+        name, {c: np.array(r) for c, r in rises.items()}, settings, other_sounds=own
+    )
 
 
 class HitCollector:
@@ -187,9 +193,12 @@ class HitCollector:
 
     def __init__(self, sr: int, settings: DetectorSettings | None = None) -> None:
         flat = AudioProfile(
-            "learn", np.full((1, N_BANDS), 1.0 / N_BANDS), np.zeros(1, np.int64),
-            np.zeros(len(CLASSES)), settings or DetectorSettings(),
-        )  # fmt: skip
+            "learn",
+            np.full((1, N_BANDS), 1.0 / N_BANDS),
+            np.zeros(1, np.int64),
+            np.zeros(len(CLASSES)),
+            settings or DetectorSettings(),
+        )
         self._det = OnlineDetector(flat, sr, one_drum=True)
         self.reset()
 

@@ -180,12 +180,22 @@ class HitModel:
         """Float32 weights (half the size; inference is float64 either way)."""
         f32 = {k: np.asarray(getattr(self, k), np.float32) for k in _ARRAYS}
         np.savez_compressed(
-            path, mean=f32["mean"], std=f32["std"], w1=f32["w1"], b1=f32["b1"], w2=f32["w2"],
-            b2=f32["b2"], w3=f32["w3"], b3=f32["b3"], prior=f32["prior"],
-            ref_level=f32["ref_level"], thresholds=f32["thresholds"],
+            path,
+            mean=f32["mean"],
+            std=f32["std"],
+            w1=f32["w1"],
+            b1=f32["b1"],
+            w2=f32["w2"],
+            b2=f32["b2"],
+            w3=f32["w3"],
+            b3=f32["b3"],
+            prior=f32["prior"],
+            ref_level=f32["ref_level"],
+            thresholds=f32["thresholds"],
             scalars=np.array([self.delta, self.floor]),
-            name=np.array(self.name), classes=np.array(CLASSES),
-        )  # fmt: skip
+            name=np.array(self.name),
+            classes=np.array(CLASSES),
+        )
 
 
 #: The arrays of a model file, in the order they are checked.
@@ -200,10 +210,19 @@ def _expected(arrays: dict[str, np.ndarray], key: str, a: np.ndarray) -> tuple[i
     h1 = arrays["w1"].shape[1] if "w1" in arrays else 0
     h2 = arrays["w2"].shape[1] if "w2" in arrays else 0
     return {
-        "mean": (N_INPUT,), "std": (N_INPUT,), "w1": (N_INPUT, width), "b1": (h1,),
-        "w2": (h1, width), "b2": (h2,), "w3": (h2, k), "b3": (k,), "ref_level": (k,),
-        "prior": (N_BANDS,), "thresholds": (k,), "scalars": (2,),
-    }[key]  # fmt: skip
+        "mean": (N_INPUT,),
+        "std": (N_INPUT,),
+        "w1": (N_INPUT, width),
+        "b1": (h1,),
+        "w2": (h1, width),
+        "b2": (h2,),
+        "w3": (h2, k),
+        "b3": (k,),
+        "ref_level": (k,),
+        "prior": (N_BANDS,),
+        "thresholds": (k,),
+        "scalars": (2,),
+    }[key]
 
 
 def read_model(path: Path) -> HitModel:

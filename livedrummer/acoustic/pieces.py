@@ -15,16 +15,31 @@ import numpy as np
 from livedrummer.kit.vocabulary import HIHATS, INSTRUMENTS, ZONES, HiHat, Zone
 
 CLASSES: tuple[str, ...] = (
-    "kick", "snare", "hihat_closed", "hihat_open",
-    "tom_high", "tom_mid", "tom_low", "crash", "ride",
-)  # fmt: skip
+    "kick",
+    "snare",
+    "hihat_closed",
+    "hihat_open",
+    "tom_high",
+    "tom_mid",
+    "tom_low",
+    "crash",
+    "ride",
+)
 CLASS_CODE: dict[str, int] = {name: i for i, name in enumerate(CLASSES)}
 #: General MIDI percussion note that each class is written as (same order as CLASSES).
 GM_NOTES: tuple[int, ...] = (36, 38, 42, 46, 50, 48, 45, 49, 51)
 #: Kit instrument (note-map role) and hi-hat articulation each class stands for on the bus.
 CLASS_INSTRUMENT: tuple[str, ...] = (
-    "kick", "snare", "hihat", "hihat", "tom1", "tom2", "tom3", "crash1", "ride",
-)  # fmt: skip
+    "kick",
+    "snare",
+    "hihat",
+    "hihat",
+    "tom1",
+    "tom2",
+    "tom3",
+    "crash1",
+    "ride",
+)
 NO_CLASS = -1
 
 _BY_INSTRUMENT = {

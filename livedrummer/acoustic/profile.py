@@ -134,8 +134,9 @@ def load_profile(spec: str | Path | None) -> AudioProfile:
         found = [d / f"{spec}.toml" for d in search_dirs("kits/audio")]
         hits = [p for p in found if p.is_file()]
         if not hits:
-            names = sorted({p.stem for d in search_dirs("kits/audio") if d.is_dir()
-                            for p in d.glob("*.toml")})  # fmt: skip
+            names = sorted(
+                {p.stem for d in search_dirs("kits/audio") if d.is_dir() for p in d.glob("*.toml")}
+            )
             raise AudioProfileError(
                 f"audio profile {spec!r} not found (known: {', '.join(names) or 'none'})"
             )

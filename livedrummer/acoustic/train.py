@@ -155,8 +155,7 @@ def fit(
     """A model fitted to the candidates of ``takes`` (each in its recording's order)."""
     for t in takes:
         if t.features.shape[1:] != (N_FEATURES,) or len(t.features) != len(t.labels):
-            raise ValueError(f"features {t.features.shape} and labels {t.labels.shape} do "
-                             "not fit")  # fmt: skip
+            raise ValueError(f"features {t.features.shape} and labels {t.labels.shape} do not fit")
     inputs, labels, levels, prior = training_set(takes, seed, copies)
     rng = np.random.default_rng(seed)
     mean = inputs.mean(axis=0)

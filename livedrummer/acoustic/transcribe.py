@@ -57,8 +57,14 @@ def hits_to_midi(hits: np.ndarray) -> mido.MidiFile:
     events: list[tuple[int, int, mido.Message]] = []
     last_on: dict[int, int] = {}
     order = np.argsort(hits["time_s"], kind="stable")
-    rows = [(max(0, round(float(hits["time_s"][i]) * ticks_per_s)),
-             GM_NOTES[int(hits["cls"][i])], int(hits["velocity"][i])) for i in order]  # fmt: skip
+    rows = [
+        (
+            max(0, round(float(hits["time_s"][i]) * ticks_per_s)),
+            GM_NOTES[int(hits["cls"][i])],
+            int(hits["velocity"][i]),
+        )
+        for i in order
+    ]
     hold = max(1, round(NOTE_S * ticks_per_s))
     next_same: dict[int, int] = {}
     offs = [0] * len(rows)
@@ -70,8 +76,9 @@ def hits_to_midi(hits: np.ndarray) -> mido.MidiFile:
         if last_on.get(note) == tick:
             continue  # one note once per tick
         last_on[note] = tick
-        on = mido.Message("note_on", channel=DRUM_CHANNEL, note=note,
-                          velocity=max(1, min(127, velocity)))  # fmt: skip
+        on = mido.Message(
+            "note_on", channel=DRUM_CHANNEL, note=note, velocity=max(1, min(127, velocity))
+        )
         events.append((tick, 1, on))
         off = mido.Message("note_off", channel=DRUM_CHANNEL, note=note)
         events.append((max(offs[k], tick + 1), 0, off))

@@ -70,8 +70,7 @@ class LiveMixer:
         self.rendered = 0  # samples rendered so far: an onset before this starts late
         self.clipped = 0  # samples clipped at full scale
         self._pans: dict[str, tuple[float, float]] = {}
-        self._piece = ({p.name: k for k, p in enumerate(kit.pieces)} if kit is not None
-                       else {})  # fmt: skip
+        self._piece = {p.name: k for k, p in enumerate(kit.pieces)} if kit is not None else {}
         self._cuts: list[tuple[int, float, int]] = []  # recent cuts: (piece, show time, sample)
 
     def piece_of(self, instrument: str) -> int:
@@ -114,8 +113,9 @@ class LiveMixer:
         """Sound ``onset`` (a row of ONSET_DTYPE) from sample ``start`` of the stream."""
         instrument = INSTRUMENTS[int(onset["instrument"])]
         hat = int(onset["instrument"]) == HAT
-        voice = voice_for(instrument, ZONES[int(onset["zone"])], HIHATS[int(onset["hihat"])],
-                          self.kit)  # fmt: skip
+        voice = voice_for(
+            instrument, ZONES[int(onset["zone"])], HIHATS[int(onset["hihat"])], self.kit
+        )
         layer, gain = layer_for(int(onset["velocity"]))
         sample = voice_layers(voice, self.sr)[layer]
         if instrument not in self._pans:
@@ -123,12 +123,22 @@ class LiveMixer:
         left, right = self._pans[instrument]
         if hat:
             for v in self.voices:
-                if v.hat and v.start <= start < v.start + (v.sample.size if v.hat_len < 0
-                                                           else v.hat_len):  # fmt: skip
+                if v.hat and v.start <= start < v.start + (
+                    v.sample.size if v.hat_len < 0 else v.hat_len
+                ):
                     v.hat_len = start - v.start
                     self._settle(v)
-        added = Voice(start, sample, gain, left, right, hat, sample.size,
-                      time_s=float(onset["time_s"]), piece=self.piece_of(instrument))  # fmt: skip
+        added = Voice(
+            start,
+            sample,
+            gain,
+            left,
+            right,
+            hat,
+            sample.size,
+            time_s=float(onset["time_s"]),
+            piece=self.piece_of(instrument),
+        )
         self.voices.append(added)
         self._cut_on_arrival(added)
 

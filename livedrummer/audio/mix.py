@@ -146,15 +146,17 @@ def track_buffer(n: int, out: np.ndarray | None = None) -> np.ndarray:
     if out is None:
         return np.zeros((n, 2), np.float32)
     if out.shape != (n, 2) or out.dtype != np.float32 or not out.flags.c_contiguous:
-        raise ValueError(f"track buffer {out.shape} {out.dtype}: want C-contiguous ({n}, 2) "
-                         "float32")  # fmt: skip
+        raise ValueError(
+            f"track buffer {out.shape} {out.dtype}: want C-contiguous ({n}, 2) float32"
+        )
     return out
 
 
 def fit_headroom(out: np.ndarray) -> None:
     """Scale ``out`` down in place, as a whole, if its peak is above :data:`HEADROOM`."""
-    peak = max((float(np.abs(out[i : i + STEP]).max()) for i in range(0, len(out), STEP)),
-               default=0.0)  # fmt: skip
+    peak = max(
+        (float(np.abs(out[i : i + STEP]).max()) for i in range(0, len(out), STEP)), default=0.0
+    )
     if peak > HEADROOM:
         for i in range(0, len(out), STEP):
             out[i : i + STEP] *= HEADROOM / peak

@@ -42,8 +42,9 @@ class SfzLiveMixer(LiveMixer):
 
     def add(self, onset: np.void | np.ndarray, start: int) -> None:
         instrument = INSTRUMENTS[int(onset["instrument"])]
-        note = gm_note(int(onset["note"]), instrument, ZONES[int(onset["zone"])],
-                       HIHATS[int(onset["hihat"])])  # fmt: skip
+        note = gm_note(
+            int(onset["note"]), instrument, ZONES[int(onset["zone"])], HIHATS[int(onset["hihat"])]
+        )
         velocity = int(onset["velocity"])
         count = self.counts.get(note, 0)
         self.counts[note] = count + 1
@@ -60,15 +61,26 @@ class SfzLiveMixer(LiveMixer):
         piece_left, piece_right = self._pans[instrument]
         for region in regions:
             sample, rate = read_sample(self.sfz, region)
-            wave = _pitched(sample, rate, self.sr,
-                            (note - region.keycenter) * 100.0 + region.tune_cents)  # fmt: skip
+            wave = _pitched(
+                sample, rate, self.sr, (note - region.keycenter) * 100.0 + region.tune_cents
+            )
             gain = 10.0 ** (region.volume_db / 20.0) * (velocity / 127.0) ** 2
             angle = (np.clip(region.pan / 100.0, -1.0, 1.0) + 1.0) * np.pi / 4
             left = float(np.cos(angle)) * np.sqrt(2.0) * piece_left * gain
             right = float(np.sin(angle)) * np.sqrt(2.0) * piece_right * gain
-            voice = Voice(start, wave, 1.0, left, right, False, wave.size, off_by=region.off_by,
-                          fade_s=region.release_s, time_s=float(onset["time_s"]),
-                          piece=self.piece_of(instrument))  # fmt: skip
+            voice = Voice(
+                start,
+                wave,
+                1.0,
+                left,
+                right,
+                False,
+                wave.size,
+                off_by=region.off_by,
+                fade_s=region.release_s,
+                time_s=float(onset["time_s"]),
+                piece=self.piece_of(instrument),
+            )
             self.voices.append(voice)
             self._cut_on_arrival(voice)
 

@@ -59,8 +59,9 @@ def read_sample(kit: SfzKit, region: Region) -> tuple[np.ndarray, int]:
         return _read(region.sample)
     except Exception as exc:  # soundfile raises LibsndfileError, RuntimeError or OSError
         why = "no such file" if not region.sample.exists() else str(exc).splitlines()[0]
-        raise SfzError(f"{kit.path}:{region.sample_line}: sample {region.sample}: "
-                       f"cannot read it ({why})") from None  # fmt: skip
+        raise SfzError(
+            f"{kit.path}:{region.sample_line}: sample {region.sample}: cannot read it ({why})"
+        ) from None
 
 
 def check_sfz(path: Path) -> SfzKit:
@@ -87,10 +88,13 @@ def _pitched(sample: np.ndarray, rate: int, sr: int, cents: float) -> np.ndarray
 
 def choose(kit: SfzKit, note: int, velocity: int, count: int, rand: float) -> list[Region]:
     """The regions one stroke plays: its ``count``-th on ``note`` (from 0), random ``rand``."""
-    return [r for r in kit.regions
-            if r.plays(note, velocity)
-            and count % r.seq_length == r.seq_position - 1
-            and r.lorand <= rand < (r.hirand if r.hirand < 1.0 else 1.0 + 1e-9)]  # fmt: skip
+    return [
+        r
+        for r in kit.regions
+        if r.plays(note, velocity)
+        and count % r.seq_length == r.seq_position - 1
+        and r.lorand <= rand < (r.hirand if r.hirand < 1.0 else 1.0 + 1e-9)
+    ]
 
 
 def render_sfz(
@@ -164,8 +168,13 @@ def render_sfz(
     return out
 
 
-def _cut(out: np.ndarray, voice: tuple[int, int, Region, np.ndarray, float, float],
-         at: int, fade_s: float, sr: int) -> None:  # fmt: skip
+def _cut(
+    out: np.ndarray,
+    voice: tuple[int, int, Region, np.ndarray, float, float],
+    at: int,
+    fade_s: float,
+    sr: int,
+) -> None:
     """Take back a ringing voice's samples after ``at``, fading it out over ``fade_s``."""
     start, end, _region, piece, left, right = voice
     fade = max(1, round(fade_s * sr))

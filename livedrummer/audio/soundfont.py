@@ -128,8 +128,16 @@ def _fluidsynth() -> tuple[Any, Any]:
     for level in range(5):
         lib.fluid_set_log_function(level, _log_callback, None)
     write = lib.fluid_synth_write_float
-    write.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p, ctypes.c_int, ctypes.c_int,
-                      ctypes.c_void_p, ctypes.c_int, ctypes.c_int]  # fmt: skip
+    write.argtypes = [
+        ctypes.c_void_p,
+        ctypes.c_int,
+        ctypes.c_void_p,
+        ctypes.c_int,
+        ctypes.c_int,
+        ctypes.c_void_p,
+        ctypes.c_int,
+        ctypes.c_int,
+    ]
     write.restype = ctypes.c_int
     return fluidsynth, write
 
@@ -200,8 +208,9 @@ def render_soundfont(
     return out
 
 
-def _play(synth: Any, write: Any, out: np.ndarray, events: list[tuple[int, int, int]],
-          pos: int) -> None:  # fmt: skip
+def _play(
+    synth: Any, write: Any, out: np.ndarray, events: list[tuple[int, int, int]], pos: int
+) -> None:
     """Send ``events`` to ``synth``, rendering into ``out`` from sample ``pos`` to its end."""
     for at, velocity, note in events:
         if at > pos:
@@ -215,8 +224,9 @@ def _play(synth: Any, write: Any, out: np.ndarray, events: list[tuple[int, int, 
         _render(write, synth.synth, out, pos, out.shape[0])
 
 
-def _add_choked(out: np.ndarray, onsets: np.ndarray, notes: np.ndarray, cuts: np.ndarray,
-                path: Path, sr: int) -> None:  # fmt: skip
+def _add_choked(
+    out: np.ndarray, onsets: np.ndarray, notes: np.ndarray, cuts: np.ndarray, path: Path, sr: int
+) -> None:
     """Each group of strokes one grab stops, rendered alone to the grab and faded into ``out``
     (through a scratch buffer of at most :data:`~livedrummer.audio.mix.STEP` samples: a group
     may span the whole show)."""

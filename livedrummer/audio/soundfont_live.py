@@ -85,8 +85,9 @@ class SoundFontLiveMixer(LiveMixer):
 
     def add(self, onset: np.void | np.ndarray, start: int) -> None:
         instrument = INSTRUMENTS[int(onset["instrument"])]
-        note = gm_note(int(onset["note"]), instrument, ZONES[int(onset["zone"])],
-                       HIHATS[int(onset["hihat"])])  # fmt: skip
+        note = gm_note(
+            int(onset["note"]), instrument, ZONES[int(onset["zone"])], HIHATS[int(onset["hihat"])]
+        )
         channel = self._channel(self.piece_of(instrument))
         at = max(self.rendered, BLOCK * round(start / BLOCK))
         off = at + self._hold

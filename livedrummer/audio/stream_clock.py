@@ -39,8 +39,9 @@ WINDOW_S = 0.1
 class StreamClock:
     """See the module docstring."""
 
-    def __init__(self, sr: int, latency_s: float = 0.0, window_s: float = WINDOW_S,
-                 period: int = 0) -> None:  # fmt: skip
+    def __init__(
+        self, sr: int, latency_s: float = 0.0, window_s: float = WINDOW_S, period: int = 0
+    ) -> None:
         self.sr = sr
         self.latency_s = latency_s
         self.period = period

@@ -60,10 +60,15 @@ HUMAN_BONES: tuple[str, ...] = (
 
 #: The bones an avatar must have (VRM 1.0's required set).
 REQUIRED: tuple[str, ...] = (
-    "hips", "spine", "head",
-    *(f"{s}{limb}" for s in SIDES
-      for limb in ("UpperArm", "LowerArm", "Hand", "UpperLeg", "LowerLeg", "Foot")),
-)  # fmt: skip
+    "hips",
+    "spine",
+    "head",
+    *(
+        f"{s}{limb}"
+        for s in SIDES
+        for limb in ("UpperArm", "LowerArm", "Hand", "UpperLeg", "LowerLeg", "Foot")
+    ),
+)
 
 
 @dataclass(frozen=True)
@@ -79,8 +84,10 @@ class Humanoid:
 
 def _vrm0_name(bone: str) -> str:
     for side in SIDES:
-        for old, new in (("ThumbProximal", "ThumbMetacarpal"),
-                         ("ThumbIntermediate", "ThumbProximal")):  # fmt: skip
+        for old, new in (
+            ("ThumbProximal", "ThumbMetacarpal"),
+            ("ThumbIntermediate", "ThumbProximal"),
+        ):
             if bone == f"{side}{old}":
                 return f"{side}{new}"
     return bone
@@ -89,8 +96,10 @@ def _vrm0_name(bone: str) -> str:
 def from_vrm(ext: dict[str, Any], n_nodes: int, source: str) -> Humanoid | None:
     def node(value: Any, bone: str, where: str) -> int:
         if not isinstance(value, int) or not 0 <= value < n_nodes:
-            raise AvatarError(f"{source}: {where} bone {bone!r} names node {value!r}, "
-                              f"not one of the file's {n_nodes} nodes")  # fmt: skip
+            raise AvatarError(
+                f"{source}: {where} bone {bone!r} names node {value!r}, "
+                f"not one of the file's {n_nodes} nodes"
+            )
         return value
 
     vrm1 = ext.get("VRMC_vrm")
@@ -98,8 +107,11 @@ def from_vrm(ext: dict[str, Any], n_nodes: int, source: str) -> Humanoid | None:
         human = (vrm1.get("humanoid") or {}).get("humanBones")
         if not isinstance(human, dict):
             raise AvatarError(f"{source}: VRMC_vrm has no humanoid.humanBones table")
-        bones = {b: node((v or {}).get("node"), b, "VRMC_vrm humanoid")
-                 for b, v in human.items() if b in HUMAN_BONES}  # fmt: skip
+        bones = {
+            b: node((v or {}).get("node"), b, "VRMC_vrm humanoid")
+            for b, v in human.items()
+            if b in HUMAN_BONES
+        }
         return Humanoid(bones, "VRM 1.0")
     vrm0 = ext.get("VRM")
     if isinstance(vrm0, dict):
@@ -119,27 +131,51 @@ def from_vrm(ext: dict[str, Any], n_nodes: int, source: str) -> Humanoid | None:
 def _rig_names() -> dict[str, dict[str, tuple[str, ...]]]:
     """Per convention: humanoid bone -> the node names (lower case, prefix removed) it may have."""
     mixamo: dict[str, tuple[str, ...]] = {
-        "hips": ("hips",), "spine": ("spine",), "chest": ("spine1",),
-        "upperChest": ("spine2",), "neck": ("neck",), "head": ("head",),
-    }  # fmt: skip
+        "hips": ("hips",),
+        "spine": ("spine",),
+        "chest": ("spine1",),
+        "upperChest": ("spine2",),
+        "neck": ("neck",),
+        "head": ("head",),
+    }
     blender: dict[str, tuple[str, ...]] = {
         "hips": ("hips", "pelvis", "spine"), "spine": ("spine.001",), "chest": ("spine.002",),
         "upperChest": ("spine.003",), "neck": ("spine.004", "neck"),
         "head": ("spine.006", "spine.005", "head"),
     }  # fmt: skip
     unreal: dict[str, tuple[str, ...]] = {
-        "hips": ("pelvis",), "spine": ("spine_01",), "chest": ("spine_02",),
-        "upperChest": ("spine_03",), "neck": ("neck_01",), "head": ("head",),
-    }  # fmt: skip
-    mixamo_limb = dict(zip(_LIMBS, ("Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot",
-                                    "ToeBase"), strict=True))  # fmt: skip
-    blender_limb = dict(zip(_LIMBS, ("shoulder", "upper_arm", "forearm", "hand", "thigh", "shin",
-                                     "foot", "toe"), strict=True))  # fmt: skip
-    unreal_limb = dict(zip(_LIMBS, ("clavicle", "upperarm", "lowerarm", "hand", "thigh", "calf",
-                                    "foot", "ball"), strict=True))  # fmt: skip
+        "hips": ("pelvis",),
+        "spine": ("spine_01",),
+        "chest": ("spine_02",),
+        "upperChest": ("spine_03",),
+        "neck": ("neck_01",),
+        "head": ("head",),
+    }
+    mixamo_limb = dict(
+        zip(
+            _LIMBS,
+            ("Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"),
+            strict=True,
+        )
+    )
+    blender_limb = dict(
+        zip(
+            _LIMBS,
+            ("shoulder", "upper_arm", "forearm", "hand", "thigh", "shin", "foot", "toe"),
+            strict=True,
+        )
+    )
+    unreal_limb = dict(
+        zip(
+            _LIMBS,
+            ("clavicle", "upperarm", "lowerarm", "hand", "thigh", "calf", "foot", "ball"),
+            strict=True,
+        )
+    )
     mixamo_finger = dict(zip(FINGERS, ("Thumb", "Index", "Middle", "Ring", "Pinky"), strict=True))
-    blender_finger = dict(zip(FINGERS, ("thumb", "f_index", "f_middle", "f_ring", "f_pinky"),
-                              strict=True))  # fmt: skip
+    blender_finger = dict(
+        zip(FINGERS, ("thumb", "f_index", "f_middle", "f_ring", "f_pinky"), strict=True)
+    )
     unreal_finger = dict(zip(FINGERS, ("thumb", "index", "middle", "ring", "pinky"), strict=True))
     for side in SIDES:
         cap, s = side.capitalize(), side[0]
@@ -226,11 +262,14 @@ def find_humanoid(scene: GltfScene, bone_map: Path | None = None) -> Humanoid:
     if human is None:
         human = from_names(scene)
     if human is None:
-        raise AvatarError(f"{scene.source}: no humanoid: not a VRM file and no node names of a "
-                          "known rig (Mixamo, Blender/Rigify, Unreal); give a bone map "
-                          "(NAME.bones.toml)")  # fmt: skip
+        raise AvatarError(
+            f"{scene.source}: no humanoid: not a VRM file and no node names of a "
+            "known rig (Mixamo, Blender/Rigify, Unreal); give a bone map "
+            "(NAME.bones.toml)"
+        )
     missing = human.missing()
     if missing:
-        raise AvatarError(f"{scene.source}: required bone(s) missing ({human.convention}): "
-                          f"{', '.join(missing)}")  # fmt: skip
+        raise AvatarError(
+            f"{scene.source}: required bone(s) missing ({human.convention}): {', '.join(missing)}"
+        )
     return human

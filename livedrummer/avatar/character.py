@@ -71,8 +71,9 @@ def _smooth(edge0: float, edge1: float, x: np.ndarray) -> np.ndarray:
     return np.asarray(t * t * (3.0 - 2.0 * t))
 
 
-def chain_weights(s: np.ndarray, joints: list[int], bounds: list[tuple[float, float]]
-                  ) -> np.ndarray:  # fmt: skip
+def chain_weights(
+    s: np.ndarray, joints: list[int], bounds: list[tuple[float, float]]
+) -> np.ndarray:
     """Dense weights (len(s), N_JOINTS): joint k hands over to k+1 around ``bounds[k]`` =
     (parameter at the joint, half-width of the blend)."""
     s = np.asarray(s, np.float64)
@@ -104,8 +105,14 @@ class _Parts:
     def add(self, material: int, pos: np.ndarray, tri: np.ndarray, weights: np.ndarray) -> None:
         self.parts.append((material, pos, tri, weights))
 
-    def tube(self, material: int, rings: np.ndarray, weights: np.ndarray, *,
-             keep: np.ndarray | None = None) -> None:  # fmt: skip
+    def tube(
+        self,
+        material: int,
+        rings: np.ndarray,
+        weights: np.ndarray,
+        *,
+        keep: np.ndarray | None = None,
+    ) -> None:
         """Rings (R, K, 3) joined into a closed tube; ``weights`` (R, N_JOINTS) per ring or
         (R, K, N_JOINTS) per vertex; ``keep`` (R, K) bool drops every quad with a vertex not
         kept."""
@@ -176,8 +183,9 @@ def _normals(pos: np.ndarray, tri: np.ndarray) -> np.ndarray:
     return np.asarray(n / np.maximum(length, 1e-12))
 
 
-def _ring(centre: np.ndarray, ex: np.ndarray, ey: np.ndarray, a: float, b: float,
-          power: float, k: int) -> np.ndarray:  # fmt: skip
+def _ring(
+    centre: np.ndarray, ex: np.ndarray, ey: np.ndarray, a: float, b: float, power: float, k: int
+) -> np.ndarray:
     """K points of a superellipse (|x/a|^p + |y/b|^p = 1) round ``centre`` in the ex/ey plane;
     angle 0 is +ex, angle 90 degrees +ey."""
     t = np.linspace(0.0, 2.0 * np.pi, k, endpoint=False)
@@ -211,26 +219,36 @@ def _sweep(
         d0 = depth[0] * min(first[1], first[2])
         for phi in np.linspace(np.pi / 2, 0.0, caps[0], endpoint=False):
             f = np.cos(phi) if phi < np.pi / 2 - 1e-9 else 0.0
-            out.append((first[0] - d0 * np.sin(phi), first[1] * f, first[2] * f,
-                        first[3], first[4]))  # fmt: skip
+            out.append(
+                (first[0] - d0 * np.sin(phi), first[1] * f, first[2] * f, first[3], first[4])
+            )
     out.extend(rows)
     if caps[1]:
         d1 = depth[1] * min(last[1], last[2])
         for phi in np.linspace(0.0, np.pi / 2, caps[1] + 1)[1:]:
             f = np.cos(phi) if phi < np.pi / 2 - 1e-9 else 0.0
-            out.append((last[0] + d1 * np.sin(phi), last[1] * f, last[2] * f,
-                        last[3], last[4]))  # fmt: skip
+            out.append((last[0] + d1 * np.sin(phi), last[1] * f, last[2] * f, last[3], last[4]))
     arr = np.array(out)
-    rings = np.stack([
-        _ring(origin + s * axis + ox * ex + oy * ey, ex, ey, a, b, power, k)
-        for s, a, b, ox, oy in arr
-    ])  # fmt: skip
+    rings = np.stack(
+        [
+            _ring(origin + s * axis + ox * ex + oy * ey, ex, ey, a, b, power, k)
+            for s, a, b, ox, oy in arr
+        ]
+    )
     return rings, arr[:, 0]
 
 
-def _ellipsoid(parts: _Parts, material: int, centre: np.ndarray, radii: tuple[float, float, float],
-               joint: int | np.ndarray, *, rot: np.ndarray | None = None, k: int = 10,
-               rings: int = 6) -> None:  # fmt: skip
+def _ellipsoid(
+    parts: _Parts,
+    material: int,
+    centre: np.ndarray,
+    radii: tuple[float, float, float],
+    joint: int | np.ndarray,
+    *,
+    rot: np.ndarray | None = None,
+    k: int = 10,
+    rings: int = 6,
+) -> None:
     """A closed ellipsoid (axes x, y, z scaled by ``radii``, turned by ``rot``) on one joint
     (an index) or on a dense weight row."""
     phi = np.linspace(-np.pi / 2, np.pi / 2, rings + 2)
@@ -300,8 +318,17 @@ def build_character(lengths: SegmentLengths | None = None) -> Avatar:
     mesh = parts.mesh()
     bind = np.tile(np.eye(4, dtype=np.float32), (N_JOINTS, 1, 1))
     bind[:, :3, 3] = p
-    mesh = SkinnedMesh(mesh.positions, mesh.normals, mesh.uv, mesh.joints, mesh.weights,
-                       mesh.indices, mesh.primitives, mesh.materials, bind)  # fmt: skip
+    mesh = SkinnedMesh(
+        mesh.positions,
+        mesh.normals,
+        mesh.uv,
+        mesh.joints,
+        mesh.weights,
+        mesh.indices,
+        mesh.primitives,
+        mesh.materials,
+        bind,
+    )
     mesh.check("built-in character")
     return Avatar("drummer", "built-in", s, mesh, faces=_faces(mesh.positions, parts.where))
 
@@ -326,8 +353,12 @@ def _faces(pos: np.ndarray, where: dict[str, np.ndarray]) -> dict[str, FaceShape
         d[:, 1] = -0.004
         move("blink", parts_, d)
         front = np.concatenate([where[f"{eye}_iris"], where[f"{eye}_pupil"]])
-        for name, axis, amount in (("look_left", 0, -0.0055), ("look_right", 0, 0.0055),
-                                   ("look_up", 2, 0.0035), ("look_down", 2, -0.0035)):  # fmt: skip
+        for name, axis, amount in (
+            ("look_left", 0, -0.0055),
+            ("look_right", 0, 0.0055),
+            ("look_up", 2, 0.0035),
+            ("look_down", 2, -0.0035),
+        ):
             d = np.zeros((front.size, 3))
             d[:, axis] = amount
             move(name, front, d)
@@ -366,9 +397,11 @@ def _torso(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
     hw = s.hip_half_width
 
     def weights(z: np.ndarray) -> np.ndarray:
-        return chain_weights(z, [J["pelvis"], J["lower_back"], J["chest"], J["neck"]],
-                             [(0.5 * k_lb + 0.02, 0.06), (0.5 * (k_lb + k_ch), 0.08),
-                              (k_nk + 0.01, 0.02)])  # fmt: skip
+        return chain_weights(
+            z,
+            [J["pelvis"], J["lower_back"], J["chest"], J["neck"]],
+            [(0.5 * k_lb + 0.02, 0.06), (0.5 * (k_lb + k_ch), 0.08), (k_nk + 0.01, 0.02)],
+        )
 
     # rows: height above the pelvis, half-width, half-depth, x offset, y offset
     trousers = [
@@ -420,8 +453,9 @@ def _torso(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
     )
 
 
-def _shoulder_blend(rings: np.ndarray, ring_w: np.ndarray, p: np.ndarray,
-                    s: SegmentLengths) -> np.ndarray:  # fmt: skip
+def _shoulder_blend(
+    rings: np.ndarray, ring_w: np.ndarray, p: np.ndarray, s: SegmentLengths
+) -> np.ndarray:
     """Per-vertex weights (R, K, N_JOINTS) of the upper torso: the outer shoulder follows
     the upper arm (up to half), so the deltoid bends with it instead of showing a seam."""
     w = np.repeat(ring_w[:, None, :], rings.shape[1], axis=1)
@@ -429,8 +463,12 @@ def _shoulder_blend(rings: np.ndarray, ring_w: np.ndarray, p: np.ndarray,
         sh = J[f"{side}_shoulder"]
         x = rings[..., 0] * sign - (p[J["chest"], 0] * sign)
         z = rings[..., 2] - p[sh, 2]
-        f = 0.85 * _smooth(s.shoulder_half_width - 0.10, s.shoulder_half_width - 0.01, x) * \
-            _smooth(-0.19, -0.07, z) * (1.0 - 0.6 * _smooth(0.0, 0.04, z))  # fmt: skip
+        f = (
+            0.85
+            * _smooth(s.shoulder_half_width - 0.10, s.shoulder_half_width - 0.01, x)
+            * _smooth(-0.19, -0.07, z)
+            * (1.0 - 0.6 * _smooth(0.0, 0.04, z))
+        )
         w *= (1.0 - f)[..., None]
         w[..., sh] += f
     return w
@@ -483,11 +521,13 @@ def _head(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
         parts.tag(f"{eye}_white")
         # the eyes look down by the face's tilt (see FACE_TILT_RAD)
         gaze = _rot_x(-FACE_TILT_RAD - 0.05)
-        _ellipsoid(parts, IRIS, c + gaze @ np.array([0, 0.0083, 0]), (0.0069, 0.0038, 0.0069),
-                   h, rot=gaze)  # fmt: skip
+        _ellipsoid(
+            parts, IRIS, c + gaze @ np.array([0, 0.0083, 0]), (0.0069, 0.0038, 0.0069), h, rot=gaze
+        )
         parts.tag(f"{eye}_iris")
-        _ellipsoid(parts, PUPIL, c + gaze @ np.array([0, 0.0108, 0]), (0.0031, 0.0018, 0.0031),
-                   h, rot=gaze)  # fmt: skip
+        _ellipsoid(
+            parts, PUPIL, c + gaze @ np.array([0, 0.0108, 0]), (0.0031, 0.0018, 0.0031), h, rot=gaze
+        )
         parts.tag(f"{eye}_pupil")
         brow = front(eye_u + 0.19, x * 1.05) - np.array([0, 0.002, 0])
         _ellipsoid(
@@ -518,8 +558,9 @@ def _head(parts: _Parts, s: SegmentLengths, p: np.ndarray) -> None:
     # fringe in front) to the crown; each column of the grid starts at its own hairline
     theta = np.linspace(0.0, 2.0 * np.pi, 32, endpoint=False)
     sin_t, cos_t = np.sin(theta), np.cos(theta)
-    line = np.where(sin_t > 0, 0.30 + 0.20 * sin_t**2 - 0.03 * np.cos(7 * theta) * sin_t,
-                    0.30 + 0.85 * sin_t)  # fmt: skip
+    line = np.where(
+        sin_t > 0, 0.30 + 0.20 * sin_t**2 - 0.03 * np.cos(7 * theta) * sin_t, 0.30 + 0.85 * sin_t
+    )
     t = np.linspace(0.0, 1.0, 14)[:, None]
     uu = line[None, :] + (1.0 - line[None, :]) * (1.0 - (1.0 - t) ** 1.5)
     a, b, y = _head_ring(uu)
@@ -575,8 +616,9 @@ def _hand(parts: _Parts, s: SegmentLengths, p: np.ndarray, side: str, sign: floa
     inner = -X * sign
     hand = wrist[2] - grip[2]
     palm = np.array([grip[0], grip[1] + 0.011, grip[2] + 0.52 * hand])
-    _ellipsoid(parts, SKIN, palm - inner * 0.002, (0.027, 0.018, 0.5 * hand + 0.006), wr,
-               k=14, rings=8)  # fmt: skip
+    _ellipsoid(
+        parts, SKIN, palm - inner * 0.002, (0.027, 0.018, 0.5 * hand + 0.006), wr, k=14, rings=8
+    )
     for f in range(4):
         z = grip[2] + 0.006 + (hand - 0.026) * f / 3.0
         w = np.zeros(N_JOINTS)
@@ -585,24 +627,31 @@ def _hand(parts: _Parts, s: SegmentLengths, p: np.ndarray, side: str, sign: floa
         major, minor = 0.0158, 0.0089 - 0.0005 * f
         # from the back of the hand (+y) round the outer side, under the stick (-y) and up
         # the inner side: 1.5 turns of a half circle
-        ang = np.linspace(0.5 * np.pi, -0.85 * np.pi, 8) if sign > 0 else \
-            np.linspace(0.5 * np.pi, 1.85 * np.pi, 8)  # fmt: skip
-        path = np.column_stack([grip[0] + major * np.cos(ang), grip[1] + major * np.sin(ang),
-                                np.full(ang.size, z)])  # fmt: skip
+        ang = (
+            np.linspace(0.5 * np.pi, -0.85 * np.pi, 8)
+            if sign > 0
+            else np.linspace(0.5 * np.pi, 1.85 * np.pi, 8)
+        )
+        path = np.column_stack(
+            [grip[0] + major * np.cos(ang), grip[1] + major * np.sin(ang), np.full(ang.size, z)]
+        )
         path[0, 1] += 0.006
         _tube_path(parts, SKIN, path, minor, w)
-    thumb = np.array([
-        palm + inner * 0.02 + Y * 0.004 + Z * 0.012,
-        grip + inner * 0.019 + Y * 0.004 + Z * 0.022,
-        grip + inner * 0.012 - Y * 0.002 - Z * 0.002,
-    ])  # fmt: skip
+    thumb = np.array(
+        [
+            palm + inner * 0.02 + Y * 0.004 + Z * 0.012,
+            grip + inner * 0.019 + Y * 0.004 + Z * 0.022,
+            grip + inner * 0.012 - Y * 0.002 - Z * 0.002,
+        ]
+    )
     w = np.zeros(N_JOINTS)
     w[wr], w[st] = 0.3, 0.7
     _tube_path(parts, SKIN, thumb, 0.0098, w)
 
 
-def _tube_path(parts: _Parts, material: int, path: np.ndarray, radius: float,
-               weights: np.ndarray, k: int = 7) -> None:  # fmt: skip
+def _tube_path(
+    parts: _Parts, material: int, path: np.ndarray, radius: float, weights: np.ndarray, k: int = 7
+) -> None:
     """A round tube of ``radius`` along a polyline, with rounded ends, on one weight row."""
     d = np.gradient(path, axis=0)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
@@ -610,13 +659,15 @@ def _tube_path(parts: _Parts, material: int, path: np.ndarray, radius: float,
     ex = np.cross(d, helper)
     ex /= np.linalg.norm(ex, axis=1, keepdims=True)
     ey = np.cross(d, ex)
-    rings = [np.asarray(path[0] - d[0] * radius * 0.999)[None].repeat(k, 0),
-             _ring(path[0] - d[0] * radius * 0.7, ex[0], ey[0], radius * 0.7, radius * 0.7,
-                   2.0, k)]  # fmt: skip
+    rings = [
+        np.asarray(path[0] - d[0] * radius * 0.999)[None].repeat(k, 0),
+        _ring(path[0] - d[0] * radius * 0.7, ex[0], ey[0], radius * 0.7, radius * 0.7, 2.0, k),
+    ]
     for i in range(path.shape[0]):
         rings.append(_ring(path[i], ex[i], ey[i], radius, radius, 2.0, k))
-    rings.append(_ring(path[-1] + d[-1] * radius * 0.7, ex[-1], ey[-1], radius * 0.7,
-                       radius * 0.7, 2.0, k))  # fmt: skip
+    rings.append(
+        _ring(path[-1] + d[-1] * radius * 0.7, ex[-1], ey[-1], radius * 0.7, radius * 0.7, 2.0, k)
+    )
     rings.append(np.asarray(path[-1] + d[-1] * radius * 0.999)[None].repeat(k, 0))
     arr = np.stack(rings)
     parts.tube(material, arr, np.tile(weights, (arr.shape[0], 1)))

@@ -52,8 +52,10 @@ def _vrm1(ext: dict[str, Any]) -> dict[str, Binds]:
         for name, e in (exprs.get(group) or {}).items():
             if isinstance(e, dict):
                 binds = [b for b in e.get("morphTargetBinds") or [] if isinstance(b, dict)]
-                out[str(name)] = [(int(b.get("node", -1)), int(b.get("index", -1)),
-                                   float(b.get("weight", 1.0))) for b in binds]  # fmt: skip
+                out[str(name)] = [
+                    (int(b.get("node", -1)), int(b.get("index", -1)), float(b.get("weight", 1.0)))
+                    for b in binds
+                ]
     return out
 
 
@@ -103,8 +105,13 @@ def _sum(scene: GltfScene, binds: Binds, name: str) -> tuple[np.ndarray, np.ndar
     for node, target, weight in binds:
         got = scene.morphs.get((node, target))
         if got is None:
-            log.info("%s: expression for %s binds node %d target %d, which has none: skipped",
-                     scene.source, name, node, target)  # fmt: skip
+            log.info(
+                "%s: expression for %s binds node %d target %d, which has none: skipped",
+                scene.source,
+                name,
+                node,
+                target,
+            )
             continue
         idx.append(got[0])
         deltas.append(got[1] * weight)

@@ -95,12 +95,21 @@ def scaled_avatar(avatar: Avatar, k: float) -> Avatar:
     for side in ("r", "l"):  # the stick keeps its length: the tip stays as far from the grip
         stick, tip = J[f"{side}_stick"], J[f"{side}_tip"]
         bind[tip, :3, 3] = bind[stick, :3, 3] + (mesh.bind[tip, :3, 3] - mesh.bind[stick, :3, 3])
-    new_mesh = replace(mesh, positions=(mesh.positions * np.float32(k)).astype(np.float32),
-                       bind=bind)  # fmt: skip
-    faces = {name: replace(f, deltas=(f.deltas * np.float32(k)).astype(np.float32))
-             for name, f in avatar.faces.items()}  # fmt: skip
-    return Avatar(avatar.name, avatar.source, scaled_lengths(avatar.lengths, k), new_mesh,
-                  dict(avatar.bones), faces=faces)  # fmt: skip
+    new_mesh = replace(
+        mesh, positions=(mesh.positions * np.float32(k)).astype(np.float32), bind=bind
+    )
+    faces = {
+        name: replace(f, deltas=(f.deltas * np.float32(k)).astype(np.float32))
+        for name, f in avatar.faces.items()
+    }
+    return Avatar(
+        avatar.name,
+        avatar.source,
+        scaled_lengths(avatar.lengths, k),
+        new_mesh,
+        dict(avatar.bones),
+        faces=faces,
+    )
 
 
 def moved_kit(kit: Kit, k: float) -> Kit:
@@ -111,13 +120,23 @@ def moved_kit(kit: Kit, k: float) -> Kit:
         return (v[0] * k, v[1] * k, v[2] * k)
 
     pieces = tuple(
-        replace(p, position_m=times(p.position_m),
-                pedal_position_m=None if p.pedal_position_m is None else times(p.pedal_position_m))
+        replace(
+            p,
+            position_m=times(p.position_m),
+            pedal_position_m=None if p.pedal_position_m is None else times(p.pedal_position_m),
+        )
         for p in kit.pieces
-    )  # fmt: skip
-    return Kit(kit.name, kit.description, kit.handedness, kit.seat_height_m * k, pieces,
-               dict(kit.pairs), f"{kit.source} (moved x{k:.3f} to the avatar)",
-               kit.lights)  # fmt: skip
+    )
+    return Kit(
+        kit.name,
+        kit.description,
+        kit.handedness,
+        kit.seat_height_m * k,
+        pieces,
+        dict(kit.pairs),
+        f"{kit.source} (moved x{k:.3f} to the avatar)",
+        kit.lights,
+    )
 
 
 def _try(kit: Kit, lengths: SegmentLengths | None) -> tuple[Rig | None, str]:
@@ -176,8 +195,16 @@ def fit_avatar(kit: Kit, avatar: Avatar | None, asked: str = "auto") -> Fitting:
         rig, error = _try(kit, None)
         if rig is None:
             raise UnreachableError(error)
-        return Fitting(kit, None, rig, asked, "none", 1.0, 1.0, "the built-in character: "
-                       f"kit {kit.name} is built for it")  # fmt: skip
+        return Fitting(
+            kit,
+            None,
+            rig,
+            asked,
+            "none",
+            1.0,
+            1.0,
+            f"the built-in character: kit {kit.name} is built for it",
+        )
     reach = reach_ratio(avatar.lengths)
     who = f"with avatar {avatar.source}"
     if asked in ("auto", "none"):

@@ -52,8 +52,9 @@ _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "M
 _GLB_MAGIC = b"glTF"
 MTOON = ("VRMC_materials_mtoon",)
 #: Required extensions whose buffers cannot be read as plain accessors.
-COMPRESSED = frozenset({"KHR_draco_mesh_compression", "EXT_meshopt_compression",
-                        "KHR_meshopt_compression"})  # fmt: skip
+COMPRESSED = frozenset(
+    {"KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression"}
+)
 
 
 @dataclass(frozen=True)
@@ -137,8 +138,9 @@ def _load(data: bytes, source: str) -> Any:
         except AvatarError:
             raise
         except Exception as exc:  # the library raises anything from struct.error to KeyError
-            raise AvatarError(f"{source}: not a readable glTF file: "
-                              f"{type(exc).__name__}: {exc}") from exc  # fmt: skip
+            raise AvatarError(
+                f"{source}: not a readable glTF file: {type(exc).__name__}: {exc}"
+            ) from exc
     if gltf is None:
         raise AvatarError(f"{source}: GLB container without a JSON chunk")
     version = str(getattr(gltf.asset, "version", "") or "")
@@ -146,8 +148,10 @@ def _load(data: bytes, source: str) -> Any:
         raise AvatarError(f"{source}: glTF version {version or '?'} (only 2.x is read)")
     unread = sorted(set(gltf.extensionsRequired or []) & COMPRESSED)
     if unread:
-        raise AvatarError(f"{source}: compressed with {', '.join(unread)}, which is not read "
-                          "(export it uncompressed)")  # fmt: skip
+        raise AvatarError(
+            f"{source}: compressed with {', '.join(unread)}, which is not read "
+            "(export it uncompressed)"
+        )
     return gltf
 
 
@@ -161,11 +165,13 @@ def _trs(node: Any) -> np.ndarray:
     x, y, z, w = (float(v) for v in r)
     n = np.sqrt(x * x + y * y + z * z + w * w) or 1.0
     x, y, z, w = x / n, y / n, z / n, w / n
-    rot = np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])  # fmt: skip
+    rot = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
     m[:3, :3] = rot * np.asarray(s, np.float64)[None, :]
     m[:3, 3] = t
     return m
@@ -238,8 +244,10 @@ class _Reader:
         start = int(bv.byteOffset or 0)
         length = int(bv.byteLength or 0)
         if start < 0 or length < 0 or start + length > len(data):
-            raise self.fail(f"{what}: buffer view {index} ({start}+{length} bytes) runs past "
-                            f"buffer {bv.buffer} ({len(data)} bytes)")  # fmt: skip
+            raise self.fail(
+                f"{what}: buffer view {index} ({start}+{length} bytes) runs past "
+                f"buffer {bv.buffer} ({len(data)} bytes)"
+            )
         return data, start, length, bv.byteStride
 
     def accessor(self, index: Any, what: str) -> np.ndarray:
@@ -250,8 +258,9 @@ class _Reader:
         dtype = _COMPONENTS.get(acc.componentType)
         width = _WIDTH.get(acc.type)
         if dtype is None or width is None:
-            raise self.fail(f"{label}: component type {acc.componentType} / type {acc.type!r} "
-                            "is not glTF 2.0")  # fmt: skip
+            raise self.fail(
+                f"{label}: component type {acc.componentType} / type {acc.type!r} is not glTF 2.0"
+            )
         count = int(acc.count or 0)
         item = np.dtype(dtype).itemsize
         if acc.bufferView is None:
@@ -263,11 +272,14 @@ class _Reader:
             offset = int(acc.byteOffset or 0)
             end = offset + step * max(count - 1, 0) + size if count else offset
             if offset < 0 or step < size or end > length:
-                raise self.fail(f"{label}: {count} items of {size} bytes (stride {step}) from "
-                                f"offset {offset} run past its buffer view of {length} "
-                                "bytes")  # fmt: skip
-            out = np.ndarray((count, width), dtype, buffer=data, offset=start + offset,
-                             strides=(step, item)).copy()  # fmt: skip
+                raise self.fail(
+                    f"{label}: {count} items of {size} bytes (stride {step}) from "
+                    f"offset {offset} run past its buffer view of {length} "
+                    "bytes"
+                )
+            out = np.ndarray(
+                (count, width), dtype, buffer=data, offset=start + offset, strides=(step, item)
+            ).copy()
         if acc.sparse is not None and acc.sparse.count:
             out = self._sparse(acc, out, label)
         result: np.ndarray = out
@@ -328,8 +340,12 @@ class _Reader:
         decoded = 0
         for i, m in enumerate(self.gltf.materials or []):
             pbr = m.pbrMetallicRoughness
-            factor = tuple(float(v) for v in (pbr.baseColorFactor if pbr and pbr.baseColorFactor
-                                              else (1.0, 1.0, 1.0, 1.0)))  # fmt: skip
+            factor = tuple(
+                float(v)
+                for v in (
+                    pbr.baseColorFactor if pbr and pbr.baseColorFactor else (1.0, 1.0, 1.0, 1.0)
+                )
+            )
             if len(factor) != 4:
                 raise self.fail(f"material {i}: baseColorFactor has {len(factor)} numbers")
             texture = None
@@ -347,13 +363,17 @@ class _Reader:
             mext = m.extensions or {}
             toon = any(k in mext for k in MTOON) or vrm0.get(m.name or "", "") == "VRM/MToon"
             shading: Shading = "toon" if toon else "lit"
-            out.append(Material(
-                name=m.name or f"material{i}",
-                base_color=(factor[0], factor[1], factor[2], factor[3]),
-                texture=texture, alpha_mode=alpha,
-                alpha_cutoff=float(0.5 if m.alphaCutoff is None else m.alphaCutoff),
-                double_sided=bool(m.doubleSided), shading=shading,
-            ))  # fmt: skip
+            out.append(
+                Material(
+                    name=m.name or f"material{i}",
+                    base_color=(factor[0], factor[1], factor[2], factor[3]),
+                    texture=texture,
+                    alpha_mode=alpha,
+                    alpha_cutoff=float(0.5 if m.alphaCutoff is None else m.alphaCutoff),
+                    double_sided=bool(m.doubleSided),
+                    shading=shading,
+                )
+            )
         return out, decoded
 
     def nodes(self) -> tuple[list[Node], list[int]]:
@@ -393,7 +413,7 @@ class _Reader:
         out = [
             Node(gltf_nodes[i].name or f"node{i}", parent[i], _or_local(world[i], gltf_nodes[i]))
             for i in range(n)
-        ]  # fmt: skip
+        ]
         return out, order
 
     def scene(self) -> GltfScene:
@@ -444,25 +464,37 @@ class _Reader:
             return np.concatenate([p[key] for p in parts])
 
         def pad(key: str, fill: float) -> np.ndarray:
-            return np.concatenate([
-                np.pad(p[key], ((0, 0), (0, width - p[key].shape[1])), constant_values=fill)
-                for p in parts
-            ])  # fmt: skip
+            return np.concatenate(
+                [
+                    np.pad(p[key], ((0, 0), (0, width - p[key].shape[1])), constant_values=fill)
+                    for p in parts
+                ]
+            )
 
         ext = self.gltf.extensions if isinstance(self.gltf.extensions, dict) else {}
         return GltfScene(
-            source=self.source, nodes=tuple(nodes), positions=cat("positions"),
-            normals=cat("normals"), uv=cat("uv").astype(np.float32), bones=pad("bones", 0),
-            weights=pad("weights", 0.0), indices=cat("indices").astype(np.uint32),
-            primitives=tuple(prims), materials=tuple(materials), extensions=dict(ext),
+            source=self.source,
+            nodes=tuple(nodes),
+            positions=cat("positions"),
+            normals=cat("normals"),
+            uv=cat("uv").astype(np.float32),
+            bones=pad("bones", 0),
+            weights=pad("weights", 0.0),
+            indices=cat("indices").astype(np.uint32),
+            primitives=tuple(prims),
+            materials=tuple(materials),
+            extensions=dict(ext),
             textures=decoded,
-            morphs={key: (np.concatenate([m[0] for m in got]), np.concatenate([m[1] for m in got]))
-                    for key, got in morphs.items()},
+            morphs={
+                key: (np.concatenate([m[0] for m in got]), np.concatenate([m[1] for m in got]))
+                for key, got in morphs.items()
+            },
             mesh_nodes={m: tuple(n) for m, n in mesh_nodes.items()},
-        )  # fmt: skip
+        )
 
-    def _primitive(self, prim: Any, ni: int, gnode: Any, nodes: list[Node], what: str
-                   ) -> dict[str, Any] | None:  # fmt: skip
+    def _primitive(
+        self, prim: Any, ni: int, gnode: Any, nodes: list[Node], what: str
+    ) -> dict[str, Any] | None:
         mode = 4 if prim.mode is None else int(prim.mode)
         if mode not in (4, 5, 6):
             log.info("%s: %s: mode %d (points or lines) skipped", self.source, what, mode)
@@ -480,8 +512,9 @@ class _Reader:
                 return None
             arr = self.accessor(index, f"{what} {name}")
             if arr.shape != (v, cols):
-                raise self.fail(f"{what}: {name} has {arr.shape[0]} items of {arr.shape[1]}, "
-                                f"want {v} of {cols}")  # fmt: skip
+                raise self.fail(
+                    f"{what}: {name} has {arr.shape[0]} items of {arr.shape[1]}, want {v} of {cols}"
+                )
             return arr
 
         nrm = per_vertex(attrs.NORMAL, "NORMAL", 3)
@@ -515,16 +548,20 @@ class _Reader:
             if skin.inverseBindMatrices is not None:
                 ibm = self.accessor(skin.inverseBindMatrices, f"skin {gnode.skin} inverse binds")
                 if ibm.shape != (len(skin_joints), 4, 4):
-                    raise self.fail(f"skin {gnode.skin}: {ibm.shape[0]} inverse bind matrices "
-                                    f"for {len(skin_joints)} joints")  # fmt: skip
+                    raise self.fail(
+                        f"skin {gnode.skin}: {ibm.shape[0]} inverse bind matrices "
+                        f"for {len(skin_joints)} joints"
+                    )
             else:
                 ibm = np.tile(np.eye(4), (len(skin_joints), 1, 1))
             jm = np.stack([nodes[j].world for j in skin_joints]) @ ibm
             local = np.concatenate([s[0] for s in joint_sets], axis=1)
             weights = np.concatenate([s[1] for s in joint_sets], axis=1)
             if local.size and local.max() >= len(skin_joints):
-                raise self.fail(f"{what}: JOINTS_ index {int(local.max())} past the "
-                                f"{len(skin_joints)} joints of skin {gnode.skin}")  # fmt: skip
+                raise self.fail(
+                    f"{what}: JOINTS_ index {int(local.max())} past the "
+                    f"{len(skin_joints)} joints of skin {gnode.skin}"
+                )
             weights = np.where(np.isfinite(weights) & (weights > 0), weights, 0.0)
             total = weights.sum(axis=1, keepdims=True)
             empty = total[:, 0] <= 1e-9
@@ -551,8 +588,11 @@ class _Reader:
             raise self.fail(f"{what}: vertex positions are not finite")
         morphs = {}
         for k, target in enumerate(prim.targets or []):
-            index = target.get("POSITION") if isinstance(target, dict) else getattr(
-                target, "POSITION", None)  # fmt: skip
+            index = (
+                target.get("POSITION")
+                if isinstance(target, dict)
+                else getattr(target, "POSITION", None)
+            )
             delta = per_vertex(index, f"morph target {k} POSITION", 3)
             if delta is not None:
                 morphs[k] = np.einsum("vij,vj->vi", linear, delta.astype(np.float64))

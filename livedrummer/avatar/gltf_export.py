@@ -51,8 +51,12 @@ def _png(rgba: np.ndarray) -> bytes:
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", crc)
 
     head = struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", head)
-            + chunk(b"IDAT", zlib.compress(rows.tobytes(), 6)) + chunk(b"IEND", b""))  # fmt: skip
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", head)
+        + chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
+        + chunk(b"IEND", b"")
+    )
 
 
 def _xyzw(q_wxyz: np.ndarray) -> np.ndarray:
@@ -75,17 +79,25 @@ class _Doc:
 
     def view(self, data: bytes, target: int | None = None) -> int:
         self.blob.extend(b"\x00" * (-len(self.blob) % 4))
-        bv = self.lib.BufferView(buffer=0, byteOffset=len(self.blob), byteLength=len(data),
-                                 target=target)  # fmt: skip
+        bv = self.lib.BufferView(
+            buffer=0, byteOffset=len(self.blob), byteLength=len(data), target=target
+        )
         self.g.bufferViews.append(bv)
         self.blob.extend(data)
         return len(self.g.bufferViews) - 1
 
-    def accessor(self, arr: np.ndarray, kind: str, component: int, target: int | None = None,
-                 bounds: bool = False) -> int:  # fmt: skip
+    def accessor(
+        self,
+        arr: np.ndarray,
+        kind: str,
+        component: int,
+        target: int | None = None,
+        bounds: bool = False,
+    ) -> int:
         view = self.view(np.ascontiguousarray(arr).tobytes(), target)
-        acc = self.lib.Accessor(bufferView=view, componentType=component,
-                                count=int(arr.shape[0]), type=kind)  # fmt: skip
+        acc = self.lib.Accessor(
+            bufferView=view, componentType=component, count=int(arr.shape[0]), type=kind
+        )
         if bounds:
             flat = arr.reshape(arr.shape[0], -1)
             acc.min = [float(v) for v in flat.min(axis=0)]
@@ -100,16 +112,21 @@ class _Doc:
     def material(self, m: Material) -> int:
         lib = self.lib
         pbr = lib.PbrMetallicRoughness(
-            baseColorFactor=[float(c) for c in m.base_color], metallicFactor=0.0,
+            baseColorFactor=[float(c) for c in m.base_color],
+            metallicFactor=0.0,
             roughnessFactor=float(m.roughness),
-        )  # fmt: skip
+        )
         if m.texture is not None:
             image = self.view(_png(np.ascontiguousarray(m.texture, np.uint8)))
             self.g.images.append(lib.Image(bufferView=image, mimeType="image/png", name=m.name))
             self.g.textures.append(lib.Texture(source=len(self.g.images) - 1))
             pbr.baseColorTexture = lib.TextureInfo(index=len(self.g.textures) - 1)
-        mat = lib.Material(name=m.name, pbrMetallicRoughness=pbr, alphaMode=m.alpha_mode,
-                           doubleSided=m.double_sided)  # fmt: skip
+        mat = lib.Material(
+            name=m.name,
+            pbrMetallicRoughness=pbr,
+            alphaMode=m.alpha_mode,
+            doubleSided=m.double_sided,
+        )
         if m.alpha_mode == "MASK":
             mat.alphaCutoff = float(m.alpha_cutoff)
         if m.shading == "toon":
@@ -120,10 +137,50 @@ class _Doc:
 
 def _box(length_from: float, length_to: float, r: float) -> tuple[np.ndarray, np.ndarray]:
     """A box along local z from ``length_from`` to ``length_to``, ``2r`` across."""
-    corners = np.array([[x, y, z] for z in (length_from, length_to) for x in (-r, r)
-                        for y in (-r, r)], np.float32)  # fmt: skip
-    faces = np.array([0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1,
-                      2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3], np.uint32)  # fmt: skip
+    corners = np.array(
+        [[x, y, z] for z in (length_from, length_to) for x in (-r, r) for y in (-r, r)], np.float32
+    )
+    faces = np.array(
+        [
+            0,
+            1,
+            3,
+            0,
+            3,
+            2,
+            4,
+            6,
+            7,
+            4,
+            7,
+            5,
+            0,
+            4,
+            5,
+            0,
+            5,
+            1,
+            2,
+            3,
+            7,
+            2,
+            7,
+            6,
+            0,
+            2,
+            6,
+            0,
+            6,
+            4,
+            1,
+            5,
+            7,
+            1,
+            7,
+            3,
+        ],
+        np.uint32,
+    )
     return corners, faces
 
 
@@ -131,8 +188,9 @@ def _matrix(m: np.ndarray) -> list[float]:
     return [float(v) for v in np.asarray(m, np.float64).T.reshape(16)]
 
 
-def _kit(d: _Doc, kit: KitMesh, channels: np.ndarray, clock: int
-         ) -> tuple[list[int], list[Any], list[Any]]:  # fmt: skip
+def _kit(
+    d: _Doc, kit: KitMesh, channels: np.ndarray, clock: int
+) -> tuple[list[int], list[Any], list[Any]]:
     """Nodes of the kit's instances, and the animation samplers/channels of those that move."""
     from livedrummer.body import quat
     from livedrummer.render.geometry import all_meshes
@@ -161,8 +219,12 @@ def _kit(d: _Doc, kit: KitMesh, channels: np.ndarray, clock: int
             metal = float(kit.material[i, 0])
             mat = d.material(Material(f"kit {name}", colour, roughness=1.0 - 0.6 * metal))
             index = d.accessor(np.asarray(unit.indices, np.uint32), "SCALAR", _UINT, _ELEMENTS)
-            g.meshes.append(lib.Mesh(name=f"kit {name}", primitives=[
-                lib.Primitive(attributes=attrs, material=mat, indices=index)]))  # fmt: skip
+            g.meshes.append(
+                lib.Mesh(
+                    name=f"kit {name}",
+                    primitives=[lib.Primitive(attributes=attrs, material=mat, indices=index)],
+                )
+            )
             meshes[key] = len(g.meshes) - 1
         placed = d.node(name=f"kit {i} {name}", mesh=meshes[key], matrix=_matrix(kit.model[i]))
         if i not in moves_at:
@@ -180,9 +242,15 @@ def _kit(d: _Doc, kit: KitMesh, channels: np.ndarray, clock: int
     return nodes, samplers, anim
 
 
-def performance_glb(avatar: Avatar, skeleton: Skeleton, times: np.ndarray, local_q: np.ndarray,
-                    root_m: np.ndarray, kit: KitMesh | None = None,
-                    kit_channels: np.ndarray | None = None) -> bytes:  # fmt: skip
+def performance_glb(
+    avatar: Avatar,
+    skeleton: Skeleton,
+    times: np.ndarray,
+    local_q: np.ndarray,
+    root_m: np.ndarray,
+    kit: KitMesh | None = None,
+    kit_channels: np.ndarray | None = None,
+) -> bytes:
     """GLB bytes of ``avatar`` playing ``local_q`` (T, 24, 4; w x y z) and ``root_m`` (T, 3) at
     ``times`` (T,) seconds, on the skeleton the motion was made for; with ``kit`` and its
     scene channels ``kit_channels`` (T, P, 4), the kit too."""
@@ -202,9 +270,13 @@ def performance_glb(avatar: Avatar, skeleton: Skeleton, times: np.ndarray, local
         parent.children = [*(parent.children or []), joint_node[j]]
     mesh = avatar.mesh
     ibm = np.linalg.inv(mesh.bind.astype(np.float64)).transpose(0, 2, 1).astype(np.float32)
-    g.skins.append(lib.Skin(joints=joint_node, skeleton=joint_node[0],
-                            inverseBindMatrices=d.accessor(ibm.reshape(N_JOINTS, 16), "MAT4",
-                                                           _FLOAT)))  # fmt: skip
+    g.skins.append(
+        lib.Skin(
+            joints=joint_node,
+            skeleton=joint_node[0],
+            inverseBindMatrices=d.accessor(ibm.reshape(N_JOINTS, 16), "MAT4", _FLOAT),
+        )
+    )
     mats = [d.material(m) for m in mesh.materials]
     attrs = lib.Attributes(
         POSITION=d.accessor(mesh.positions, "VEC3", _FLOAT, _ARRAY, bounds=True),
@@ -218,17 +290,27 @@ def performance_glb(avatar: Avatar, skeleton: Skeleton, times: np.ndarray, local
     prims = []
     for p in mesh.primitives:
         if p.count:
-            index = d.accessor(mesh.indices[p.first : p.first + p.count], "SCALAR", _UINT,
-                               _ELEMENTS)  # fmt: skip
+            index = d.accessor(
+                mesh.indices[p.first : p.first + p.count], "SCALAR", _UINT, _ELEMENTS
+            )
             prims.append(lib.Primitive(attributes=attrs, material=mats[p.material], indices=index))
     g.meshes.append(lib.Mesh(name=avatar.name, primitives=prims))
     body = d.node(name=f"avatar {avatar.name}", mesh=len(g.meshes) - 1, skin=0)
     wood = d.material(Material("stick", (0.85, 0.70, 0.45, 1.0)))
     corners, faces = _box(STICK_TAIL_M, -skeleton.lengths.stick, STICK_RADIUS_M)
     stick_attrs = lib.Attributes(POSITION=d.accessor(corners, "VEC3", _FLOAT, _ARRAY, bounds=True))
-    g.meshes.append(lib.Mesh(name="stick", primitives=[lib.Primitive(
-        attributes=stick_attrs, material=wood,
-        indices=d.accessor(faces, "SCALAR", _UINT, _ELEMENTS))]))  # fmt: skip
+    g.meshes.append(
+        lib.Mesh(
+            name="stick",
+            primitives=[
+                lib.Primitive(
+                    attributes=stick_attrs,
+                    material=wood,
+                    indices=d.accessor(faces, "SCALAR", _UINT, _ELEMENTS),
+                )
+            ],
+        )
+    )
     for side in ("r", "l"):
         grip = g.nodes[joint_node[J[f"{side}_stick"]]]
         stick = d.node(name=f"{side}_stick_geo", mesh=len(g.meshes) - 1)

@@ -48,8 +48,10 @@ def resolve_avatar(spec: str) -> Path | None:
     if hits:
         return hits[-1]
     names = ", ".join(name for name, _, _ in list_avatars())
-    raise AvatarError(f"avatar {spec!r}: no such file or name (known: {names}; add .vrm/.glb "
-                      f"files to {user_home() / 'avatars'})")  # fmt: skip
+    raise AvatarError(
+        f"avatar {spec!r}: no such file or name (known: {names}; add .vrm/.glb "
+        f"files to {user_home() / 'avatars'})"
+    )
 
 
 def _bone_map_for(path: Path, bone_map: Path | None) -> Path | None:
@@ -120,8 +122,9 @@ class AvatarInfo:
         return out
 
 
-def inspect_avatar(path: Path, bone_map: Path | None = None, kit: Kit | None = None,
-                   fit: str = "auto") -> AvatarInfo:  # fmt: skip
+def inspect_avatar(
+    path: Path, bone_map: Path | None = None, kit: Kit | None = None, fit: str = "auto"
+) -> AvatarInfo:
     """Everything ``avatar info`` shows; a file that is not glTF at all still raises. With
     ``kit``, the avatar is also fitted to it as ``render --fit FIT`` would (the same call), and
     a piece it would leave out of reach makes it unusable with that reason."""

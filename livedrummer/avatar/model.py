@@ -111,11 +111,14 @@ class SkinnedMesh:
         for name, (shape, dtype) in want.items():
             arr = getattr(self, name)
             if arr.shape != shape or arr.dtype != dtype:
-                raise AvatarError(f"{where}: {name} is {arr.dtype}{arr.shape}, want "
-                                  f"{np.dtype(dtype)}{shape}")  # fmt: skip
+                raise AvatarError(
+                    f"{where}: {name} is {arr.dtype}{arr.shape}, want {np.dtype(dtype)}{shape}"
+                )
         if self.indices.dtype != np.uint32 or self.indices.ndim != 1 or self.indices.size % 3:
-            raise AvatarError(f"{where}: indices must be uint32 triangles (got "
-                              f"{self.indices.dtype}{self.indices.shape})")  # fmt: skip
+            raise AvatarError(
+                f"{where}: indices must be uint32 triangles (got "
+                f"{self.indices.dtype}{self.indices.shape})"
+            )
         if v == 0 or self.indices.size == 0:
             raise AvatarError(f"{where}: the mesh has no triangles")
         if int(self.indices.max()) >= v:
@@ -127,8 +130,9 @@ class SkinnedMesh:
         sums = self.weights.sum(axis=1)
         bad = np.flatnonzero(np.abs(sums - 1.0) > 1e-3)
         if bad.size:
-            raise AvatarError(f"{where}: vertex {int(bad[0])} weights sum to "
-                              f"{float(sums[bad[0]]):.4f}, want 1")  # fmt: skip
+            raise AvatarError(
+                f"{where}: vertex {int(bad[0])} weights sum to {float(sums[bad[0]]):.4f}, want 1"
+            )
         end = 0
         for i, prim in enumerate(self.primitives):
             if not 0 <= prim.material < len(self.materials):

@@ -69,10 +69,15 @@ THUMB_CURL_DEG = (20.0, 35.0, 30.0)
 _DEFAULT = SegmentLengths()
 
 #: Humanoid bone -> our joint (per side: VRM "right" is the drummer's right, +x).
-_TORSO = {"hips": "pelvis", "spine": "lower_back", "chest": "chest", "neck": "neck",
-          "head": "head"}  # fmt: skip
-_LIMB = {"UpperArm": "shoulder", "LowerArm": "elbow", "Hand": "wrist", "UpperLeg": "hip",
-         "LowerLeg": "knee", "Foot": "ankle"}  # fmt: skip
+_TORSO = {"hips": "pelvis", "spine": "lower_back", "chest": "chest", "neck": "neck", "head": "head"}
+_LIMB = {
+    "UpperArm": "shoulder",
+    "LowerArm": "elbow",
+    "Hand": "wrist",
+    "UpperLeg": "hip",
+    "LowerLeg": "knee",
+    "Foot": "ankle",
+}
 
 
 @dataclass(frozen=True)
@@ -125,8 +130,10 @@ def _frame(scene: GltfScene, human: Humanoid) -> tuple[np.ndarray, float, str, s
     for lo, hi, unit in ((0.3, 3.5, 1.0), (30.0, 350.0, 0.01), (350.0, 3500.0, 0.001)):
         if lo <= height <= hi:
             return rot, unit, _axis_name(rot[1]), _axis_name(rot[2])
-    raise AvatarError(f"{scene.source}: the avatar is {height:.4g} units tall: not a person in "
-                      "metres, centimetres or millimetres")  # fmt: skip
+    raise AvatarError(
+        f"{scene.source}: the avatar is {height:.4g} units tall: not a person in "
+        "metres, centimetres or millimetres"
+    )
 
 
 def _curl(human: Humanoid, parents: np.ndarray, heads: np.ndarray) -> np.ndarray:
@@ -150,8 +157,11 @@ def _curl(human: Humanoid, parents: np.ndarray, heads: np.ndarray) -> np.ndarray
         else:
             palm = _unit(-UP - (-UP @ h_dir) * h_dir)
         for finger in FINGERS:
-            parts = (("Metacarpal", "Proximal", "Distal") if finger == "Thumb"
-                     else ("Proximal", "Intermediate", "Distal"))  # fmt: skip
+            parts = (
+                ("Metacarpal", "Proximal", "Distal")
+                if finger == "Thumb"
+                else ("Proximal", "Intermediate", "Distal")
+            )
             angles = THUMB_CURL_DEG if finger == "Thumb" else CURL_DEG
             chain = [b.get(f"{side}{finger}{p}") for p in parts]
             for k, node in enumerate(chain):
@@ -224,10 +234,16 @@ def retarget(scene: GltfScene, human: Humanoid, name: str) -> tuple[Avatar, Fitt
     lengths, bind, node_joint = _fit(scene, human, heads, pos, parents)
     joints, weights = _remap(scene.bones, scene.weights, node_joint)
     mesh = SkinnedMesh(
-        positions=pos.astype(np.float32), normals=nrm.astype(np.float32), uv=scene.uv,
-        joints=joints, weights=weights, indices=scene.indices, primitives=scene.primitives,
-        materials=scene.materials, bind=bind,
-    )  # fmt: skip
+        positions=pos.astype(np.float32),
+        normals=nrm.astype(np.float32),
+        uv=scene.uv,
+        joints=joints,
+        weights=weights,
+        indices=scene.indices,
+        primitives=scene.primitives,
+        materials=scene.materials,
+        bind=bind,
+    )
     mesh.check(src)
     bones = {our: scene.nodes[human.bones[b]].name for b, our in _mapping(human).items()}
     height = float(pos[:, 2].max() - pos[:, 2].min())
@@ -249,8 +265,9 @@ def _mapping(human: Humanoid) -> dict[str, str]:
     return out
 
 
-def _fit(scene: GltfScene, human: Humanoid, heads: np.ndarray, pos: np.ndarray,
-         parents: np.ndarray) -> tuple[SegmentLengths, np.ndarray, np.ndarray]:  # fmt: skip
+def _fit(
+    scene: GltfScene, human: Humanoid, heads: np.ndarray, pos: np.ndarray, parents: np.ndarray
+) -> tuple[SegmentLengths, np.ndarray, np.ndarray]:
     src = scene.source
     b = human.bones
 
@@ -273,9 +290,11 @@ def _fit(scene: GltfScene, human: Humanoid, heads: np.ndarray, pos: np.ndarray,
     }  # fmt: skip
     for seg, value in torso.items():
         if not value > 0.005:
-            raise AvatarError(f"{src}: the bones do not stack up the torso: segment {seg} is "
-                              f"{value * 1000:.0f} mm (spine above hips, neck above chest, "
-                              "head above neck?)")  # fmt: skip
+            raise AvatarError(
+                f"{src}: the bones do not stack up the torso: segment {seg} is "
+                f"{value * 1000:.0f} mm (spine above hips, neck above chest, "
+                "head above neck?)"
+            )
     half_w = abs(at("rightUpperArm")[0] - at("leftUpperArm")[0]) / 2
     hip_w = abs(at("rightUpperLeg")[0] - at("leftUpperLeg")[0]) / 2
     hip_f = max(0.005, (at("rightUpperLeg")[1] + at("leftUpperLeg")[1]) / 2 - at("hips")[1])
@@ -322,13 +341,24 @@ def _fit(scene: GltfScene, human: Humanoid, heads: np.ndarray, pos: np.ndarray,
     legs_ratio = (mean["thigh"] + mean["shin"]) / (_DEFAULT.thigh + _DEFAULT.shin)
     try:
         lengths = SegmentLengths(
-            pelvis_height=_DEFAULT.pelvis_height * legs_ratio, lower_back=torso["lower_back"],
-            upper_back=torso["upper_back"], chest_to_shoulder=torso["chest_to_shoulder"],
-            shoulder_half_width=half_w, neck=torso["neck"], head=torso["head"],
-            head_top=torso["head_top"], upper_arm=mean["upper_arm"], forearm=mean["forearm"],
-            hand=mean["hand"], stick=STICK_M, hip_half_width=hip_w, hip_forward=hip_f,
-            thigh=mean["thigh"], shin=mean["shin"], foot=mean["foot"],
-        )  # fmt: skip
+            pelvis_height=_DEFAULT.pelvis_height * legs_ratio,
+            lower_back=torso["lower_back"],
+            upper_back=torso["upper_back"],
+            chest_to_shoulder=torso["chest_to_shoulder"],
+            shoulder_half_width=half_w,
+            neck=torso["neck"],
+            head=torso["head"],
+            head_top=torso["head_top"],
+            upper_arm=mean["upper_arm"],
+            forearm=mean["forearm"],
+            hand=mean["hand"],
+            stick=STICK_M,
+            hip_half_width=hip_w,
+            hip_forward=hip_f,
+            thigh=mean["thigh"],
+            shin=mean["shin"],
+            foot=mean["foot"],
+        )
         lengths = SegmentLengths(**{f: float(getattr(lengths, f)) for f in lengths.__slots__})
         lengths.check()
     except ValueError as exc:
@@ -336,23 +366,28 @@ def _fit(scene: GltfScene, human: Humanoid, heads: np.ndarray, pos: np.ndarray,
     # our joints in the bind pose: FK along the avatar's bone directions with our lengths
     for side, sign in (("r", 1.0), ("l", -1.0)):
         p[J[f"{side}_shoulder"]] = p[J["chest"]] + (sign * half_w, 0.0, torso["chest_to_shoulder"])
-        chain = ((f"{side}_shoulder", f"{side}_elbow", lengths.upper_arm),
-                 (f"{side}_elbow", f"{side}_wrist", lengths.forearm),
-                 (f"{side}_wrist", f"{side}_stick", lengths.hand),
-                 (f"{side}_stick", f"{side}_tip", lengths.stick))  # fmt: skip
+        chain = (
+            (f"{side}_shoulder", f"{side}_elbow", lengths.upper_arm),
+            (f"{side}_elbow", f"{side}_wrist", lengths.forearm),
+            (f"{side}_wrist", f"{side}_stick", lengths.hand),
+            (f"{side}_stick", f"{side}_tip", lengths.stick),
+        )
         for joint, child, length in chain:
             d = dirs.get(joint, dirs[f"{side}_wrist"])
             rq[J[joint]] = _aim(BONE_REST_DIR, BONE_REST_SIDE, d)
             p[J[child]] = p[J[joint]] + length * d
         rq[J[f"{side}_tip"]] = rq[J[f"{side}_stick"]]
         p[J[f"{side}_hip"]] = p[J["pelvis"]] + (sign * hip_w, hip_f, 0.0)
-        for joint, child, length in ((f"{side}_hip", f"{side}_knee", lengths.thigh),
-                                     (f"{side}_knee", f"{side}_ankle", lengths.shin)):  # fmt: skip
+        for joint, child, length in (
+            (f"{side}_hip", f"{side}_knee", lengths.thigh),
+            (f"{side}_knee", f"{side}_ankle", lengths.shin),
+        ):
             rq[J[joint]] = _aim(BONE_REST_DIR, BONE_REST_SIDE, dirs[joint])
             p[J[child]] = p[J[joint]] + length * dirs[joint]
         foot = dirs[f"{side}_ankle"]
-        rq[J[f"{side}_ankle"]] = quat.align(FOOT_REST_DIR, FOOT_REST_SIDE, foot,
-                                            _unit(np.cross(foot, UP)))  # fmt: skip
+        rq[J[f"{side}_ankle"]] = quat.align(
+            FOOT_REST_DIR, FOOT_REST_SIDE, foot, _unit(np.cross(foot, UP))
+        )
         rq[J[f"{side}_toe"]] = rq[J[f"{side}_ankle"]]
         p[J[f"{side}_toe"]] = p[J[f"{side}_ankle"]] + lengths.foot * foot
     bind = joint_matrices(rq, p).astype(np.float32)
@@ -377,8 +412,9 @@ def _aim(rest_dir: np.ndarray, rest_side: np.ndarray, direction: np.ndarray) -> 
     return q
 
 
-def _ball_of_foot(scene: GltfScene, foot: int, parents: np.ndarray, pos: np.ndarray,
-                  ankle: np.ndarray) -> np.ndarray:  # fmt: skip
+def _ball_of_foot(
+    scene: GltfScene, foot: int, parents: np.ndarray, pos: np.ndarray, ankle: np.ndarray
+) -> np.ndarray:
     """Without a toe bone: 75 % of the way to the front of the foot's vertices, near the sole."""
     under = np.zeros(parents.size, bool)
     for i in range(parents.size):
@@ -389,17 +425,21 @@ def _ball_of_foot(scene: GltfScene, foot: int, parents: np.ndarray, pos: np.ndar
     main = scene.bones[np.arange(scene.bones.shape[0]), np.argmax(scene.weights, axis=1)]
     mine = under[main]
     if not mine.any():
-        raise AvatarError(f"{scene.source}: no toe bone and no vertices on the foot "
-                          f"{scene.nodes[foot].name!r} to measure it by")  # fmt: skip
+        raise AvatarError(
+            f"{scene.source}: no toe bone and no vertices on the foot "
+            f"{scene.nodes[foot].name!r} to measure it by"
+        )
     fp = pos[mine]
     front = float(fp[:, 1].max())
     sole = float(fp[:, 2].min())
-    return np.array([ankle[0], ankle[1] + 0.75 * (front - ankle[1]),
-                     sole + 0.35 * (ankle[2] - sole)])  # fmt: skip
+    return np.array(
+        [ankle[0], ankle[1] + 0.75 * (front - ankle[1]), sole + 0.35 * (ankle[2] - sole)]
+    )
 
 
-def _remap(bones: np.ndarray, weights: np.ndarray, node_joint: np.ndarray
-           ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def _remap(
+    bones: np.ndarray, weights: np.ndarray, node_joint: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Per vertex: our joints (V, 4) uint16 and weights (V, 4) float32 summing to 1."""
     v = bones.shape[0]
     dense = np.zeros((v, N_JOINTS))

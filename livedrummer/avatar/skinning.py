@@ -47,8 +47,9 @@ def skin_matrices(world: np.ndarray, bind: np.ndarray) -> np.ndarray:
 
 def skin(mesh: SkinnedMesh, skin_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Skinned positions and (unnormalised-then-normalised) normals, float32 ``(V, 3)`` each."""
-    m = np.einsum("vk,vkij->vij", mesh.weights.astype(np.float64),
-                  skin_m.astype(np.float64)[mesh.joints])  # fmt: skip
+    m = np.einsum(
+        "vk,vkij->vij", mesh.weights.astype(np.float64), skin_m.astype(np.float64)[mesh.joints]
+    )
     p = np.einsum("vij,vj->vi", m[:, :3, :3], mesh.positions) + m[:, :3, 3]
     n = np.einsum("vij,vj->vi", m[:, :3, :3], mesh.normals)
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)

@@ -81,8 +81,9 @@ class JointCurve:
     bias: np.ndarray | None = None  # Expression.ctb_bias at the contacts
 
     def sample(self, times: np.ndarray) -> np.ndarray:
-        rv = spline.evaluate(self.time_s, self.rotvec, times, self.tension, self.continuity,
-                             self.bias)  # fmt: skip
+        rv = spline.evaluate(
+            self.time_s, self.rotvec, times, self.tension, self.continuity, self.bias
+        )
         return quat.exp(rv)
 
 
@@ -102,8 +103,9 @@ class FootCurve:
         return out
 
     def pedal(self, times: np.ndarray) -> np.ndarray:
-        return np.stack([np.interp(times, self.contact_s, self.pedal_m[:, k]) for k in range(3)],
-                        axis=-1)  # fmt: skip
+        return np.stack(
+            [np.interp(times, self.contact_s, self.pedal_m[:, k]) for k in range(3)], axis=-1
+        )
 
 
 @dataclass(frozen=True)
@@ -167,8 +169,9 @@ class Animation:
         _, _, wq, wp = self.solve(times)
         return wq, wp
 
-    def solve(self, times: np.ndarray, guard: bool = True
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    def solve(
+        self, times: np.ndarray, guard: bool = True
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Local rotations, root positions, world rotations and positions at ``times``, with
         the stick guard applied (see :func:`guard_sticks`)."""
         local, root = self._curves(times)
@@ -251,8 +254,9 @@ def _inside(s: Surfaces, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return depth.max(axis=-1), depth.argmax(axis=-1)
 
 
-def hihat_openness(onsets: np.ndarray, controls: np.ndarray, hihat_cc: int = 4,
-                   cc_open: np.ndarray | None = None) -> Openness:  # fmt: skip
+def hihat_openness(
+    onsets: np.ndarray, controls: np.ndarray, hihat_cc: int = 4, cc_open: np.ndarray | None = None
+) -> Openness:
     """Openness over time from pedal-controller events (``cc_open`` maps 0..127 to openness;
     default 1 - value/127), else from the hi-hat onsets' own openness."""
     from livedrummer.timeline.events import ControlKind
@@ -295,8 +299,11 @@ def _home_piece(rig: Rig, limb: Limb) -> int:
     for i, p in enumerate(pieces):
         if p.preferred_limb is limb:
             return i
-    return next(i for i, p in enumerate(pieces) if p.kind is PieceKind.SNARE) if any(
-        p.kind is PieceKind.SNARE for p in pieces) else 0  # fmt: skip
+    return (
+        next(i for i, p in enumerate(pieces) if p.kind is PieceKind.SNARE)
+        if any(p.kind is PieceKind.SNARE for p in pieces)
+        else 0
+    )
 
 
 def animate(
@@ -340,12 +347,24 @@ def animate(
     kinds = np.array([p.kind.value for p in kit.pieces] or ["none"])
     bob_mask = played & np.isin(kinds[np.maximum(piece, 0)], list(BOB_KINDS))
     torso = build_torso(
-        sec, ex.twist_fraction, np.radians(ex.back_amplitude_deg),
-        np.radians(ex.head_amplitude_deg), np.asarray(beats, dtype=np.float64), times[hands],
-        h_point, head_m, times[bob_mask], vel[bob_mask], times[played],
-        TorsoStyle(ex.back_frequency, ex.head_frequency, np.radians(ex.side_sway_deg),
-                   np.radians(ex.head_tilt_deg)),
-    )  # fmt: skip
+        sec,
+        ex.twist_fraction,
+        np.radians(ex.back_amplitude_deg),
+        np.radians(ex.head_amplitude_deg),
+        np.asarray(beats, dtype=np.float64),
+        times[hands],
+        h_point,
+        head_m,
+        times[bob_mask],
+        vel[bob_mask],
+        times[played],
+        TorsoStyle(
+            ex.back_frequency,
+            ex.head_frequency,
+            np.radians(ex.side_sway_deg),
+            np.radians(ex.head_tilt_deg),
+        ),
+    )
     step()
 
     amp_w, amp_e, amp_s = ex.joint_amplitude_rad(sp.full_amplitude_rad)
@@ -370,8 +389,9 @@ def animate(
         chest_q, r_sh, l_sh = _spine(rig, torso, t)
         shoulder = r_sh if side == "r" else l_sh
         if notes.size == 0:  # a hand with nothing to play waits ready over its home piece
-            sol, point, normal = solve_ready(rig, code, shoulder, chest_q, pz[0], pz[1], openn,
-                                             READY.height_m)  # fmt: skip
+            sol, point, normal = solve_ready(
+                rig, code, shoulder, chest_q, pz[0], pz[1], openn, READY.height_m
+            )
         else:
             sol, point, normal = solve_strike(rig, code, shoulder, chest_q, pz[0], pz[1], openn)
         poses = _ArmPoses.of(sol, shoulder, point, normal, (amp_s, amp_e, amp_w), side)
@@ -390,8 +410,9 @@ def animate(
                 sol_r, point_r, normal_r = solve_ready(
                     rig, code, shoulder_r, chest_r, pz[0][r], pz[1][r], openn[r], READY.height_m
                 )
-                poses = poses.then(_ArmPoses.of(sol_r, shoulder_r, point_r, normal_r,
-                                                (amp_s, amp_e, amp_w), side))  # fmt: skip
+                poses = poses.then(
+                    _ArmPoses.of(sol_r, shoulder_r, point_r, normal_r, (amp_s, amp_e, amp_w), side)
+                )
         arm = _ArmKeys(keys, poses.base, poses.signed, poses.amps, scales, ex.ctb_bias)
         arm_keys[side] = arm
         arms[side] = arm.curves()
@@ -408,16 +429,22 @@ def animate(
             extra[f"{side}_rest_toe"] = np.asarray(best.pedal_position_m, dtype=np.float64)
             continue
         pz = (piece[notes], zone[notes])
-        pedal_m = np.array([
-            kit.pieces[i].pedal_position_m or kit.pieces[i].position_m for i in pz[0]
-        ], dtype=np.float64)  # fmt: skip
-        keys = stroke_keys(times[notes], pz[0] * len(ZONES) + pz[1], lift_all[notes],
-                           elasticity[pz[0]], sp)  # fmt: skip
+        pedal_m = np.array(
+            [kit.pieces[i].pedal_position_m or kit.pieces[i].position_m for i in pz[0]],
+            dtype=np.float64,
+        )
+        keys = stroke_keys(
+            times[notes], pz[0] * len(ZONES) + pz[1], lift_all[notes], elasticity[pz[0]], sp
+        )
         feet[side] = FootCurve(
-            keys.time_s, keys.lift, np.where(keys.kind == CONTACT, 0.0, 1.0),
-            np.where(keys.kind == CONTACT, -1.0, 0.0), times[notes], pedal_m,
+            keys.time_s,
+            keys.lift,
+            np.where(keys.kind == CONTACT, 0.0, 1.0),
+            np.where(keys.kind == CONTACT, -1.0, 0.0),
+            times[notes],
+            pedal_m,
             follows_hihat=any(kit.pieces[i].kind is PieceKind.HIHAT for i in set(pz[0].tolist())),
-        )  # fmt: skip
+        )
     anim = Animation(rig, torso, arms, feet, openness, hihat, extra)
     step()
     _clear_kit(anim, arm_keys, step, memo)
@@ -438,14 +465,20 @@ class _ArmPoses:
     amps: dict[int, np.ndarray]
 
     @classmethod
-    def of(cls, sol: ArmSolution, shoulder: np.ndarray, point: np.ndarray, normal: np.ndarray,
-           amp: tuple[float, float, float], side: str) -> _ArmPoses:  # fmt: skip
+    def of(
+        cls,
+        sol: ArmSolution,
+        shoulder: np.ndarray,
+        point: np.ndarray,
+        normal: np.ndarray,
+        amp: tuple[float, float, float],
+        side: str,
+    ) -> _ArmPoses:
         amp_s, amp_e, amp_w = amp
         sh_j, el_j, wr_j, st_j, _ = ARM[side.upper()]
         world = {sh_j: sol.shoulder_q, el_j: sol.elbow_q, wr_j: sol.wrist_q, st_j: sol.stick_q}
         # the shoulder's stays in the world frame (see Animation.locals), the rest local
-        base = dict(zip((sh_j, el_j, wr_j, st_j),
-                        to_local(None, *world.values()), strict=True))  # fmt: skip
+        base = dict(zip((sh_j, el_j, wr_j, st_j), to_local(None, *world.values()), strict=True))
         pivots = {sh_j: shoulder, el_j: sol.elbow, wr_j: sol.wrist, st_j: sol.fulcrum}
         n = shoulder.shape[0]
         flexion = _angle(sol.elbow - shoulder, sol.wrist - sol.elbow)
@@ -469,8 +502,9 @@ class _ArmPoses:
         def cat(a: dict[int, np.ndarray], b: dict[int, np.ndarray]) -> dict[int, np.ndarray]:
             return {j: np.concatenate([a[j], b[j]]) for j in a}
 
-        return _ArmPoses(cat(self.base, more.base), cat(self.signed, more.signed),
-                         cat(self.amps, more.amps))  # fmt: skip
+        return _ArmPoses(
+            cat(self.base, more.base), cat(self.signed, more.signed), cat(self.amps, more.amps)
+        )
 
 
 @dataclass
@@ -521,8 +555,12 @@ class _ArmKeys:
 ClearanceMemo = dict[tuple[str, float, int, float], tuple[float, float]]
 
 
-def _clear_kit(anim: Animation, arm_keys: dict[str, _ArmKeys], step: Callable[[], None],
-               memo: ClearanceMemo | None = None) -> None:  # fmt: skip
+def _clear_kit(
+    anim: Animation,
+    arm_keys: dict[str, _ArmKeys],
+    step: Callable[[], None],
+    memo: ClearanceMemo | None = None,
+) -> None:
     """Keep raised sticks out of the kit. A preparation, rebound or merged key whose stick
     (or the arc next to it) dips into a piece, say a loud floor-tom preparation under the
     ride, is lowered step by step; then a travel arc that does is raised, or else lowered.
@@ -539,13 +577,21 @@ def _clear_kit(anim: Animation, arm_keys: dict[str, _ArmKeys], step: Callable[[]
         raised = np.flatnonzero(kind != CONTACT)
         lift0 = arm.keys.lift[raised].copy()
         at_s = np.round(arm.keys.time_s[raised], 6).tolist()
-        ids = list(zip([side] * raised.size, at_s, kind[raised].tolist(),
-                       np.round(lift0, 6).tolist(), strict=True))  # fmt: skip
+        ids = list(
+            zip(
+                [side] * raised.size,
+                at_s,
+                kind[raised].tolist(),
+                np.round(lift0, 6).tolist(),
+                strict=True,
+            )
+        )
         old = [memo.get(i) if memo is not None else None for i in ids]
         known = np.array([m is not None for m in old], dtype=bool)
         if known.any():
-            arm.set_lift(anim.arms[side], raised[known],
-                         np.array([m[0] for m in old if m is not None]))  # fmt: skip
+            arm.set_lift(
+                anim.arms[side], raised[known], np.array([m[0] for m in old if m is not None])
+            )
         depth = _probe_depth(anim, side, raised)
         was = np.array([m[1] if m is not None else np.inf for m in old])
         kept = known & (depth <= was + GUARD_TOLERANCE_M * 0.2)
@@ -558,10 +604,12 @@ def _clear_kit(anim: Animation, arm_keys: dict[str, _ArmKeys], step: Callable[[]
             free = bad & np.isin(kind[raised], (BEFORE, AFTER, MERGED))
             travel = bad & (kind[raised] == TRAVEL)
             step()
-            depth[free] = _search(anim, side, arm, raised[free], depth[free], TRIES_SCALE, True,
-                                  step)  # fmt: skip
-            depth[travel] = _search(anim, side, arm, raised[travel], depth[travel],
-                                    TRIES_TRAVEL, False, step)  # fmt: skip
+            depth[free] = _search(
+                anim, side, arm, raised[free], depth[free], TRIES_SCALE, True, step
+            )
+            depth[travel] = _search(
+                anim, side, arm, raised[travel], depth[travel], TRIES_TRAVEL, False, step
+            )
         final = arm.keys.lift[raised]
         for k in np.flatnonzero(bad | kept).tolist():
             settled[ids[k]] = (float(final[k]), float(depth[k]))
@@ -601,9 +649,16 @@ def arm_tip(anim: Animation, side: str, times: np.ndarray) -> np.ndarray:
     return pos
 
 
-def _search(anim: Animation, side: str, arm: _ArmKeys, keys: np.ndarray, depth: np.ndarray,
-            tries: tuple[float, ...], scale: bool, step: Callable[[], None]
-            ) -> np.ndarray:  # fmt: skip
+def _search(
+    anim: Animation,
+    side: str,
+    arm: _ArmKeys,
+    keys: np.ndarray,
+    depth: np.ndarray,
+    tries: tuple[float, ...],
+    scale: bool,
+    step: Callable[[], None],
+) -> np.ndarray:
     """Try lift settings for ``keys`` (whose current arcs dip ``depth`` into the kit), keeping
     per key the first that clears the kit, else the shallowest; returns how deep each still
     dips with the setting kept."""

@@ -26,8 +26,7 @@ def blend_rows(rig: Rig, a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndar
     for name in ("swing", "lift", "glow"):
         shape = (-1,) + (1,) * (a[name].ndim - 1)
         out[name] = a[name] + (b[name] - a[name]) * wc.reshape(shape).astype(np.float32)
-    q = quat.slerp(a["rotation"].astype(np.float64), b["rotation"].astype(np.float64),
-                   wc[:, None])  # fmt: skip
+    q = quat.slerp(a["rotation"].astype(np.float64), b["rotation"].astype(np.float64), wc[:, None])
     pa = a["position"][:, 0].astype(np.float64)
     root = pa + (b["position"][:, 0].astype(np.float64) - pa) * wc[:, None]
     _, pos = fk.forward(rig.skeleton, q, root)

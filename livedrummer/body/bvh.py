@@ -67,8 +67,9 @@ def hierarchy_text(skeleton: Skeleton) -> str:
         offset = np.zeros(3) if j == 0 else M @ skeleton.offsets[j] * CM
         lines.append(f"{pad}\tOFFSET {_fmt(offset)}")
         if j == 0:
-            lines.append(f"{pad}\tCHANNELS 6 Xposition Yposition Zposition "
-                         "Zrotation Xrotation Yrotation")  # fmt: skip
+            lines.append(
+                f"{pad}\tCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"
+            )
         else:
             lines.append(f"{pad}\tCHANNELS 3 Zrotation Xrotation Yrotation")
         for k in _children(j):

@@ -72,8 +72,9 @@ def vibration(
     return np.where(live, angle, 0.0)
 
 
-def glow(times: np.ndarray, hit_s: np.ndarray, hit_velocity: np.ndarray, tau_s: float
-         ) -> np.ndarray:  # fmt: skip
+def glow(
+    times: np.ndarray, hit_s: np.ndarray, hit_velocity: np.ndarray, tau_s: float
+) -> np.ndarray:
     if hit_s.size == 0:
         return np.zeros_like(times, dtype=np.float64)
     i = np.searchsorted(hit_s, times, side="right") - 1

@@ -89,36 +89,111 @@ class Param:
 
 def _params() -> tuple[Param, ...]:
     d = Expression()
-    out = [Param("amplitude_gain", 0.0, 3.0, d.amplitude_gain, "x",
-                 "size of every stroke (SMED's amplitude gain)")]  # fmt: skip
-    out += [Param(f"amplitude_{j}", 0.0, 1.0, d.amplitude_shares[i], "share",
-                  f"the {j}'s share of the stroke; the other two keep their ratio")
-            for i, j in enumerate(JOINTS)]  # fmt: skip
-    out.append(Param("frequency_gain", 0.2, 5.0, d.frequency_gain, "x",
-                     "snap of every stroke (SMED's frequency gain)"))  # fmt: skip
-    out += [Param(f"frequency_{j}", 0.0, 1.0, d.frequency_shares[i], "share",
-                  f"the {j}'s share of the snap; the other two keep their ratio")
-            for i, j in enumerate(JOINTS)]  # fmt: skip
+    out = [
+        Param(
+            "amplitude_gain",
+            0.0,
+            3.0,
+            d.amplitude_gain,
+            "x",
+            "size of every stroke (SMED's amplitude gain)",
+        )
+    ]
     out += [
-        Param("back_amplitude_deg", 0.0, 20.0, d.back_amplitude_deg, "deg",
-              "forward sway of the back on the beat"),
-        Param("back_frequency", 0.25, 4.0, d.back_frequency, "per beat",
-              "back sways per beat (0.5: every other beat)"),
+        Param(
+            f"amplitude_{j}",
+            0.0,
+            1.0,
+            d.amplitude_shares[i],
+            "share",
+            f"the {j}'s share of the stroke; the other two keep their ratio",
+        )
+        for i, j in enumerate(JOINTS)
+    ]
+    out.append(
+        Param(
+            "frequency_gain",
+            0.2,
+            5.0,
+            d.frequency_gain,
+            "x",
+            "snap of every stroke (SMED's frequency gain)",
+        )
+    )
+    out += [
+        Param(
+            f"frequency_{j}",
+            0.0,
+            1.0,
+            d.frequency_shares[i],
+            "share",
+            f"the {j}'s share of the snap; the other two keep their ratio",
+        )
+        for i, j in enumerate(JOINTS)
+    ]
+    out += [
+        Param(
+            "back_amplitude_deg",
+            0.0,
+            20.0,
+            d.back_amplitude_deg,
+            "deg",
+            "forward sway of the back on the beat",
+        ),
+        Param(
+            "back_frequency",
+            0.25,
+            4.0,
+            d.back_frequency,
+            "per beat",
+            "back sways per beat (0.5: every other beat)",
+        ),
         Param("head_amplitude_deg", 0.0, 30.0, d.head_amplitude_deg, "deg", "head bob"),
         Param("head_frequency", 0.25, 4.0, d.head_frequency, "per beat", "head bobs per beat"),
-        Param("twist_fraction", 0.0, 1.0, d.twist_fraction, "0..1",
-              "how far the torso turns towards the piece played"),
-        Param("turn_speed_deg_s", 20.0, 600.0, d.turn_speed_deg_s, "deg/s",
-              "fastest turn of the torso"),
-        Param("side_sway_deg", 0.0, 10.0, d.side_sway_deg, "deg",
-              "sideways sway of the back, one side per beat"),
-        Param("head_tilt_deg", -20.0, 20.0, d.head_tilt_deg, "deg",
-              "sideways tilt of the head (positive: to the drummer's right)"),
-        Param("ctb_bias", -0.8, 0.8, d.ctb_bias, "-1..1",
-              "bias of the arm curves: anticipation below 0, follow-through above"),
-    ]  # fmt: skip
-    out += [Param(f"amplitude_{k}", 0.0, 2.0, 1.0, "x", f"stroke size on a {k}")
-            for k in PIECE_KINDS]  # fmt: skip
+        Param(
+            "twist_fraction",
+            0.0,
+            1.0,
+            d.twist_fraction,
+            "0..1",
+            "how far the torso turns towards the piece played",
+        ),
+        Param(
+            "turn_speed_deg_s",
+            20.0,
+            600.0,
+            d.turn_speed_deg_s,
+            "deg/s",
+            "fastest turn of the torso",
+        ),
+        Param(
+            "side_sway_deg",
+            0.0,
+            10.0,
+            d.side_sway_deg,
+            "deg",
+            "sideways sway of the back, one side per beat",
+        ),
+        Param(
+            "head_tilt_deg",
+            -20.0,
+            20.0,
+            d.head_tilt_deg,
+            "deg",
+            "sideways tilt of the head (positive: to the drummer's right)",
+        ),
+        Param(
+            "ctb_bias",
+            -0.8,
+            0.8,
+            d.ctb_bias,
+            "-1..1",
+            "bias of the arm curves: anticipation below 0, follow-through above",
+        ),
+    ]
+    out += [
+        Param(f"amplitude_{k}", 0.0, 2.0, 1.0, "x", f"stroke size on a {k}") for k in PIECE_KINDS
+    ]
     return tuple(out)
 
 
@@ -180,8 +255,10 @@ def with_param(e: Expression, name: str, value: float) -> Expression:
 
 def params_markdown() -> str:
     """The parameter table of the documentation's presets page (``deploy/docs_hooks.py``)."""
-    lines = ["| parameter | range | default | unit | what it does |",
-             "| --- | --- | --- | --- | --- |"]  # fmt: skip
+    lines = [
+        "| parameter | range | default | unit | what it does |",
+        "| --- | --- | --- | --- | --- |",
+    ]
     for p in PARAMS:
         lines.append(f"| `{p.name}` | {p.lo:g}..{p.hi:g} | {p.default:.3g} | {p.unit} | {p.doc} |")
     return "\n".join(lines) + "\n"

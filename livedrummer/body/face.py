@@ -65,8 +65,9 @@ def _block(seed: int, block: int, params: FaceParams) -> np.ndarray:
     rng = np.random.default_rng([seed & 0xFFFFFFFF, block & 0xFFFFFFFF, 0xB11C])
     lo, hi = params.blink_range_s
     mean_n = int(BLOCK_S / lo) + 2
-    gaps = np.clip(params.blink_median_s * np.exp(params.blink_sigma * rng.standard_normal(mean_n)),
-                   lo, hi)  # fmt: skip
+    gaps = np.clip(
+        params.blink_median_s * np.exp(params.blink_sigma * rng.standard_normal(mean_n)), lo, hi
+    )
     start = block * BLOCK_S + rng.uniform(0.0, lo)
     t = start + np.concatenate([[0.0], np.cumsum(gaps)])
     out: np.ndarray = t[t < (block + 1) * BLOCK_S]
@@ -144,8 +145,9 @@ class Reactions:
             kinds = (("happy", rose, p.accent), ("surprised", rose & self.crash_like, p.crash))
             for name, mask, threshold in kinds:
                 if mask.any():
-                    peak = float(np.clip((v[mask].max() - 0.8 * threshold) / (0.2 * threshold),
-                                         0.0, 1.0))  # fmt: skip
+                    peak = float(
+                        np.clip((v[mask].max() - 0.8 * threshold) / (0.2 * threshold), 0.0, 1.0)
+                    )
                     if peak > 0.0 and peak >= self._weight(name, time_s):
                         self._hits[name] = (time_s, peak)
         self._t, self._glow = time_s, g
@@ -162,9 +164,15 @@ class Reactions:
         return peak * float(_ease(np.array(1.0 - min(since / self.params.react_release_s, 1.0))))
 
 
-def face_weights(time_s: float, reactions: tuple[float, float], head_world_q: np.ndarray | None,
-                 look_fraction: float, neutral_pitch_rad: float, params: FaceParams,
-                 gaze: GazeParams | None = None) -> dict[str, float]:  # fmt: skip
+def face_weights(
+    time_s: float,
+    reactions: tuple[float, float],
+    head_world_q: np.ndarray | None,
+    look_fraction: float,
+    neutral_pitch_rad: float,
+    params: FaceParams,
+    gaze: GazeParams | None = None,
+) -> dict[str, float]:
     """Every weight of :data:`FACES` for one record: its blink, the (happy, surprised)
     :class:`Reactions` gave, and the eyes' look from the head's world rotation."""
     out = dict.fromkeys(FACES, 0.0)
@@ -172,8 +180,9 @@ def face_weights(time_s: float, reactions: tuple[float, float], head_world_q: np
     out["happy"], out["surprised"] = reactions
     if head_world_q is not None:
         g = gaze or GazeParams()
-        yaw, pitch = eye_angles(np.asarray(head_world_q, np.float64)[None], look_fraction,
-                                neutral_pitch_rad, g)  # fmt: skip
+        yaw, pitch = eye_angles(
+            np.asarray(head_world_q, np.float64)[None], look_fraction, neutral_pitch_rad, g
+        )
         lim = np.radians(g.eye_max_deg)
         out["look_left"] = float(np.clip(yaw[0] / lim, 0.0, 1.0))
         out["look_right"] = float(np.clip(-yaw[0] / lim, 0.0, 1.0))
@@ -186,18 +195,25 @@ class FaceTrack:
     """One drawer's face: :meth:`weights` for each record it draws, in time order (the
     :class:`Reactions` state, the blink schedule and the eyes' look together)."""
 
-    def __init__(self, crash_like: np.ndarray, params: FaceParams | None = None,
-                 look_fraction: float = 0.6, lean_deg: float = 10.0) -> None:  # fmt: skip
+    def __init__(
+        self,
+        crash_like: np.ndarray,
+        params: FaceParams | None = None,
+        look_fraction: float = 0.6,
+        lean_deg: float = 10.0,
+    ) -> None:
         self.params = params or FaceParams()
         self.reactions = Reactions(crash_like, self.params)
         self.look_fraction = look_fraction
         self.neutral_pitch_rad = neutral_head_pitch(lean_deg)
 
-    def weights(self, time_s: float, glow: np.ndarray, head_world_q: np.ndarray | None
-                ) -> dict[str, float]:  # fmt: skip
+    def weights(
+        self, time_s: float, glow: np.ndarray, head_world_q: np.ndarray | None
+    ) -> dict[str, float]:
         glow = np.asarray(glow, dtype=np.float64)
         if glow.shape != self.reactions.crash_like.shape:  # a kit of another size: no crashes
             self.reactions = Reactions(np.zeros(glow.shape, dtype=bool), self.params)
         react = self.reactions.update(time_s, glow)
-        return face_weights(time_s, react, head_world_q, self.look_fraction,
-                            self.neutral_pitch_rad, self.params)  # fmt: skip
+        return face_weights(
+            time_s, react, head_world_q, self.look_fraction, self.neutral_pitch_rad, self.params
+        )

@@ -50,8 +50,9 @@ def elevation(points: np.ndarray) -> np.ndarray:
     return out
 
 
-def gaze_keys(onset_s: np.ndarray, rel: np.ndarray, params: GazeParams
-              ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def gaze_keys(
+    onset_s: np.ndarray, rel: np.ndarray, params: GazeParams
+) -> tuple[np.ndarray, np.ndarray]:
     """The whole gaze's (yaw, pitch) in radians at each onset, from the targets' directions
     ``rel`` (N, 3) seen from the head (see the module docstring)."""
     n = onset_s.size
@@ -76,8 +77,9 @@ def gaze_keys(onset_s: np.ndarray, rel: np.ndarray, params: GazeParams
 FORWARD = np.array([0.0, 1.0, 0.0])
 
 
-def eye_angles(head_world_q: np.ndarray, look_fraction: float, neutral_pitch_rad: float,
-               params: GazeParams) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def eye_angles(
+    head_world_q: np.ndarray, look_fraction: float, neutral_pitch_rad: float, params: GazeParams
+) -> tuple[np.ndarray, np.ndarray]:
     """The eyes' (yaw, pitch) in the head, radians, from the head's world rotations (T, 4):
     the share of the gaze the head leaves to them (see the module docstring)."""
     fwd = quat.rotate(head_world_q, np.broadcast_to(FORWARD, (*head_world_q.shape[:-1], 3)))
@@ -88,8 +90,9 @@ def eye_angles(head_world_q: np.ndarray, look_fraction: float, neutral_pitch_rad
     return yaw, pitch
 
 
-def gaze_direction(head_world_q: np.ndarray, look_fraction: float, neutral_pitch_rad: float,
-                   params: GazeParams) -> np.ndarray:  # fmt: skip
+def gaze_direction(
+    head_world_q: np.ndarray, look_fraction: float, neutral_pitch_rad: float, params: GazeParams
+) -> np.ndarray:
     """Unit gaze directions (T, 3): the head's forward turned by :func:`eye_angles`."""
     fwd = quat.rotate(head_world_q, np.broadcast_to(FORWARD, (*head_world_q.shape[:-1], 3)))
     yaw, pitch = eye_angles(head_world_q, look_fraction, neutral_pitch_rad, params)
@@ -103,7 +106,11 @@ def neutral_head_pitch(lean_deg: float) -> float:
     lean, its chest's 0.3 of it back and the neck's 1.3 of it (the torso's rest pose)."""
     lean = np.radians(lean_deg)
     x = np.array([1.0, 0.0, 0.0])
-    q = quat.mul(quat.from_axis_angle(x, np.array([-lean])),
-                 quat.mul(quat.from_axis_angle(x, np.array([0.3 * lean])),
-                          quat.from_axis_angle(x, np.array([1.3 * lean]))))  # fmt: skip
+    q = quat.mul(
+        quat.from_axis_angle(x, np.array([-lean])),
+        quat.mul(
+            quat.from_axis_angle(x, np.array([0.3 * lean])),
+            quat.from_axis_angle(x, np.array([1.3 * lean])),
+        ),
+    )
     return float(elevation(quat.rotate(q, FORWARD[None]))[0])

@@ -140,8 +140,11 @@ def solve_arm(
         rows = todo
         if k < len(turns):
             # (a turn of 0 is the identity: skipped, the first candidate fits most strikes)
-            cand = _rotate_about(preferred[rows], normal[rows], turns[k]) if turns[k] else \
-                preferred[rows]  # fmt: skip
+            cand = (
+                _rotate_about(preferred[rows], normal[rows], turns[k])
+                if turns[k]
+                else preferred[rows]
+            )
         else:
             b = blends[k - len(turns)]
             cand = _unit((1.0 - b) * preferred[rows] + b * straight[rows])
@@ -197,12 +200,14 @@ def solve_arm(
     # its opposite is the bone frames' x axis, as in the rest pose, so rotations stay small
     # (the four bones aimed in one call: each numpy call costs more than its arithmetic here)
     shoulder_q, elbow_q, wrist_q, stick_q = quat.align(
-        BONE_REST_DIR, BONE_REST_SIDE,
+        BONE_REST_DIR,
+        BONE_REST_SIDE,
         np.stack([_unit(elbow - shoulder), _unit(wrist_real - elbow), e, d]),
         np.stack([-hinge, -hinge, a_axis, a_axis]),  # the wrist twists with the stroke axis
-    )  # fmt: skip
-    return ArmSolution(shoulder_q, elbow_q, wrist_q, stick_q, elbow, wrist_real, fulcrum, tip,
-                       reached)  # fmt: skip
+    )
+    return ArmSolution(
+        shoulder_q, elbow_q, wrist_q, stick_q, elbow, wrist_real, fulcrum, tip, reached
+    )
 
 
 @dataclass(frozen=True)
@@ -228,8 +233,9 @@ def foot_pitch(rise_m: np.ndarray, foot_m: float) -> np.ndarray:
     return out
 
 
-def solve_leg(lengths: SegmentLengths, hip: np.ndarray, toe: np.ndarray,
-              rise_m: np.ndarray | None = None) -> LegSolution:  # fmt: skip
+def solve_leg(
+    lengths: SegmentLengths, hip: np.ndarray, toe: np.ndarray, rise_m: np.ndarray | None = None
+) -> LegSolution:
     """Leg poses putting the ball of the foot on ``toe`` (arrays over N samples), lifted
     ``rise_m`` (N,) above its footboard (None: on it), which flexes the ankle."""
     s = lengths
@@ -243,8 +249,11 @@ def solve_leg(lengths: SegmentLengths, hip: np.ndarray, toe: np.ndarray,
     ankle_real = knee + s.shin * _unit(ankle - knee)
     toe_real = ankle_real + s.foot * foot_dir
     side = hinge  # lateral axis, +x as at rest (the knee bends forward)
-    hip_q, knee_q = quat.align(BONE_REST_DIR, BONE_REST_SIDE,
-                               np.stack([_unit(knee - hip), _unit(ankle_real - knee)]),
-                               np.stack([side, side]))  # fmt: skip
+    hip_q, knee_q = quat.align(
+        BONE_REST_DIR,
+        BONE_REST_SIDE,
+        np.stack([_unit(knee - hip), _unit(ankle_real - knee)]),
+        np.stack([side, side]),
+    )
     ankle_q = quat.align(FOOT_REST_DIR, FOOT_REST_SIDE, foot_dir, side)
     return LegSolution(hip_q, knee_q, ankle_q, knee, ankle_real, toe_real, reached)

@@ -59,5 +59,9 @@ def perform(
     cc_open = np.array([note_map.openness(v) for v in range(128)])
     openness = hihat_openness(performance.onsets, performance.controls, cc_open=cc_open)
     anim = animate(rig, st, performance.grid.beat_s, openness, expression, strokes, secondary)
-    return Performed(st, anim, choke_times(performance.controls, note_map, anim),
-                     sound_chokes(performance.controls, note_map, rig.kit))  # fmt: skip
+    return Performed(
+        st,
+        anim,
+        choke_times(performance.controls, note_map, anim),
+        sound_chokes(performance.controls, note_map, rig.kit),
+    )

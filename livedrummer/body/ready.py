@@ -107,9 +107,16 @@ def waiting(note_s: np.ndarray, params: ReadyParams) -> np.ndarray:
     return np.diff(note_s) >= params.min_gap_s
 
 
-def solve_ready(rig: Rig, limb: int, shoulder: np.ndarray, chest_q: np.ndarray,
-                piece: np.ndarray, zone: np.ndarray, openness: np.ndarray, height_m: float
-                ) -> tuple[ArmSolution, np.ndarray, np.ndarray]:  # fmt: skip
+def solve_ready(
+    rig: Rig,
+    limb: int,
+    shoulder: np.ndarray,
+    chest_q: np.ndarray,
+    piece: np.ndarray,
+    zone: np.ndarray,
+    openness: np.ndarray,
+    height_m: float,
+) -> tuple[ArmSolution, np.ndarray, np.ndarray]:
     """Arm ``limb`` (0 right, 1 left) in the ready pose over (``piece``, ``zone``): the stick
     as at contact, its tip ``height_m`` straight above the contact point (the solution, the
     raised points and the zones' normals)."""

@@ -36,8 +36,9 @@ class Rig:
     hand_gap_m: np.ndarray  # (2, P, Z) how far the tip falls short (0 when reached)
 
 
-def neutral_world(skeleton: Skeleton, lean_deg: float, times: int = 1
-                  ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def neutral_world(
+    skeleton: Skeleton, lean_deg: float, times: int = 1
+) -> tuple[np.ndarray, np.ndarray]:
     """World rotations/positions of the neutral seated torso (arms at rest)."""
     local = quat.identity((times, N_JOINTS))
     lean = np.radians(lean_deg)
@@ -60,8 +61,15 @@ def build_rig(kit: Kit, lengths: SegmentLengths | None = None) -> Rig:
     point, normal, pitch = table.lookup(pieces, zones)
     for k, (side, sign) in enumerate((("r", 1.0), ("l", -1.0))):
         shoulder = np.broadcast_to(wp[0, J[f"{side}_shoulder"]], point.shape)
-        sol = solve_arm(skel.lengths, shoulder, np.broadcast_to(chest, (pieces.size, 4)), sign,
-                        point, normal, pitch)  # fmt: skip
+        sol = solve_arm(
+            skel.lengths,
+            shoulder,
+            np.broadcast_to(chest, (pieces.size, 4)),
+            sign,
+            point,
+            normal,
+            pitch,
+        )
         miss = np.linalg.norm(sol.tip - point, axis=-1)
         ok[k] = (sol.reached & (miss < 1e-4)).reshape(p, z)
         gap[k] = miss.reshape(p, z)

@@ -67,8 +67,9 @@ def channels_at(
             foot = anim.foot_lift(side, times)
         feet.append(foot)
     no_chokes = [np.zeros(0) for _ in kit.pieces]
-    return kit_channels(kit.pieces, times, hits_s, hits_v, chokes or no_chokes, feet,
-                        anim.openness(times), vib)  # fmt: skip
+    return kit_channels(
+        kit.pieces, times, hits_s, hits_v, chokes or no_chokes, feet, anim.openness(times), vib
+    )
 
 
 def sample_poses(

@@ -191,8 +191,9 @@ class Torso:
         else:
             yaw = pitch = np.zeros_like(times)
         # forward lean and sway tip +z towards +y: a negative turn about +x
-        turned = quat.mul(quat.from_axis_angle(Z, 0.5 * twist),
-                          quat.from_axis_angle(Y, self.roll(times)))  # fmt: skip
+        turned = quat.mul(
+            quat.from_axis_angle(Z, 0.5 * twist), quat.from_axis_angle(Y, self.roll(times))
+        )
         lower = quat.mul(turned, quat.from_axis_angle(X, -(self.lean_rad + sway)))
         chest = quat.mul(
             quat.from_axis_angle(Z, 0.5 * twist),

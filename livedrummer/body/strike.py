@@ -101,9 +101,16 @@ def foot_contacts(rig: Rig) -> FootContacts:
     return FootContacts(*(np.stack(arrays) for arrays in zip(*parts, strict=True)))
 
 
-def strike_poses(rig: Rig, base: np.ndarray, limb: int, piece: np.ndarray, zone: np.ndarray,
-                 velocity: np.ndarray, openness: np.ndarray, feet: FootContacts | None = None,
-                 ) -> np.ndarray:  # fmt: skip
+def strike_poses(
+    rig: Rig,
+    base: np.ndarray,
+    limb: int,
+    piece: np.ndarray,
+    zone: np.ndarray,
+    velocity: np.ndarray,
+    openness: np.ndarray,
+    feet: FootContacts | None = None,
+) -> np.ndarray:
     """``base`` (N pose records) with ``limb`` (0-3: right hand, left hand, right foot, left
     foot) on (``piece``, ``zone``) at contact, each (a copy; see the module docstring);
     ``feet``: a foot's contact looked up there instead of solved (the same numbers)."""
@@ -112,8 +119,9 @@ def strike_poses(rig: Rig, base: np.ndarray, limb: int, piece: np.ndarray, zone:
     n = rec.size
     if limb in (0, 1):
         sh_j, el_j, wr_j, st_j, tip_j = ARM["R" if limb == 0 else "L"]
-        chest_w = quat.mul(rot[:, J["lower_back"]].astype(np.float64),
-                           rot[:, J["chest"]].astype(np.float64))  # fmt: skip
+        chest_w = quat.mul(
+            rot[:, J["lower_back"]].astype(np.float64), rot[:, J["chest"]].astype(np.float64)
+        )
         shoulder = pos[:, sh_j].astype(np.float64)
         sol, _, _ = solve_strike(rig, limb, shoulder, chest_w, piece, zone, openness)
         locals_ = to_local(chest_w, sol.shoulder_q, sol.elbow_q, sol.wrist_q, sol.stick_q)
@@ -140,12 +148,14 @@ def strike_poses(rig: Rig, base: np.ndarray, limb: int, piece: np.ndarray, zone:
     return _struck(rig, rec, limb, piece, zone, velocity)
 
 
-def _struck(rig: Rig, rec: np.ndarray, limb: int, piece: np.ndarray, zone: np.ndarray,
-            velocity: np.ndarray) -> np.ndarray:  # fmt: skip
+def _struck(
+    rig: Rig, rec: np.ndarray, limb: int, piece: np.ndarray, zone: np.ndarray, velocity: np.ndarray
+) -> np.ndarray:
     """``rec`` with the struck pieces' channels as at a hit (in place; returned)."""
     kinds = [rig.kit.pieces[int(k)].kind for k in piece.tolist()]
-    for k, (kind, pc, z, v) in enumerate(zip(kinds, piece.tolist(), zone.tolist(),
-                                             velocity.tolist(), strict=True)):  # fmt: skip
+    for k, (kind, pc, z, v) in enumerate(
+        zip(kinds, piece.tolist(), zone.tolist(), velocity.tolist(), strict=True)
+    ):
         pedal = limb >= 2 and kind in (PieceKind.KICK, PieceKind.HIHAT)
         if pedal or (kind.is_cymbal and kind is not PieceKind.HIHAT):
             rec["swing"][k, pc] = 0.0  # beater on the head, footboard down; wobble restarts

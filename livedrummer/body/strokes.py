@@ -106,8 +106,10 @@ def stroke_keys(
     if piece_id is not None and params.model != "paper":
         travel = ~merge & (piece_id[:-1] != piece_id[1:])
     tr = np.flatnonzero(travel)
-    travel_l = (np.maximum(np.maximum(after_l[:-1], before_l[1:]), params.travel_lift)
-                + params.travel_raise * closeness)[tr]  # fmt: skip
+    travel_l = (
+        np.maximum(np.maximum(after_l[:-1], before_l[1:]), params.travel_lift)
+        + params.travel_raise * closeness
+    )[tr]
     travel_t = 0.5 * (after_t[:-1] + before_t[1:])[tr]
     keep_after = np.ones(n, dtype=bool)
     keep_before = np.ones(n, dtype=bool)
@@ -115,14 +117,26 @@ def stroke_keys(
     keep_before[1:] = ~merge
     m = np.flatnonzero(merge)
     parts = [
-        (before_t[keep_before], before_l[keep_before], BEFORE, idx[keep_before],
-         idx[keep_before], time_s[keep_before]),
+        (
+            before_t[keep_before],
+            before_l[keep_before],
+            BEFORE,
+            idx[keep_before],
+            idx[keep_before],
+            time_s[keep_before],
+        ),
         (time_s, np.zeros(n), CONTACT, idx, idx, time_s),
-        (after_t[keep_after], after_l[keep_after], AFTER, idx[keep_after], idx[keep_after],
-         time_s[keep_after]),
+        (
+            after_t[keep_after],
+            after_l[keep_after],
+            AFTER,
+            idx[keep_after],
+            idx[keep_after],
+            time_s[keep_after],
+        ),
         (time_s[m] + 0.5 * gap[m], merged_l[m], MERGED, m, m + 1, time_s[m] + 0.5 * gap[m]),
         (travel_t, travel_l, TRAVEL, tr, tr + 1, travel_t),
-    ]  # fmt: skip
+    ]
     t = np.concatenate([p[0] for p in parts])
     lift = np.concatenate([p[1] for p in parts])
     kind = np.concatenate([np.full(p[0].size, p[2]) for p in parts])

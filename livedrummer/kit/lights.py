@@ -56,8 +56,15 @@ LIGHT_NAMES: tuple[str, ...] = ("key", "fill", "rim", "wash")
 #: direction, the linear colour (``r``, ``g``, ``b`` one at a time, or ``color`` "#rrggbb")
 #: and whether it is on (``enabled``, 0 or 1).
 LIGHT_PARAMS: tuple[str, ...] = (
-    "intensity", "azimuth", "elevation", "r", "g", "b", "color", "enabled",
-)  # fmt: skip
+    "intensity",
+    "azimuth",
+    "elevation",
+    "r",
+    "g",
+    "b",
+    "color",
+    "enabled",
+)
 #: How far the key spot stands from the kit's centre (its shadow map's eye).
 KEY_DISTANCE_M = 4.6
 MAX_INTENSITY = 20.0
@@ -342,8 +349,9 @@ def _mix(a: float, b: float, s: float) -> float:
     return a + (b - a) * s
 
 
-def _mix3(a: tuple[float, float, float], b: tuple[float, float, float], s: float
-          ) -> tuple[float, float, float]:  # fmt: skip
+def _mix3(
+    a: tuple[float, float, float], b: tuple[float, float, float], s: float
+) -> tuple[float, float, float]:
     return (_mix(a[0], b[0], s), _mix(a[1], b[1], s), _mix(a[2], b[2], s))
 
 
@@ -365,9 +373,13 @@ def blend_rigs(a: LightRig, b: LightRig, s: float) -> LightRig:
             azimuth_deg=la.azimuth_deg + turn * s,
             elevation_deg=_mix(la.elevation_deg, lb.elevation_deg, s),
         )
-    return LightRig(sky=_mix3(a.sky, b.sky, s), ground=_mix3(a.ground, b.ground, s),
-                    exposure=_mix(a.exposure, b.exposure, s), name=b.name,
-                    **lights)  # fmt: skip
+    return LightRig(
+        sky=_mix3(a.sky, b.sky, s),
+        ground=_mix3(a.ground, b.ground, s),
+        exposure=_mix(a.exposure, b.exposure, s),
+        name=b.name,
+        **lights,
+    )
 
 
 def load_lights(path: Path | str, base: LightRig | None = None) -> LightRig:

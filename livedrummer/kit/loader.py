@@ -227,8 +227,10 @@ def extend_kit(kit: Kit, extension: str) -> Kit:
     have = {p.name for p in kit.pieces}
     for p in pieces:
         if p.name in have:
-            raise KitError(f"kit extension {extension!r}: kit {kit.name!r} already has a piece "
-                           f"named {p.name!r}")  # fmt: skip
+            raise KitError(
+                f"kit extension {extension!r}: kit {kit.name!r} already has a piece "
+                f"named {p.name!r}"
+            )
     return Kit(
         name=f"{kit.name}+{extension}",
         description=f"{kit.description}, with {extension}",

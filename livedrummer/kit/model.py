@@ -69,9 +69,8 @@ class Piece:
         base = math.atan2(to_seat[1], to_seat[0]) if norm > 1e-9 else -math.pi / 2
         azimuth = base - math.radians(self.facing_deg)
         return np.array(
-            [math.sin(tilt) * math.cos(azimuth), math.sin(tilt) * math.sin(azimuth),
-             math.cos(tilt)]
-        )  # fmt: skip
+            [math.sin(tilt) * math.cos(azimuth), math.sin(tilt) * math.sin(azimuth), math.cos(tilt)]
+        )
 
     def mirrored(self) -> Piece:
         x, y, z = self.position_m

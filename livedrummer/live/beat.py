@@ -126,10 +126,12 @@ class BeatTracker:
         centers = (np.arange(math.ceil(4.2 * self._periods.max() / _BIN_S)) + 0.5) * _BIN_S
         self._teeth = np.arange(1, 9) / 2.0
         self._tooth_w = np.where(np.arange(1, 9) % 2 == 0, 1.0, p.half_share) / np.sqrt(self._teeth)
-        self._kernel = np.stack([
-            np.exp(-0.5 * ((centers[None, :] - m * self._periods[:, None]) / p.sigma_s) ** 2)
-            for m in self._teeth
-        ])  # fmt: skip
+        self._kernel = np.stack(
+            [
+                np.exp(-0.5 * ((centers[None, :] - m * self._periods[:, None]) / p.sigma_s) ** 2)
+                for m in self._teeth
+            ]
+        )
         self._comb = np.tensordot(self._tooth_w, self._kernel, axes=1)  # all teeth at once
         self._comb_norm = float(np.sum(self._tooth_w))
         self._fit = np.full(self._periods.size, -1)  # teeth that fit each row of the comb below
@@ -183,8 +185,9 @@ class BeatTracker:
         if downbeat != 0.0:
             self._update_downbeat(time_s, downbeat)
 
-    def _pair_in(self, onset: tuple[float, float], others: deque[tuple[float, float, float]],
-                 sign: float) -> None:  # fmt: skip
+    def _pair_in(
+        self, onset: tuple[float, float], others: deque[tuple[float, float, float]], sign: float
+    ) -> None:
         """The pairs of ``onset`` (time, weight) with each of ``others`` added to the pair
         histogram (``sign`` 1) or taken out of it (-1): a pair counts once, in the bin of its
         distance, when that lies between 0.1 s and the histogram's end. Kept up to date onset
@@ -196,8 +199,9 @@ class BeatTracker:
         d = np.abs(arr[:, 0] - onset[0])
         keep = (d > 0.1) & (d < _BIN_S * self._hist.size)
         if keep.any():
-            self._hist += sign * np.bincount((d[keep] / _BIN_S).astype(np.int64),
-                                             arr[keep, 1] * onset[1], self._hist.size)  # fmt: skip
+            self._hist += sign * np.bincount(
+                (d[keep] / _BIN_S).astype(np.int64), arr[keep, 1] * onset[1], self._hist.size
+            )
 
     def _partial_comb(self, span: float) -> tuple[np.ndarray, np.ndarray]:
         """The comb of the teeth that fit ``span`` (per period: a tooth at ``m`` periods fits
@@ -233,8 +237,9 @@ class BeatTracker:
             return
         ratio = best / self.period_s
         if abs(math.log(ratio)) < 0.08:
-            self.period_s = math.exp((1 - p.smooth) * math.log(self.period_s)
-                                     + p.smooth * math.log(best))  # fmt: skip
+            self.period_s = math.exp(
+                (1 - p.smooth) * math.log(self.period_s) + p.smooth * math.log(best)
+            )
             self._challenger = None
         elif self._challenger is not None and abs(math.log(best / self._challenger)) < 0.08:
             self.period_s, self._challenger = best, None  # it won twice in a row
@@ -417,9 +422,13 @@ def downbeat_weights(onsets: np.ndarray) -> np.ndarray:
     return out
 
 
-def track_beats(times: np.ndarray, weights: np.ndarray, end_s: float,
-                params: BeatParams | None = None,
-                downbeats: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+def track_beats(
+    times: np.ndarray,
+    weights: np.ndarray,
+    end_s: float,
+    params: BeatParams | None = None,
+    downbeats: np.ndarray | None = None,
+) -> np.ndarray:
     """The offline twin (see the module docstring): the beats a :class:`BeatTracker` fed
     these onsets one at a time predicts, each from what it had heard by then, up to
     ``end_s``."""
@@ -434,8 +443,9 @@ def track_beats(times: np.ndarray, weights: np.ndarray, end_s: float,
     return np.concatenate(out) if out else np.zeros(0)
 
 
-def beat_accuracy(detected: np.ndarray, reference: np.ndarray, from_s: float,
-                  tolerance_s: float = 0.07) -> float:  # fmt: skip
+def beat_accuracy(
+    detected: np.ndarray, reference: np.ndarray, from_s: float, tolerance_s: float = 0.07
+) -> float:
     """The fraction of reference beats at or after ``from_s`` with a detected beat within
     ``tolerance_s``."""
     ref = reference[reference >= from_s]
@@ -447,8 +457,9 @@ def beat_accuracy(detected: np.ndarray, reference: np.ndarray, from_s: float,
     return float(np.mean(near <= tolerance_s))
 
 
-def beat_precision(detected: np.ndarray, reference: np.ndarray, from_s: float,
-                   tolerance_s: float = 0.07) -> float:  # fmt: skip
+def beat_precision(
+    detected: np.ndarray, reference: np.ndarray, from_s: float, tolerance_s: float = 0.07
+) -> float:
     """The fraction of detected beats from ``from_s`` to the last reference beat with a
     reference beat within ``tolerance_s``: :func:`beat_accuracy`'s other half (a tracker
     at double tempo matches every reference beat, and half its own beats are extra)."""

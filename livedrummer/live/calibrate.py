@@ -59,9 +59,12 @@ def estimate(clicks: np.ndarray, hits: np.ndarray) -> OffsetEstimate:
         taken.add(i)
         lags.append(lag)
     if len(lags) < MIN_HITS:
-        raise ValueError(f"{len(lags)} hits on the clicks ({dropped} off them): need at least "
-                         f"{MIN_HITS}; hit once on each click")  # fmt: skip
+        raise ValueError(
+            f"{len(lags)} hits on the clicks ({dropped} off them): need at least "
+            f"{MIN_HITS}; hit once on each click"
+        )
     ms = np.array(lags) * 1000.0
     q1, med, q3 = np.percentile(ms, [25, 50, 75])
-    return OffsetEstimate(float(med), float(q3 - q1) / 2.0, len(lags), dropped,
-                          tuple(float(x) for x in ms))  # fmt: skip
+    return OffsetEstimate(
+        float(med), float(q3 - q1) / 2.0, len(lags), dropped, tuple(float(x) for x in ms)
+    )

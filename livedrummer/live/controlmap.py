@@ -157,8 +157,7 @@ def parse_control_map(data: dict[str, object], source: str) -> ControlMap:
         except ValueError as exc:
             raise t.fail(target, str(exc)) from None
         t.done()
-        out.append(Binding(kind, number, None if channel is None else channel - 1, target,
-                           value))  # fmt: skip
+        out.append(Binding(kind, number, None if channel is None else channel - 1, target, value))
     root.done()
     return ControlMap(out)
 

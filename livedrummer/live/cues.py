@@ -144,8 +144,19 @@ def parse_cues(data: dict[str, object], source: str) -> dict[str, Cue]:
         if t.has("fade_s") and lights is None:
             raise t.fail("fade_s", "fades a light change: give look or [cue.lights] too")
         t.done()
-        out[name] = Cue(name, at_s, bar, preset, expression, tuple(params), camera, cut, blackout,
-                        lights, fade_s)  # fmt: skip
+        out[name] = Cue(
+            name,
+            at_s,
+            bar,
+            preset,
+            expression,
+            tuple(params),
+            camera,
+            cut,
+            blackout,
+            lights,
+            fade_s,
+        )
     root.done()
     return out
 
@@ -178,8 +189,9 @@ def expression_at(timed: list[tuple[float, Cue]], t: float, base: Expression) ->
     return out
 
 
-def style_changes(timed: list[tuple[float, Cue]], base: Expression
-                  ) -> list[tuple[float, Expression]]:  # fmt: skip
+def style_changes(
+    timed: list[tuple[float, Cue]], base: Expression
+) -> list[tuple[float, Expression]]:
     """(time, expression from then on) at each cue that changes the style, from -inf."""
     out = [(-math.inf, base)]
     for at, cue in timed:
@@ -225,8 +237,9 @@ class BarCues:
     once, in bar order, with the start of the first bar given at or past the cue's bar."""
 
     def __init__(self, cues: dict[str, Cue]) -> None:
-        self._pending = sorted((c for c in cues.values() if c.bar is not None),
-                               key=lambda c: c.bar or 0)  # fmt: skip
+        self._pending = sorted(
+            (c for c in cues.values() if c.bar is not None), key=lambda c: c.bar or 0
+        )
 
     def due(self, bars: list[tuple[float, int]]) -> list[tuple[float, Cue]]:
         if not bars or not self._pending:
@@ -254,9 +267,13 @@ def stage_cue_of(row: np.void) -> Cue:
     camera = int(row["camera"])
     blackout = int(row["blackout"])
     bar = int(row["bar"])
-    return Cue(f"bar {bar}", bar=bar or None,
-               camera=CAMERA_NAMES[camera - 1] if camera else None, cut=bool(row["cut"]),
-               blackout=None if blackout < 0 else bool(blackout))  # fmt: skip
+    return Cue(
+        f"bar {bar}",
+        bar=bar or None,
+        camera=CAMERA_NAMES[camera - 1] if camera else None,
+        cut=bool(row["cut"]),
+        blackout=None if blackout < 0 else bool(blackout),
+    )
 
 
 def with_lights_of(cue: Cue, cues: dict[str, Cue]) -> Cue:

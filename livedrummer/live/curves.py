@@ -88,8 +88,9 @@ class CurveView:
     fade: tuple[float, float] = (0.0, 0.0)
 
 
-def sample_curves(view: CurveView, times: np.ndarray, answer: Answer | None = None
-                  ) -> tuple[np.ndarray, bool]:  # fmt: skip
+def sample_curves(
+    view: CurveView, times: np.ndarray, answer: Answer | None = None
+) -> tuple[np.ndarray, bool]:
     """Pose records at ``times``, cross-faded from ``view.old`` over its fade; and whether the
     fade is over for all of them (then the old curves can be dropped). ``answer``: called
     between the two samplings (see :func:`~livedrummer.body.animation.animate`)."""
@@ -196,13 +197,29 @@ class CurveSet:
         it current, fading from the old curves from ``start_s`` until the first of
         ``contacts_s`` (the sorted times of its committed notes, guesses left out) after it,
         at most ``blend_s``."""
-        anim = animate(self.rig, sticking, beats, openness, expression, strokes=self.strokes,
-                       pause=answer, memo=self._memo)  # fmt: skip
+        anim = animate(
+            self.rig,
+            sticking,
+            beats,
+            openness,
+            expression,
+            strokes=self.strokes,
+            pause=answer,
+            memo=self._memo,
+        )
         self.animations += 1
         style = None
         if change is not None:
-            old_anim = animate(self.rig, sticking, beats, openness, change.old,
-                               strokes=self.strokes, pause=answer, memo=self._memo_old)  # fmt: skip
+            old_anim = animate(
+                self.rig,
+                sticking,
+                beats,
+                openness,
+                change.old,
+                strokes=self.strokes,
+                pause=answer,
+                memo=self._memo_old,
+            )
             style = (change, old_anim)
         self.built_at = horizon_s
         new = Curves(anim, sticking, key, contacts_s, chokes, style)

@@ -92,8 +92,9 @@ class SampleLedger:
 
     # -- publishing ----------------------------------------------------------------------------
 
-    def publish(self, start: float, top: float, committed_s: float, contacts_s: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    def publish(
+        self, start: float, top: float, committed_s: float, contacts_s: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The held samples in ``(start, top]`` (with the quick contacts the curves lack,
         see :meth:`with_struck`), now published; later ones stay held. ``committed_s``: the
         committed horizon; ``contacts_s``: the contacts the current curves have (their quick
@@ -110,9 +111,10 @@ class SampleLedger:
             self._sent_t = t_all[recent]
             self._sent_rows = np.concatenate([self._sent_rows[older], rows])[recent]
         self._struck = {
-            t: r for t, r in self._struck.items()
+            t: r
+            for t, r in self._struck.items()
             if t > committed_s - self.keep_s and not np.any(contacts_s == t)
-        }  # fmt: skip
+        }
         return self.with_struck(times, rows, start, top)
 
     # -- quick contacts ------------------------------------------------------------------------
@@ -140,16 +142,18 @@ class SampleLedger:
             return self._empty()
         lo, hi = self._quick_lo, self._quick_hi
         self._quick_lo, self._quick_hi = math.inf, -math.inf
-        sent_end = max(self.published_s if self.published_s is not None else -math.inf,
-                       self._quick_end)  # fmt: skip
+        sent_end = max(
+            self.published_s if self.published_s is not None else -math.inf, self._quick_end
+        )
         lo = min(lo, sent_end)
         self._quick_end = max(self._quick_end, hi)
         held_t, held = self.samples()
         fill = (held_t > lo) & (held_t <= hi)
         return self.with_struck(held_t[fill], held[fill], np.nextafter(lo, -math.inf), hi)
 
-    def with_struck(self, times: np.ndarray, rows: np.ndarray, start: float, top: float
-                    ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    def with_struck(
+        self, times: np.ndarray, rows: np.ndarray, start: float, top: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         """``times``/``rows`` with every quick contact in ``(start, top]`` put in (in place of a
         sample at its time): a batch from curves that lack a hit (it arrived while they were
         being built) still carries that hit's contact."""

@@ -83,9 +83,15 @@ def quick_contact(
         if sel.size:
             h = hits[sel]
             base[at[sel]] = strike_poses(
-                state.rig, base[at[sel]], code, piece[sel].astype(np.int64),
-                h["zone"].astype(np.int64), h["velocity"], h["openness"], state.feet,
-            )  # fmt: skip
+                state.rig,
+                base[at[sel]],
+                code,
+                piece[sel].astype(np.int64),
+                h["zone"].astype(np.int64),
+                h["velocity"],
+                h["openness"],
+                state.feet,
+            )
     return times, base
 
 
@@ -100,8 +106,15 @@ def _bodies_at(state: QuickState, times: np.ndarray) -> np.ndarray | None:
             out[k], todo[k] = state.struck[t], False
     if todo.any() and state.samples_t.size:
         i = np.clip(np.searchsorted(state.samples_t, times), 1, state.samples_t.size - 1)
-        i = np.where(np.abs(state.samples_t[i - 1] - times) < np.abs(state.samples_t[i] - times),
-                     i - 1, i) if state.samples_t.size > 1 else np.zeros_like(i)  # fmt: skip
+        i = (
+            np.where(
+                np.abs(state.samples_t[i - 1] - times) < np.abs(state.samples_t[i] - times),
+                i - 1,
+                i,
+            )
+            if state.samples_t.size > 1
+            else np.zeros_like(i)
+        )
         out[todo] = state.samples[i[todo]]
         todo[:] = False
     if todo.any():

@@ -209,8 +209,13 @@ class ShowSettings:
         sd.done()
         top.done()
         try:
-            return cls(note_map, kit, AvatarChoice(spec, bone_map, fit),
-                       Delay.from_ms(lookahead_ms, delay_ms), sound)  # fmt: skip
+            return cls(
+                note_map,
+                kit,
+                AvatarChoice(spec, bone_map, fit),
+                Delay.from_ms(lookahead_ms, delay_ms),
+                sound,
+            )
         except SettingsError as exc:
             raise SettingsError(f"{source}: {exc}") from None
 

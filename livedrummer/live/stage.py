@@ -45,8 +45,14 @@ def _smoothstep(x: float) -> float:
 class Stage:
     """The camera and the blackout (see the module docstring)."""
 
-    def __init__(self, kit: Kit, camera: str = "stage", fade_s: float = 0.5,
-                 move_s: float = 1.2, lights: LightRig | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        kit: Kit,
+        camera: str = "stage",
+        fade_s: float = 0.5,
+        move_s: float = 1.2,
+        lights: LightRig | None = None,
+    ) -> None:
         self.cameras = kit_cameras(kit)
         #: the rig the lights are at or fading to (the last change's); lights_at for a frame
         self.lights = lights if lights is not None else look_rig(DEFAULT_LOOK)

@@ -184,8 +184,16 @@ class LiveSynth:
         self.cc_open = cc_open
         self.dtype = pose_dtype(len(rig.kit.pieces))
         ahead = p.provisional or p.delay_s > p.lookahead_s
-        wp = WindowParams(p.lookahead_s, ahead, p.window_s, p.guard_s, p.idle_period_s, p.epoch_s,
-                          p.max_notes, p.delay_s)  # fmt: skip
+        wp = WindowParams(
+            p.lookahead_s,
+            ahead,
+            p.window_s,
+            p.guard_s,
+            p.idle_period_s,
+            p.epoch_s,
+            p.max_notes,
+            p.delay_s,
+        )
         self.window = NoteWindow(rig, wp, note_map)
         self.curves = curves if curves is not None else CurveSet(rig, p.blend_s, strokes)
         self.ledger = SampleLedger(self.dtype)
@@ -238,8 +246,14 @@ class LiveSynth:
 
     def quick_state(self) -> QuickState:
         """A read-only copy for :func:`~livedrummer.live.quick.quick_contact`."""
-        return QuickState(self.rig, self.dtype, self.curves.view(), *self.ledger.samples(),
-                          self.ledger.struck(), self.feet)  # fmt: skip
+        return QuickState(
+            self.rig,
+            self.dtype,
+            self.curves.view(),
+            *self.ledger.samples(),
+            self.ledger.struck(),
+            self.feet,
+        )
 
     def take_quick(self) -> PoseBatch:
         """Quick contacts of the hits that arrived since the last call, to publish at once,
@@ -254,8 +268,9 @@ class LiveSynth:
 
     # -- output --------------------------------------------------------------------------------
 
-    def poses_until(self, now_s: float, answer: Answer | None = None, *,
-                    lock: Lock | None = None) -> PoseBatch:  # fmt: skip
+    def poses_until(
+        self, now_s: float, answer: Answer | None = None, *, lock: Lock | None = None
+    ) -> PoseBatch:
         """Commit what ``now_s`` allows and return the samples to publish: show times up to
         ``now_s + D`` (provisional) or ``now_s + D - L``. A provisional batch may start before
         the end of the previous one: it replaces the samples it covers (see the module
@@ -277,10 +292,10 @@ class LiveSynth:
             self.window.update_guesses(committed, now_s)
         # what was published past the last committed horizon is provisional: a change of the
         # notes re-sends it from there (with D = L its first tick may already be on screen)
-        rewind = min(start, max(self._committed, committed - p.delay_s)) if p.provisional \
-            else start  # fmt: skip
-        refreshed = (top > start or p.provisional) and self._refresh(rewind, committed, answer,
-                                                                      lock)  # fmt: skip
+        rewind = min(start, max(self._committed, committed - p.delay_s)) if p.provisional else start
+        refreshed = (top > start or p.provisional) and self._refresh(
+            rewind, committed, answer, lock
+        )
         if refreshed:
             start = rewind
             if answer is not None and lock is None:  # with a lock: only while it is let go
@@ -310,8 +325,9 @@ class LiveSynth:
         rows["time_s"] = (times - float(times[0])).astype(np.float32)
         return PoseBatch(times + self.params.delay_s, rows)
 
-    def _sample_ahead(self, lo: float, hi: float, answer: Answer | None, lock: Lock | None = None
-                      ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    def _sample_ahead(
+        self, lo: float, hi: float, answer: Answer | None, lock: Lock | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Samples of the current curves in ``(lo, hi]``, on the rate grid plus every committed
         contact: one call per chunk costs about what one sample does."""
         curves = self.curves.current
@@ -326,8 +342,9 @@ class LiveSynth:
         with released(lock):
             return times, self.curves.sample(times, answer)
 
-    def _refresh(self, start: float, horizon: float, answer: Answer | None,
-                 lock: Lock | None = None) -> bool:  # fmt: skip
+    def _refresh(
+        self, start: float, horizon: float, answer: Answer | None, lock: Lock | None = None
+    ) -> bool:
         """Rebuild the curves if the window's notes changed; True when they were rebuilt."""
         window = self.window
         window.prune(horizon)
@@ -339,13 +356,25 @@ class LiveSynth:
         if current is not None and current.key[:4] == key[:4] and current.key[5:] == key[5:]:
             # only the pedal moved: its openness joins at most every ``control_every_s``
             # (each hi-hat CC4 step would otherwise cost a whole re-animation)
-            if (content.key[4] == current.key[4]
-                    or horizon - self.curves.built_at < self.params.control_every_s):  # fmt: skip
+            if (
+                content.key[4] == current.key[4]
+                or horizon - self.curves.built_at < self.params.control_every_s
+            ):
                 return False
         openness = hihat_openness(content.sticking.onsets, content.controls, cc_open=self.cc_open)
         expression = self.style.target
         with released(lock):  # what it reads was taken above; the quick path reads its view
-            self.curves.rebuild(content.sticking, content.beats_s, openness, key,
-                                content.contacts_s, content.chokes, start, horizon, answer,
-                                expression, change)  # fmt: skip
+            self.curves.rebuild(
+                content.sticking,
+                content.beats_s,
+                openness,
+                key,
+                content.contacts_s,
+                content.chokes,
+                start,
+                horizon,
+                answer,
+                expression,
+                change,
+            )
         return True

@@ -175,14 +175,17 @@ class NoteWindow:
             note.hand = d.limb in (0, 1) and d.piece >= 0
             if note.hand:
                 r = note.row
-                self.predictor.observe(float(r["time_s"]), d.limb, d.piece, int(r["zone"]),
-                                       int(r["velocity"]))  # fmt: skip
+                self.predictor.observe(
+                    float(r["time_s"]), d.limb, d.piece, int(r["zone"]), int(r["velocity"])
+                )
 
     def limbs(self, notes: list[Note]) -> tuple[np.ndarray, np.ndarray]:
         """Limb and piece of each note: its decision, else its provisional limb."""
         played = [(n.limb, n.piece) if n.decided else self.provisional(n) for n in notes]
-        return (np.array([li for li, _ in played], dtype=np.int64),
-                np.array([pi for _, pi in played], dtype=np.int64))  # fmt: skip
+        return (
+            np.array([li for li, _ in played], dtype=np.int64),
+            np.array([pi for _, pi in played], dtype=np.int64),
+        )
 
     def provisional(self, note: Note) -> tuple[int, int]:
         """A pending note's likely limb and piece: what the online sticking's cheapest path
@@ -209,10 +212,12 @@ class NoteWindow:
             if g is not None:
                 near = [n for n in pending if abs(n.time_s - g.time_s) <= g.period_s / 3]
                 done = any(
-                    n.decided and n.limb == limb and abs(n.time_s - g.time_s) <= g.period_s / 3
+                    n.decided
+                    and n.limb == limb
+                    and abs(n.time_s - g.time_s) <= g.period_s / 3
                     and n.time_s <= horizon
                     for n in self._notes[-8:]
-                )  # fmt: skip
+                )
                 if done:
                     g = None
                 elif near:
@@ -224,8 +229,10 @@ class NoteWindow:
                 elif horizon >= g.time_s - p.guard_s:
                     g = None  # it did not come: settle back
             if g is None:
-                last = max((n.time_s for n in self._notes if n.decided and n.limb == limb),
-                           default=-math.inf)  # fmt: skip
+                last = max(
+                    (n.time_s for n in self._notes if n.decided and n.limb == limb),
+                    default=-math.inf,
+                )
                 g = self.predictor.guess(limb, max(horizon + p.guard_s, last + 1e-3, now_s))
                 if g is not None and g.time_s - horizon > 2.5:
                     g = None
@@ -279,10 +286,16 @@ class NoteWindow:
                 if limb >= 0:
                     keep.append((n.row, limb, piece))
         guesses = sorted(self._guesses.values(), key=lambda g: g.time_s)
-        controls = (np.array(self._controls, CONTROL_DTYPE).reshape(-1) if self._controls
-                    else np.zeros(0, CONTROL_DTYPE))  # fmt: skip
-        chokes = (kit_choke_times(controls, self.note_map, self.rig.kit)
-                  if self.note_map is not None else None)  # fmt: skip
+        controls = (
+            np.array(self._controls, CONTROL_DTYPE).reshape(-1)
+            if self._controls
+            else np.zeros(0, CONTROL_DTYPE)
+        )
+        chokes = (
+            kit_choke_times(controls, self.note_map, self.rig.kit)
+            if self.note_map is not None
+            else None
+        )
         is_choke = controls["kind"] == ControlKind.CHOKE
         key = (
             tuple((float(r["time_s"]), li, pi) for r, li, pi in keep),
@@ -304,9 +317,14 @@ class NoteWindow:
             pieces.append(g.piece)
         onsets = np.array(rows, dtype=ONSET_DTYPE).reshape(-1)
         order = np.argsort(onsets["time_s"], kind="stable")
-        sticking = Sticking(onsets[order], np.array(limbs, np.int8).reshape(-1)[order],
-                            np.array(pieces, np.int16).reshape(-1)[order], {}, "online",
-                            self.rig.kit.name)  # fmt: skip
+        sticking = Sticking(
+            onsets[order],
+            np.array(limbs, np.int8).reshape(-1)[order],
+            np.array(pieces, np.int16).reshape(-1)[order],
+            {},
+            "online",
+            self.rig.kit.name,
+        )
         contacts = np.array(sorted(float(r["time_s"]) for r, _, _ in keep))
         beats = self._beats(horizon, keep)
         return WindowContent(sticking, contacts, beats, controls, chokes, key)

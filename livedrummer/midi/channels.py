@@ -86,8 +86,10 @@ def choose_drum_channels(
         left = {c: n for c, n in notes.items() if c != choice and n > 0}
         notice = ""
         if left:
-            notice = (f"{_count(sum(left.values()))} on {_channels(left)} ignored "
-                      f"(--channel {choice + 1}; --channel all reads them)")  # fmt: skip
+            notice = (
+                f"{_count(sum(left.values()))} on {_channels(left)} ignored "
+                f"(--channel {choice + 1}; --channel all reads them)"
+            )
         return DrumChannels(frozenset({choice}), notice, no_drum_part=notes.get(choice, 0) == 0)
     if not used:
         return DrumChannels(None)

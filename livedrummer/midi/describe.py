@@ -22,8 +22,15 @@ from livedrummer.midi.decode import ChannelMessage
 from livedrummer.midi.notemap import NoteMap
 
 #: Controllers drummers meet, by number (anything else is printed by number only).
-CC_NAMES = {1: "modulation", 4: "hi-hat pedal", 7: "volume", 16: "strike position",
-            17: "strike position", 18: "strike position", 64: "sustain"}  # fmt: skip
+CC_NAMES = {
+    1: "modulation",
+    4: "hi-hat pedal",
+    7: "volume",
+    16: "strike position",
+    17: "strike position",
+    18: "strike position",
+    64: "sustain",
+}
 
 
 @dataclass(frozen=True)
@@ -39,11 +46,17 @@ class MessageInfo:
     known: bool  # False for a note (or choke) the map does not know
 
     def line(self, start_s: float = 0.0) -> str:
-        what = {"note_on": "note", "note_off": "off", "control_change": "CC",
-                "polytouch": "touch"}.get(self.type, self.type)  # fmt: skip
+        what = {
+            "note_on": "note",
+            "note_off": "off",
+            "control_change": "CC",
+            "polytouch": "touch",
+        }.get(self.type, self.type)
         mark = "  " if self.known else "? "
-        return (f"{self.time_s - start_s:9.3f} s  ch{self.channel:<2d} {what:<5} "
-                f"{self.number:3d} {self.value:3d}  {mark}{self.meaning}")  # fmt: skip
+        return (
+            f"{self.time_s - start_s:9.3f} s  ch{self.channel:<2d} {what:<5} "
+            f"{self.number:3d} {self.value:3d}  {mark}{self.meaning}"
+        )
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
@@ -58,10 +71,24 @@ def describe(time_s: float, msg: ChannelMessage, note_map: NoteMap) -> MessageIn
             return MessageInfo(time_s, kind, ch, msg.note, msg.velocity, spec.label, True)
         if msg.note in note_map.ignored:
             label = note_map.ignored[msg.note]
-            return MessageInfo(time_s, kind, ch, msg.note, msg.velocity,
-                               f"{label} (ignored: not on a drum kit)", True)  # fmt: skip
-        return MessageInfo(time_s, kind, ch, msg.note, msg.velocity,
-                           f"unknown note (not in map {note_map.name})", False)  # fmt: skip
+            return MessageInfo(
+                time_s,
+                kind,
+                ch,
+                msg.note,
+                msg.velocity,
+                f"{label} (ignored: not on a drum kit)",
+                True,
+            )
+        return MessageInfo(
+            time_s,
+            kind,
+            ch,
+            msg.note,
+            msg.velocity,
+            f"unknown note (not in map {note_map.name})",
+            False,
+        )
     if kind in ("note_on", "note_off"):
         return MessageInfo(time_s, "note_off", ch, msg.note, msg.velocity, "release", True)
     if kind == "control_change":
@@ -74,8 +101,9 @@ def describe(time_s: float, msg: ChannelMessage, note_map: NoteMap) -> MessageIn
     if kind == "polytouch":
         spec = note_map.lookup(msg.note)
         if spec is None:
-            return MessageInfo(time_s, kind, ch, msg.note, msg.value,
-                               "aftertouch on an unknown note", False)  # fmt: skip
+            return MessageInfo(
+                time_s, kind, ch, msg.note, msg.value, "aftertouch on an unknown note", False
+            )
         meaning = f"choke: {spec.instrument}" if msg.value else "choke released"
         return MessageInfo(time_s, kind, ch, msg.note, msg.value, meaning, True)
     return MessageInfo(time_s, kind, ch, 0, getattr(msg, "value", 0), "not used", True)

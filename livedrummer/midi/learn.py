@@ -124,8 +124,10 @@ class MapLearner:
         if msg.note in known:
             if prompt[1] == "pedal" and known[msg.note].piece != "hihat":
                 return None
-            return (f"note {msg.note} is already {known[msg.note].label}: hit {prompt[3]} "
-                    "again, or skip it")  # fmt: skip
+            return (
+                f"note {msg.note} is already {known[msg.note].label}: hit {prompt[3]} "
+                "again, or skip it"
+            )
         self._answer(msg.note)
         self.answered_s = time_s
         return f"{prompt[3]}: note {msg.note}"
@@ -162,6 +164,8 @@ class MapLearner:
             if d.note is None:
                 continue
             hihat = f'hihat = "{d.hihat}", ' if d.piece == "hihat" else ""
-            lines.append(f'{d.note} = {{ piece = "{d.piece}", zone = "{d.zone}", {hihat}'
-                         f'label = "{d.label}" }}')  # fmt: skip
+            lines.append(
+                f'{d.note} = {{ piece = "{d.piece}", zone = "{d.zone}", {hihat}'
+                f'label = "{d.label}" }}'
+            )
         return "\n".join(lines) + "\n"

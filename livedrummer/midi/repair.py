@@ -125,8 +125,9 @@ def repair_track(
                 )
             if status < 0x80:
                 if running is None:
-                    raise MidiFileError(f"{at}: byte {pos}: running status with no status "
-                                        "before it")  # fmt: skip
+                    raise MidiFileError(
+                        f"{at}: byte {pos}: running status with no status before it"
+                    )
                 if after_sysex:
                     note("running status after a SysEx event", pos)
                 first_data = pos
@@ -138,14 +139,16 @@ def repair_track(
                 raise EOFError
             for i in range(first_data, first_data + size):
                 if data[i] >= 0x80:
-                    raise MidiFileError(f"{at}: byte {i}: data byte 0x{data[i]:02X} is not "
-                                        "in range 0..127")  # fmt: skip
+                    raise MidiFileError(
+                        f"{at}: byte {i}: data byte 0x{data[i]:02X} is not in range 0..127"
+                    )
             out += _encode_varlen(delta) + bytes((running,)) + data[first_data : first_data + size]
             pos = first_data + size
             after_sysex = False
     except EOFError:
-        raise MidiFileError(f"{at}: byte {event}: an event runs past the end of its track"
-                            ) from None  # fmt: skip
+        raise MidiFileError(
+            f"{at}: byte {event}: an event runs past the end of its track"
+        ) from None
     except ValueError as exc:
         raise MidiFileError(f"{at}: byte {event}: {exc}") from None
     warnings = [

@@ -120,8 +120,10 @@ def check_layout(data: bytes, name: str) -> SmfLayout:
             # Junk after a track is no music lost; a truncated chunk before the declared
             # tracks are all there is (a file cut short).
             if tracks and (len(tracks) >= ntracks or not problem.startswith("truncated")):
-                warnings.append(f"byte {pos}: {problem}: the {len(data) - pos} bytes after the "
-                                f"last declared track are ignored")  # fmt: skip
+                warnings.append(
+                    f"byte {pos}: {problem}: the {len(data) - pos} bytes after the "
+                    f"last declared track are ignored"
+                )
                 break
             raise MidiFileError(f"{name}: byte {pos}: {problem}")
         kind = data[pos : pos + 4]
@@ -132,8 +134,10 @@ def check_layout(data: bytes, name: str) -> SmfLayout:
     if not tracks:
         raise MidiFileError(f"{name}: no MTrk track chunk (header says {ntracks})")
     if len(tracks) != ntracks:  # a common writer bug, harmless: every track found is read
-        warnings.append(f"byte 10: header declares {ntracks} tracks, file holds {len(tracks)}: "
-                        f"all {len(tracks)} are read")  # fmt: skip
+        warnings.append(
+            f"byte 10: header declares {ntracks} tracks, file holds {len(tracks)}: "
+            f"all {len(tracks)} are read"
+        )
     return SmfLayout(fmt, division, tuple(tracks), tuple(warnings))
 
 
@@ -147,8 +151,10 @@ def _chunk_problem(data: bytes, pos: int, tracks: int) -> str | None:
         return f"corrupt chunk id {kind!r}"
     if pos + 8 + length > len(data):
         what = f"track {tracks + 1}" if kind == b"MTrk" else f"chunk {kind!r}"
-        return (f"truncated: {what} declares {length} bytes but the file ends "
-                f"{len(data) - pos - 8} bytes after its header")  # fmt: skip
+        return (
+            f"truncated: {what} declares {length} bytes but the file ends "
+            f"{len(data) - pos - 8} bytes after its header"
+        )
     return None
 
 
@@ -453,8 +459,13 @@ def _chart_part(
         part, part_ticks, others, what = merged, ticks, 0, "all tracks read as one chart part"
     else:
         part, part_ticks = merge_tracks([tracks[index]])
-        others = sum(1 for i, t in enumerate(tracks) if i != index for m in t
-                     if m.type == "note_on" and m.velocity > 0)  # fmt: skip
+        others = sum(
+            1
+            for i, t in enumerate(tracks)
+            if i != index
+            for m in t
+            if m.type == "note_on" and m.velocity > 0
+        )
         what = f"track {tracks[index].name.strip()!r} read"
     part, part_ticks, markers = apply_tom_markers(part, part_ticks)
     line = f"rhythm-game chart: {what}, Expert gems played, {markers:,} tom markers applied"

@@ -203,9 +203,12 @@ def windows_json(match_window_ms: float, level: Level) -> dict[str, Any]:
         "level": level.value,
         "match_window_ms": float(match_window_ms),
         "on_time_window_ms": level.window_ms,
-        "grade_limits_ms": {"perfect": HARD_WINDOW_MS, "good": EASY_WINDOW_MS,
-                            "ok": float(match_window_ms)},
-    }  # fmt: skip
+        "grade_limits_ms": {
+            "perfect": HARD_WINDOW_MS,
+            "good": EASY_WINDOW_MS,
+            "ok": float(match_window_ms),
+        },
+    }
 
 
 def window_words(result: dict[str, Any]) -> dict[str, str]:

@@ -37,8 +37,10 @@ class HitLine:
     def text(self) -> str:
         name = PIECES[self.piece]
         if self.offset_ms is None:
-            return f"{name:<12} {'no note of it here':<29} streak {self.streak:>3}  " \
-                   f"{self.accuracy_pct:5.1f} %"  # fmt: skip
+            return (
+                f"{name:<12} {'no note of it here':<29} streak {self.streak:>3}  "
+                f"{self.accuracy_pct:5.1f} %"
+            )
         off = self.offset_ms
         word = "on time" if self.on_time else ("late" if off > 0 else "early")
         return (

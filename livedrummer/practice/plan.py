@@ -143,9 +143,11 @@ def count_in(grid: Grid, seg: Segment, scale: float, bars: int) -> tuple[np.ndar
         beats = np.arange(4) * 0.5 / scale
     length = pass_length_bar(beats, grid, seg, scale)
     times = np.concatenate([beats - (bars - k) * length for k in range(bars)])
-    accent = np.concatenate([grid.beat_in_bar[pick] == 0] * bars) if pick.any() else (
-        np.tile(np.arange(4) == 0, bars)
-    )  # fmt: skip
+    accent = (
+        np.concatenate([grid.beat_in_bar[pick] == 0] * bars)
+        if pick.any()
+        else (np.tile(np.arange(4) == 0, bars))
+    )
     return times, accent
 
 
@@ -159,9 +161,13 @@ def pass_length_bar(beats: np.ndarray, grid: Grid, seg: Segment, scale: float) -
 
 
 def pass_bounds(
-    starts_s: list[float], length_s: list[float], first_s: float, last_s: float,
-    scales: list[float], window_s: float,
-) -> list[tuple[float, float]]:  # fmt: skip
+    starts_s: list[float],
+    length_s: list[float],
+    first_s: float,
+    last_s: float,
+    scales: list[float],
+    window_s: float,
+) -> list[tuple[float, float]]:
     """[from, to) on the shared clock of the hits each pass owns (see the module docstring).
 
     ``first_s``/``last_s``: the segment's first and last note on the pass clock at scale 1

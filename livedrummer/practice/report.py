@@ -158,8 +158,14 @@ def _timeline_svg(notes: np.ndarray, grades: list[str], result: dict[str, Any]) 
             ax.scatter(t, y, s=12, c=colour, marker=marker, label=grade.replace("_", " "))
         extra_t = [e["time_s"] for e in result.get("extra_notes", ()) if e["piece"] == PIECES[code]]
         if extra_t:
-            ax.scatter(extra_t, np.full(len(extra_t), 0.85 * window), s=14, c="#777", marker="v",
-                       label="extra")  # fmt: skip
+            ax.scatter(
+                extra_t,
+                np.full(len(extra_t), 0.85 * window),
+                s=14,
+                c="#777",
+                marker="v",
+                label="extra",
+            )
         ax.set_ylim(-window, window)
         ax.set_ylabel(f"{PIECES[code]}\nms", fontsize=8)
         ax.tick_params(labelsize=8)
@@ -250,9 +256,12 @@ def _limbs_svg(grades: list[str], notes: np.ndarray, limbs: Sequence[str | None]
     left = np.zeros(len(present))
     for grade, colour in _GRADE_COLOURS.items():
         counts = np.array(
-            [sum(1 for n, g in zip(names, grades, strict=True) if n == limb and g == grade)
-             for limb in present], dtype=float,
-        )  # fmt: skip
+            [
+                sum(1 for n, g in zip(names, grades, strict=True) if n == limb and g == grade)
+                for limb in present
+            ],
+            dtype=float,
+        )
         ax1.barh(present, counts, left=left, color=colour, label=grade.replace("_", " "))
         left += counts
     ax1.invert_yaxis()
@@ -261,9 +270,11 @@ def _limbs_svg(grades: list[str], notes: np.ndarray, limbs: Sequence[str | None]
     hit = notes["result"] == Result.HIT
     arr = np.array(names, dtype=object)
     means = [
-        float(notes["offset_ms"][hit & (arr == limb)].mean()) if (hit & (arr == limb)).any()
-        else 0.0 for limb in present
-    ]  # fmt: skip
+        float(notes["offset_ms"][hit & (arr == limb)].mean())
+        if (hit & (arr == limb)).any()
+        else 0.0
+        for limb in present
+    ]
     ax2.barh(present, means, color=["#e07a5f" if m > 0 else "#3d85c6" for m in means])
     ax2.axvline(0, color="#555", lw=0.6)
     ax2.invert_yaxis()
@@ -273,8 +284,10 @@ def _limbs_svg(grades: list[str], notes: np.ndarray, limbs: Sequence[str | None]
 
 
 def _piece_table(result: dict[str, Any]) -> str:
-    head = "<tr><th>piece</th><th>notes</th><th>hits</th><th>wrong</th><th>missed</th>" \
-           "<th>extra</th><th>mean ms</th><th>sd ms</th><th>accuracy %</th></tr>"  # fmt: skip
+    head = (
+        "<tr><th>piece</th><th>notes</th><th>hits</th><th>wrong</th><th>missed</th>"
+        "<th>extra</th><th>mean ms</th><th>sd ms</th><th>accuracy %</th></tr>"
+    )
     rows = []
     for piece, r in result["per_piece"].items():
         mean = "" if r["mean_offset_ms"] is None else f"{r['mean_offset_ms']:+.1f}"

@@ -96,9 +96,14 @@ class StreamIntake:
     in its subscription and so cannot read the numbers (every message is then taken).
     """
 
-    def __init__(self, kinds: Iterable[Kind], pose_format: PoseFormat | None = None,
-                 performer: int | None = None, sequenced: bool = True,
-                 max_payload: int = MAX_PAYLOAD) -> None:  # fmt: skip
+    def __init__(
+        self,
+        kinds: Iterable[Kind],
+        pose_format: PoseFormat | None = None,
+        performer: int | None = None,
+        sequenced: bool = True,
+        max_payload: int = MAX_PAYLOAD,
+    ) -> None:
         self.kinds = frozenset(kinds)
         self.pose_format = pose_format
         self.performer = performer
@@ -116,8 +121,12 @@ class StreamIntake:
         if msg.kind not in self.kinds:
             return self._drop("unexpected", f"{msg.kind.name} is not served here", msg)
         if self.performer is not None and msg.performer != self.performer:
-            return self._drop("unexpected", f"{msg.kind.name} of performer {msg.performer} "
-                              f"(this stream is performer {self.performer}'s)", msg)  # fmt: skip
+            return self._drop(
+                "unexpected",
+                f"{msg.kind.name} of performer {msg.performer} "
+                f"(this stream is performer {self.performer}'s)",
+                msg,
+            )
         if not self.sequenced:
             return Taken(msg, _UNSEQUENCED)
         report = self.tracker.observe_message(msg)

@@ -110,8 +110,7 @@ class SequenceTracker:
             out.add(stats)
         return out
 
-    def observe(self, performer: int, stream: int, seq: int, send_time_s: float = 0.0
-                ) -> SeqReport:  # fmt: skip
+    def observe(self, performer: int, stream: int, seq: int, send_time_s: float = 0.0) -> SeqReport:
         key = (performer, stream)
         stats = self.stats.setdefault(key, SeqStats())
         at = self._at.get(key)

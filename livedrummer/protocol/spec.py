@@ -109,9 +109,12 @@ HELLO_KEYS: dict[str, tuple[bool, str]] = {
     "performer": (True, "performer id 0..65535"),
     "endpoints": (True, "{name: zmq endpoint} of its sockets"),
     "pose": (True, "PoseFormat JSON of the POSE rows it sends, or null"),
-    "avatar": (False, "digest (16 hex digits) of the avatar whose proportions it plays or "
-               "draws; empty for the built-in character"),
-}  # fmt: skip
+    "avatar": (
+        False,
+        "digest (16 hex digits) of the avatar whose proportions it plays or "
+        "draws; empty for the built-in character",
+    ),
+}
 AVATAR_DIGEST_LEN = 16
 
 

@@ -55,8 +55,14 @@ class BodyReach:
     radius_m: np.ndarray
 
     @classmethod
-    def from_capsules(cls, parent: np.ndarray, bones: np.ndarray, bone_radius_m: np.ndarray,
-                      balls: np.ndarray, ball_radius_m: np.ndarray) -> BodyReach:  # fmt: skip
+    def from_capsules(
+        cls,
+        parent: np.ndarray,
+        bones: np.ndarray,
+        bone_radius_m: np.ndarray,
+        balls: np.ndarray,
+        ball_radius_m: np.ndarray,
+    ) -> BodyReach:
         """From the mannequin: segments from ``parent[bones]`` to ``bones`` of their radii, and
         balls at joints ``balls``."""
         nb = len(bones)
@@ -73,5 +79,7 @@ class BodyReach:
         p = np.asarray(joints_m, np.float64)[self.joint]
         reach = (self.radius_m + margin_m)[:, None]
         starts = np.flatnonzero(np.r_[True, self.group[1:] != self.group[:-1]])
-        return (np.minimum.reduceat(p - reach, starts, axis=0),
-                np.maximum.reduceat(p + reach, starts, axis=0))  # fmt: skip
+        return (
+            np.minimum.reduceat(p - reach, starts, axis=0),
+            np.maximum.reduceat(p + reach, starts, axis=0),
+        )

@@ -113,8 +113,9 @@ def channel_roles(kit: Kit) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndar
     """Per piece: swing is wobble, swing is travel, lift is travel (bool (P,)), wobble azimuth
     (from :data:`~livedrummer.kit.behaviour.BEHAVIOURS`)."""
     looks = [BEHAVIOURS[p.kind] for p in kit.pieces]
-    wobbles = np.array([b.hit is not HitMotion.NONE and b.pedal is PedalMotion.NONE
-                        for b in looks], bool)  # fmt: skip
+    wobbles = np.array(
+        [b.hit is not HitMotion.NONE and b.pedal is PedalMotion.NONE for b in looks], bool
+    )
     beater = np.array([b.pedal is PedalMotion.BEATER for b in looks], bool)
     lifts = np.array([b.pedal is PedalMotion.HIHAT for b in looks], bool)
     pos = np.array([p.position_m for p in kit.pieces], np.float64).reshape(-1, 3)
@@ -160,9 +161,12 @@ def frame_from_pose(pose: np.ndarray, time_s: float, kit: Kit) -> SceneFrame:
     poses = np.asarray(pose).reshape(1)
     position = np.ascontiguousarray(poses["position"], np.float32)
     return SceneFrame(
-        position[0], stick_segments(position)[0], scene_channels(poses, kit)[0], time_s,
+        position[0],
+        stick_segments(position)[0],
+        scene_channels(poses, kit)[0],
+        time_s,
         world_rotations(poses["rotation"])[0],
-    )  # fmt: skip
+    )
 
 
 @dataclass(frozen=True)
@@ -184,8 +188,10 @@ class BodyScene:
     ) -> BodyScene:
         """Fit the body to ``kit`` and animate ``performance`` with ``sticking`` (by default
         :func:`~livedrummer.sticking.strategy.stick_performance`'s: optimal on its grid)."""
-        return cls(kit, perform(performance, build_rig(kit), note_map, expression, strokes,
-                                sticking=sticking))  # fmt: skip
+        return cls(
+            kit,
+            perform(performance, build_rig(kit), note_map, expression, strokes, sticking=sticking),
+        )
 
     def poses(self, times: np.ndarray) -> np.ndarray:
         """The body's pose records at ``times`` (seconds, float64)."""

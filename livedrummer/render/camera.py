@@ -73,8 +73,15 @@ def perspective(fov_deg: float, aspect: float, near: float, far: float) -> np.nd
 
 #: Stored viewpoint names, in the order the window's number keys 1..8 select them.
 CAMERA_NAMES: tuple[str, ...] = (
-    "stage", "front", "drummer", "overhead", "left", "right", "back", "kick",
-)  # fmt: skip
+    "stage",
+    "front",
+    "drummer",
+    "overhead",
+    "left",
+    "right",
+    "back",
+    "kick",
+)
 
 
 #: The frame's aspect the stored viewpoints are fitted to (width / height: 16:9 video).
@@ -102,8 +109,10 @@ def figure_points(kit: Kit, lengths: SegmentLengths | None = None) -> np.ndarray
     pts = [top, pose[J["r_shoulder"]], pose[J["l_shoulder"]]]
     elbow = skel.lengths.upper_arm * 0.8
     for side in ("r", "l"):
-        pts.append(pose[J[f"{side}_shoulder"]] + (np.sign(pose[J[f"{side}_shoulder"]][0]) * elbow,
-                                                  0.0, -skel.lengths.upper_arm))  # fmt: skip
+        pts.append(
+            pose[J[f"{side}_shoulder"]]
+            + (np.sign(pose[J[f"{side}_shoulder"]][0]) * elbow, 0.0, -skel.lengths.upper_arm)
+        )
     for piece in kit.pieces:
         if piece.pedal_position_m is not None:
             pts.append(np.asarray(piece.pedal_position_m, float))
@@ -117,8 +126,14 @@ def figure_points(kit: Kit, lengths: SegmentLengths | None = None) -> np.ndarray
     return np.array(pts, float)
 
 
-def fit_distance(points: np.ndarray, target: np.ndarray, direction: np.ndarray, fov_deg: float,
-                 aspect: float = FRAME_ASPECT, fill: float = FILL) -> float:  # fmt: skip
+def fit_distance(
+    points: np.ndarray,
+    target: np.ndarray,
+    direction: np.ndarray,
+    fov_deg: float,
+    aspect: float = FRAME_ASPECT,
+    fill: float = FILL,
+) -> float:
     """The distance from ``target`` along unit ``direction`` (towards the eye) at which every
     point lies inside ``fill`` of the frame (vertical field ``fov_deg``, ``aspect``)."""
     view = look_at(target + direction, target)
@@ -161,8 +176,9 @@ def kit_cameras(kit: Kit, lengths: SegmentLengths | None = None) -> dict[str, Ca
     head_z = float(hi[2]) - 0.18  # the face, below the top of the head
     head = (0.0, 0.23, head_z)  # just in front of the face
 
-    def cam(name: str, offset: tuple[float, float, float], fov: float = 40.0,
-            drop: float = 0.0) -> Camera:  # fmt: skip
+    def cam(
+        name: str, offset: tuple[float, float, float], fov: float = 40.0, drop: float = 0.0
+    ) -> Camera:
         at = c - (0.0, 0.0, drop)
         return Camera(name, tuple(float(v) for v in at + offset), tuple(float(v) for v in at), fov)  # type: ignore[arg-type]
 

@@ -42,11 +42,13 @@ class CuedBodyScene(BodyScene):
         out = _sample(self.performed, times)
         rig = self.performed.animation.rig
         for at, performed in self.styled:
-            x = np.clip((times - at) / self.ramp_s, 0.0, 1.0) if self.ramp_s > 0 else (
-                (times >= at).astype(np.float64))  # fmt: skip
+            x = (
+                np.clip((times - at) / self.ramp_s, 0.0, 1.0)
+                if self.ramp_s > 0
+                else ((times >= at).astype(np.float64))
+            )
             w = x * x * (3.0 - 2.0 * x)
             mixed = w > 0
             if mixed.any():
-                out[mixed] = blend_rows(rig, out[mixed], _sample(performed, times[mixed]),
-                                        w[mixed])  # fmt: skip
+                out[mixed] = blend_rows(rig, out[mixed], _sample(performed, times[mixed]), w[mixed])
         return out

@@ -63,10 +63,17 @@ def cymbal(segments: int = 32) -> Mesh:
     """A cymbal of radius 1 with its bell up; edge at z = 0, bell top at z = 0.1."""
     return lathe(
         "cymbal",
-        [(1.0, 0.0), (0.7, 0.018), (0.4, 0.036), (0.24, 0.048), (0.2, 0.08), (0.12, 0.1),
-         (0.0, 0.1)],
+        [
+            (1.0, 0.0),
+            (0.7, 0.018),
+            (0.4, 0.036),
+            (0.24, 0.048),
+            (0.2, 0.08),
+            (0.12, 0.1),
+            (0.0, 0.1),
+        ],
         segments,
-    )  # fmt: skip
+    )
 
 
 def sphere(segments: int = 16, rings: int = 10) -> Mesh:
@@ -98,6 +105,14 @@ def cube() -> Mesh:
 
 def all_meshes() -> dict[str, Mesh]:
     """The meshes the renderer uploads once, by name."""
-    meshes = (cylinder(), cylinder(12, "limb"), cylinder(6, "rod"), disc(), disc(64, "floor"),
-              cymbal(), sphere(), cube())  # fmt: skip
+    meshes = (
+        cylinder(),
+        cylinder(12, "limb"),
+        cylinder(6, "rod"),
+        disc(),
+        disc(64, "floor"),
+        cymbal(),
+        sphere(),
+        cube(),
+    )
     return {m.name: m for m in meshes}

@@ -20,8 +20,9 @@ GHOST_TINT = (40, 235, 255)
 GHOST_ALPHA = 0.4
 
 
-def ghost_image(rgba: np.ndarray, tint: tuple[int, int, int] = GHOST_TINT,
-                alpha: float = GHOST_ALPHA) -> np.ndarray:  # fmt: skip
+def ghost_image(
+    rgba: np.ndarray, tint: tuple[int, int, int] = GHOST_TINT, alpha: float = GHOST_ALPHA
+) -> np.ndarray:
     """The overlay of a body render ``rgba`` (see the module docstring)."""
     if rgba.ndim != 3 or rgba.shape[2] != 4 or rgba.dtype != np.uint8:
         raise ValueError(f"expected (H, W, 4) uint8, got {rgba.shape} {rgba.dtype}")
@@ -40,6 +41,9 @@ def tint_fraction(rgb: np.ndarray, tint: tuple[int, int, int] = GHOST_TINT) -> f
     well above red, as no other part of the scene is (for tests and checks)."""
     x = rgb.astype(np.int32)
     r, g, b = x[..., 0], x[..., 1], x[..., 2]
-    hit = (g > r + 40) & (b > r + 40) & (abs(g - b) < 90) if tint == GHOST_TINT else (
-        np.all(np.abs(x - np.asarray(tint)) < 40, axis=2))  # fmt: skip
+    hit = (
+        (g > r + 40) & (b > r + 40) & (abs(g - b) < 90)
+        if tint == GHOST_TINT
+        else (np.all(np.abs(x - np.asarray(tint)) < 40, axis=2))
+    )
     return float(np.count_nonzero(hit)) / max(1, hit.size)

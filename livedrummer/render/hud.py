@@ -61,8 +61,10 @@ def hud_lines(
     """The readout for a file window (see the module docstring); ``loop`` and ``step_s``
     add the loop's ends and the step size."""
     state = ("REVERSE" if reverse else "PLAYING") if playing else "PAUSED"
-    lines = [f"{clock_text(position_s)} / {clock_text(duration_s)}   {speed:g}X   {state}   "
-             f"CAMERA {camera.upper()}   H HELP"]  # fmt: skip
+    lines = [
+        f"{clock_text(position_s)} / {clock_text(duration_s)}   {speed:g}X   {state}   "
+        f"CAMERA {camera.upper()}   H HELP"
+    ]
     extra = []
     if loop is not None:
         extra.append(f"LOOP {clock_text(loop[0])} - {clock_text(loop[1])}")

@@ -86,8 +86,9 @@ class KeyDrum:
     def glow(self, now_s: float) -> np.ndarray:
         """Per piece, the key glow at ``now_s`` (0..1)."""
         age = now_s - self._last
-        out: np.ndarray = np.where(age >= 0.0, self._level * np.exp(-np.maximum(age, 0) / GLOW_S),
-                                   0.0)  # fmt: skip
+        out: np.ndarray = np.where(
+            age >= 0.0, self._level * np.exp(-np.maximum(age, 0) / GLOW_S), 0.0
+        )
         return out
 
     def light(self, frame: SceneFrame, now_s: float) -> SceneFrame:

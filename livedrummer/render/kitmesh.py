@@ -242,8 +242,12 @@ def _pedal(b: _Builder, pedal: np.ndarray, towards: np.ndarray, piece: int) -> N
     centre = pedal + np.array([0.0, 0.0, 0.035])
     hinge = centre - FOOTBOARD_HINGE_M * (tilt @ f)
     board = _Move(piece, MOTION_PEDAL, hinge, x)
-    b.add("cube", placed(centre, tilt @ rot, (0.09, 2 * FOOTBOARD_HINGE_M, 0.015)), "pedal",
-          move=board)  # fmt: skip
+    b.add(
+        "cube",
+        placed(centre, tilt @ rot, (0.09, 2 * FOOTBOARD_HINGE_M, 0.015)),
+        "pedal",
+        move=board,
+    )
     b.add("cube", placed(hinge - np.array([0.0, 0.0, 0.012]), rot, (0.11, 0.05, 0.02)), "pedal")
 
 
@@ -258,16 +262,30 @@ def _drum(b: _Builder, p: Piece, i: int) -> None:
     bottom = c - n * p.depth_m
     wob = _Move(i, MOTION_WOBBLE if _moves_when_hit(p) else MOTION_STATIC, c)
     shell = "snare_shell" if p.kind is PieceKind.SNARE else "shell"
-    b.add("cylinder", placed(bottom, rot, (p.radius_m, p.radius_m, p.depth_m)), shell,
-          highlight=0.3, move=wob)  # fmt: skip
+    b.add(
+        "cylinder",
+        placed(bottom, rot, (p.radius_m, p.radius_m, p.depth_m)),
+        shell,
+        highlight=0.3,
+        move=wob,
+    )
     b.add("disc", placed(c, rot, (p.radius_m, p.radius_m, 1.0)), "head", highlight=1.0, move=wob)
     for end in (c - n * 0.012, bottom - n * 0.004):
-        b.add("cylinder", placed(end, rot, (p.radius_m * 1.025, p.radius_m * 1.025, 0.018)),
-              "chrome", move=wob)  # fmt: skip
+        b.add(
+            "cylinder",
+            placed(end, rot, (p.radius_m * 1.025, p.radius_m * 1.025, 0.018)),
+            "chrome",
+            move=wob,
+        )
     if BEHAVIOURS[p.kind].pedal is PedalMotion.BEATER:
         flipped = rot * np.array([1.0, -1.0, -1.0])[None, :]
-        b.add("disc", placed(bottom, flipped, (p.radius_m, p.radius_m, 1.0)), "front_head",
-              highlight=0.6, move=wob)  # fmt: skip
+        b.add(
+            "disc",
+            placed(bottom, flipped, (p.radius_m, p.radius_m, 1.0)),
+            "front_head",
+            highlight=0.6,
+            move=wob,
+        )
         if p.pedal_position_m is not None:
             pedal = np.asarray(p.pedal_position_m, float)
             _pedal(b, pedal, c, i)
@@ -314,11 +332,19 @@ def build_kit_mesh(kit: Kit, *, floor: bool = True) -> KitMesh:
     b = _Builder()
     if floor:
         centre = np.mean([p.position_m for p in kit.pieces], axis=0) if kit.pieces else np.zeros(3)
-        b.add("floor", placed(np.array([centre[0], centre[1] * 0.5, 0.0]), np.eye(3),
-                             (STAGE_RADIUS_M, STAGE_RADIUS_M, 1.0)), "floor")  # fmt: skip
+        b.add(
+            "floor",
+            placed(
+                np.array([centre[0], centre[1] * 0.5, 0.0]),
+                np.eye(3),
+                (STAGE_RADIUS_M, STAGE_RADIUS_M, 1.0),
+            ),
+            "floor",
+        )
     seat = kit.seat_height_m
-    b.add("cylinder", placed(np.array([0, -0.02, seat - 0.07]), np.eye(3), (0.17, 0.17, 0.07)),
-          "seat")  # fmt: skip
+    b.add(
+        "cylinder", placed(np.array([0, -0.02, seat - 0.07]), np.eye(3), (0.17, 0.17, 0.07)), "seat"
+    )
     b.add("disc", placed(np.array([0, -0.02, seat]), np.eye(3), (0.17, 0.17, 1.0)), "seat")
     _stand(b, np.array([0.0, -0.02, seat - 0.07]), np.array([0.0, -0.02]))
     for i, piece in enumerate(kit.pieces):

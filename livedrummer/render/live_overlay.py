@@ -85,8 +85,9 @@ class LiveScore:
         and left stick tips (n, 3)) the hand whose tip is nearer its piece's centre then."""
         if time_s.size < 2:
             return
-        todo = np.flatnonzero((self.limb == NOT_PLAYED) & (self.time_s >= time_s[0])
-                              & (self.time_s <= time_s[-1]))  # fmt: skip
+        todo = np.flatnonzero(
+            (self.limb == NOT_PLAYED) & (self.time_s >= time_s[0]) & (self.time_s <= time_s[-1])
+        )
         if todo.size == 0:
             return
         t = self.time_s[todo]
@@ -101,8 +102,13 @@ class LiveScore:
         """The onsets with ``now_s - HISTORY_S <= time_s <= now_s + LOOKAHEAD_S``."""
         lo = int(np.searchsorted(self.time_s, now_s - HISTORY_S, side="left"))
         hi = int(np.searchsorted(self.time_s, now_s + LOOKAHEAD_S, side="right"))
-        return ScoreView(now_s, window_x(self.time_s[lo:hi], now_s), self.lane[lo:hi],
-                         self.velocity[lo:hi], self.limb[lo:hi])  # fmt: skip
+        return ScoreView(
+            now_s,
+            window_x(self.time_s[lo:hi], now_s),
+            self.lane[lo:hi],
+            self.velocity[lo:hi],
+            self.limb[lo:hi],
+        )
 
 
 class LiveAngles:
@@ -137,8 +143,9 @@ class LiveAngles:
         hi = min(np.ceil((now_s + LOOKAHEAD_S) * r), np.floor(self.time_s[-1] * r + 1e-6))
         k = np.arange(int(lo), int(hi) + 1)
         times = k / r
-        deg = np.stack([np.interp(times, self.time_s, self.degrees[:, c]) for c in range(6)],
-                       axis=-1).astype(np.float32)  # fmt: skip
+        deg = np.stack(
+            [np.interp(times, self.time_s, self.degrees[:, c]) for c in range(6)], axis=-1
+        ).astype(np.float32)
         return AngleView(now_s, window_x(times, now_s), deg)
 
 

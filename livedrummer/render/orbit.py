@@ -60,11 +60,13 @@ def orbit(cam: Camera, dx_px: float, dy_px: float, height_px: int) -> Camera:
     elevation = math.asin(max(-1.0, min(1.0, rel[2] / r)))
     elevation += ORBIT_RAD_PER_HEIGHT * dy_px / max(height_px, 1)
     elevation = max(-MAX_ELEVATION_RAD, min(MAX_ELEVATION_RAD, elevation))
-    direction = np.array([
-        math.cos(elevation) * math.cos(azimuth),
-        math.cos(elevation) * math.sin(azimuth),
-        math.sin(elevation),
-    ])  # fmt: skip
+    direction = np.array(
+        [
+            math.cos(elevation) * math.cos(azimuth),
+            math.cos(elevation) * math.sin(azimuth),
+            math.sin(elevation),
+        ]
+    )
     return _camera(cam, target + r * direction, target)
 
 
@@ -136,7 +138,7 @@ class Viewpoints:
                     and len(vec) == 3
                     and all(isinstance(v, int | float) and math.isfinite(v) for v in vec)
                 ):
-                    raise ViewpointError(f"{where}.{name}: want three finite numbers")  # fmt: skip
+                    raise ViewpointError(f"{where}.{name}: want three finite numbers")
             if not isinstance(fov, int | float) or not 5.0 <= fov <= 150.0:
                 raise ViewpointError(f"{where}.fov_deg: want 5..150 degrees")
             if math.dist(eye, target) < 1e-6:

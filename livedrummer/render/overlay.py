@@ -51,8 +51,13 @@ ANGLE_RATE_HZ = 60.0
 OVERLAYS: tuple[str, ...] = ("score", "joints")
 #: Columns of :func:`joint_angles`.
 ANGLE_NAMES: tuple[str, ...] = (
-    "r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist",
-)  # fmt: skip
+    "r_shoulder",
+    "r_elbow",
+    "r_wrist",
+    "l_shoulder",
+    "l_elbow",
+    "l_wrist",
+)
 
 #: Staff groups, top to bottom.
 GROUPS: tuple[str, ...] = ("cymbals", "hihat", "percussion", "snare", "toms", "kick")
@@ -62,8 +67,14 @@ _GROUP_OF: dict[PieceKind, str] = {
     PieceKind.TAMBOURINE: "percussion", PieceKind.PERCUSSION: "percussion",
     PieceKind.SNARE: "snare", PieceKind.TOM: "toms", PieceKind.KICK: "kick",
 }  # fmt: skip
-_GROUP_LABEL = {"cymbals": "CY", "hihat": "HH", "percussion": "PC", "snare": "SN", "toms": "TM",
-                "kick": "KK"}  # fmt: skip
+_GROUP_LABEL = {
+    "cymbals": "CY",
+    "hihat": "HH",
+    "percussion": "PC",
+    "snare": "SN",
+    "toms": "TM",
+    "kick": "KK",
+}
 _KIND_LABEL: dict[PieceKind, str] = {
     PieceKind.KICK: "KK", PieceKind.SNARE: "SN", PieceKind.TOM: "T", PieceKind.HIHAT: "HH",
     PieceKind.CRASH: "CR", PieceKind.RIDE: "RD", PieceKind.SPLASH: "SP", PieceKind.CHINA: "CH",
@@ -82,8 +93,9 @@ def parse_overlays(text: str) -> frozenset[str]:
         return frozenset()
     bad = [n for n in names if n not in OVERLAYS]
     if bad:
-        raise OverlayError(f"--overlay {text!r}: unknown overlay {bad[0]!r} "
-                           f"(known: {', '.join(OVERLAYS)})")  # fmt: skip
+        raise OverlayError(
+            f"--overlay {text!r}: unknown overlay {bad[0]!r} (known: {', '.join(OVERLAYS)})"
+        )
     return frozenset(names)
 
 
@@ -151,8 +163,11 @@ class ScoreModel:
         placed = piece >= 0
         unplaced = int(np.count_nonzero(~placed))
         if unplaced:
-            log.warning("score overlay: %d onsets have no piece on kit %s and are not drawn",
-                        unplaced, kit.name)  # fmt: skip
+            log.warning(
+                "score overlay: %d onsets have no piece on kit %s and are not drawn",
+                unplaced,
+                kit.name,
+            )
         onsets = sticking.onsets[placed]
         order = np.argsort(onsets["time_s"], kind="stable")
         return cls(
@@ -168,8 +183,13 @@ class ScoreModel:
         """The notes with ``now_s - HISTORY_S <= time_s <= now_s + LOOKAHEAD_S``."""
         lo = int(np.searchsorted(self.time_s, now_s - HISTORY_S, side="left"))
         hi = int(np.searchsorted(self.time_s, now_s + LOOKAHEAD_S, side="right"))
-        return ScoreView(now_s, window_x(self.time_s[lo:hi], now_s), self.lane[lo:hi],
-                         self.velocity[lo:hi], self.limb[lo:hi])  # fmt: skip
+        return ScoreView(
+            now_s,
+            window_x(self.time_s[lo:hi], now_s),
+            self.lane[lo:hi],
+            self.velocity[lo:hi],
+            self.limb[lo:hi],
+        )
 
 
 def _flexion_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -217,12 +237,15 @@ class AngleModel:
         return cls(rate_hz, joint_angles(joints).astype(np.float32))
 
     @classmethod
-    def from_body(cls, body: BodyScene, duration_s: float, rate_hz: float = ANGLE_RATE_HZ,
-                  chunk: int = 2048) -> AngleModel:  # fmt: skip
+    def from_body(
+        cls, body: BodyScene, duration_s: float, rate_hz: float = ANGLE_RATE_HZ, chunk: int = 2048
+    ) -> AngleModel:
         """The body's angles over ``[0, duration_s]`` (sampled ``chunk`` times at a go)."""
         times = np.arange(int(np.floor(max(duration_s, 0.0) * rate_hz)) + 1) / rate_hz
-        parts = [joint_angles(body.poses(times[i : i + chunk])["position"]).astype(np.float32)
-                 for i in range(0, times.size, chunk)]  # fmt: skip
+        parts = [
+            joint_angles(body.poses(times[i : i + chunk])["position"]).astype(np.float32)
+            for i in range(0, times.size, chunk)
+        ]
         return cls(rate_hz, np.concatenate(parts))
 
     @property
@@ -251,8 +274,9 @@ class OverlayModels:
     def score(self, grouped: bool = False) -> ScoreModel:
         """The score with a lane per piece, or per group (``grouped``)."""
         if grouped not in self._score:
-            self._score[grouped] = ScoreModel.from_sticking(self.body.performed.sticking,
-                                                            self.body.kit, grouped)  # fmt: skip
+            self._score[grouped] = ScoreModel.from_sticking(
+                self.body.performed.sticking, self.body.kit, grouped
+            )
         return self._score[grouped]
 
     @property

@@ -40,12 +40,22 @@ TEXT = (215, 215, 225, 255)
 NOW_LINE = (255, 40, 40, 255)
 NOW_LINE_HALF_WIDTH = 1  # the line is 3 pixels wide
 #: marker colour per limb: RH, LH, RF, LF, then not played (limb -1)
-LIMB_RGB = np.array([(255, 150, 50), (60, 150, 255), (90, 220, 110), (200, 120, 255),
-                     (150, 150, 150)], np.uint8)  # fmt: skip
+LIMB_RGB = np.array(
+    [(255, 150, 50), (60, 150, 255), (90, 220, 110), (200, 120, 255), (150, 150, 150)], np.uint8
+)
 LIMB_LABELS = ("R", "L", "RF", "LF")
 #: curve colour per :data:`~livedrummer.render.overlay.ANGLE_NAMES` column
-ANGLE_RGB = np.array([(255, 150, 50), (255, 230, 70), (255, 110, 190), (60, 130, 255),
-                      (60, 225, 230), (140, 230, 80)], np.uint8)  # fmt: skip
+ANGLE_RGB = np.array(
+    [
+        (255, 150, 50),
+        (255, 230, 70),
+        (255, 110, 190),
+        (60, 130, 255),
+        (60, 225, 230),
+        (140, 230, 80),
+    ],
+    np.uint8,
+)
 ANGLE_LABELS = ("RS", "RE", "RW", "LS", "LE", "LW")
 SCORE_FRACTION = 0.14
 GRAPH_FRACTION = 0.11
@@ -68,9 +78,15 @@ class AngleSource(Protocol):
     def view(self, now_s: float) -> AngleView: ...
 
 
-def fill_boxes(img: np.ndarray, top: np.ndarray, left: np.ndarray, height: np.ndarray,
-               width: np.ndarray, rgba: np.ndarray, diamond: np.ndarray | None = None
-               ) -> None:  # fmt: skip
+def fill_boxes(
+    img: np.ndarray,
+    top: np.ndarray,
+    left: np.ndarray,
+    height: np.ndarray,
+    width: np.ndarray,
+    rgba: np.ndarray,
+    diamond: np.ndarray | None = None,
+) -> None:
     """Paint boxes ``[top, top+height) x [left, left+width)`` (int arrays (n,)) with ``rgba``
     ((n, 4) or (4,) uint8); where ``diamond`` (bool (n,)) is set, only the inscribed diamond.
     Later boxes cover earlier ones; parts outside ``img`` are clipped."""
@@ -90,8 +106,10 @@ def fill_boxes(img: np.ndarray, top: np.ndarray, left: np.ndarray, height: np.nd
     if diamond is not None and np.any(diamond):
         cy = (height[box] - 1) / 2.0
         cx = (w - 1) / 2.0
-        inside = (np.abs(dy - cy) / np.maximum(cy, 0.5) + np.abs(dx - cx) / np.maximum(cx, 0.5)
-                  <= 1.0 + 1e-9)  # fmt: skip
+        inside = (
+            np.abs(dy - cy) / np.maximum(cy, 0.5) + np.abs(dx - cx) / np.maximum(cx, 0.5)
+            <= 1.0 + 1e-9
+        )
         keep = ~np.asarray(diamond, bool)[box] | inside
     rows = top[box] + dy
     cols = left[box] + dx
@@ -100,8 +118,9 @@ def fill_boxes(img: np.ndarray, top: np.ndarray, left: np.ndarray, height: np.nd
     img[rows[keep], cols[keep]] = colour[box[keep]] if colour.ndim == 2 else colour
 
 
-def draw_text(img: np.ndarray, text: str, top: int, left: int, scale: int,
-              rgba: Sequence[int] = TEXT) -> int:  # fmt: skip
+def draw_text(
+    img: np.ndarray, text: str, top: int, left: int, scale: int, rgba: Sequence[int] = TEXT
+) -> int:
     """Paint ``text`` with its top-left at (top, left); returns the column after it."""
     rows, cols = text_pixels(text, scale)
     rows, cols = rows + top, cols + left
@@ -110,14 +129,21 @@ def draw_text(img: np.ndarray, text: str, top: int, left: int, scale: int,
     return left + text_size(text, scale)[1]
 
 
-def draw_legend(img: np.ndarray, top: int, left: int, scale: int, colours: np.ndarray,
-                labels: Sequence[str]) -> int:  # fmt: skip
+def draw_legend(
+    img: np.ndarray, top: int, left: int, scale: int, colours: np.ndarray, labels: Sequence[str]
+) -> int:
     """Swatch and label per entry, left to right; returns the column after the last."""
     side = GLYPH_H * scale
     x = left
     for rgb, label in zip(colours, labels, strict=True):
-        fill_boxes(img, np.array([top]), np.array([x]), np.array([side]), np.array([side]),
-                   np.append(rgb, 255).astype(np.uint8))  # fmt: skip
+        fill_boxes(
+            img,
+            np.array([top]),
+            np.array([x]),
+            np.array([side]),
+            np.array([side]),
+            np.append(rgb, 255).astype(np.uint8),
+        )
         x = draw_text(img, label, top, x + side + 2 * scale, scale) + 3 * ADVANCE * scale // 2
     return x
 
@@ -182,8 +208,7 @@ class ScoreStrip:
         rgba = np.empty((v.size, 4), np.uint8)
         rgba[:, :3] = marker_rgb(view.limb, view.velocity)
         rgba[:, 3] = 255
-        return (centre_y - half_h, centre_x - half_w, 2 * half_h + 1, 2 * half_w + 1, rgba,
-                feet)  # fmt: skip
+        return (centre_y - half_h, centre_x - half_w, 2 * half_h + 1, 2 * half_w + 1, rgba, feet)
 
     def paint(self, out: np.ndarray, now_s: float) -> None:
         """Paint the strip at ``now_s`` into ``out`` ((height, width, 4) uint8)."""
@@ -241,10 +266,17 @@ class AngleStrip:
         hi = np.maximum(rows, nxt).T
         cols = np.broadcast_to(np.arange(self.width), lo.shape)
         use = np.broadcast_to(valid, lo.shape)
-        colour = np.repeat(np.append(ANGLE_RGB, np.full((6, 1), 255, np.uint8), axis=1),
-                           self.width, axis=0)  # fmt: skip
-        fill_boxes(out, lo[use], cols[use], (hi - lo + 2)[use], np.ones(int(use.sum()), np.int64),
-                   colour[use.ravel()])  # fmt: skip
+        colour = np.repeat(
+            np.append(ANGLE_RGB, np.full((6, 1), 255, np.uint8), axis=1), self.width, axis=0
+        )
+        fill_boxes(
+            out,
+            lo[use],
+            cols[use],
+            (hi - lo + 2)[use],
+            np.ones(int(use.sum()), np.int64),
+            colour[use.ravel()],
+        )
         _now_line(out, self.band_h)
 
 
@@ -277,8 +309,13 @@ class OverlayImage:
     :meth:`paint` returns the same array each call (painted in place); :attr:`rect` is where
     it goes. With no strip enabled, :attr:`empty` is true and nothing should be drawn."""
 
-    def __init__(self, frame_size: tuple[int, int], names: frozenset[str],
-                 score: ScoreSource | None, angles: AngleSource | None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        frame_size: tuple[int, int],
+        names: frozenset[str],
+        score: ScoreSource | None,
+        angles: AngleSource | None,
+    ) -> None:
         w, h = frame_size
         heights = strip_heights(h, names)
         self.strips: list[tuple[ScoreStrip | AngleStrip, int, int]] = []
@@ -305,8 +342,9 @@ class OverlayImage:
         return image
 
 
-def overlay_image(frame_size: tuple[int, int], names: frozenset[str], models: OverlayModels
-                  ) -> OverlayImage:  # fmt: skip
+def overlay_image(
+    frame_size: tuple[int, int], names: frozenset[str], models: OverlayModels
+) -> OverlayImage:
     """The overlay of the strips ``names`` for frames of ``frame_size`` (W, H); the score has a
     lane per kit piece where the lanes are tall enough for their labels, else one per group."""
     score = None
@@ -316,5 +354,4 @@ def overlay_image(frame_size: tuple[int, int], names: frozenset[str], models: Ov
         s = font_scale(height)
         if (height - (GLYPH_H + 4) * s - 2) / max(score.lanes.count, 1) < (GLYPH_H + 1) * s:
             score = models.score(grouped=True)
-    return OverlayImage(frame_size, names, score,
-                        models.angles if "joints" in names else None)  # fmt: skip
+    return OverlayImage(frame_size, names, score, models.angles if "joints" in names else None)

@@ -74,8 +74,10 @@ class PracticePanel:
             self.window_ms = float(p["window_ms"])
             self.level_ms = float(p["level_ms"])
             bars = p["bars"]
-            self.pass_line = (f"PASS {int(p['pass'])}  BARS {int(bars[0])}-{int(bars[1])}  "
-                              f"{float(p['bpm']):.1f} BPM")  # fmt: skip
+            self.pass_line = (
+                f"PASS {int(p['pass'])}  BARS {int(bars[0])}-{int(bars[1])}  "
+                f"{float(p['bpm']):.1f} BPM"
+            )
             self.teacher = str(p.get("teacher", ""))
         elif "hit" in msg:
             h = msg["hit"]
@@ -83,9 +85,15 @@ class PracticePanel:
             if self.summary:  # a new pass's hits: its summary has been read
                 self.summary = []
                 self.hits = []
-            self.hits.append(HitView(str(h["piece"]), None if off is None else float(off),
-                                     bool(h["on_time"]), int(h["streak"]),
-                                     float(h["accuracy_pct"])))  # fmt: skip
+            self.hits.append(
+                HitView(
+                    str(h["piece"]),
+                    None if off is None else float(off),
+                    bool(h["on_time"]),
+                    int(h["streak"]),
+                    float(h["accuracy_pct"]),
+                )
+            )
             self.hits = self.hits[-HISTORY:]
         elif "summary" in msg:
             s = msg["summary"]
@@ -140,16 +148,25 @@ def panel_image(panel: PracticePanel, scale: int = 2) -> np.ndarray:
     px_ms = half / max(panel.window_ms, 1e-6)
 
     def column(offset_ms: float) -> int:
-        return left + half + round(float(np.clip(offset_ms, -panel.window_ms,
-                                                 panel.window_ms)) * px_ms)  # fmt: skip
+        return (
+            left
+            + half
+            + round(float(np.clip(offset_ms, -panel.window_ms, panel.window_ms)) * px_ms)
+        )
 
     band = round(panel.level_ms * px_ms)
     _box(img, top + meter_h // 3, left + half - band, meter_h // 3, 2 * band, BAND_RGBA)
     _box(img, top, left + half - scale // 2, meter_h, max(1, scale), CENTRE_RGBA)
     for h in panel.hits[:-1]:
         if h.offset_ms is not None:
-            _box(img, top + meter_h // 4, column(h.offset_ms) - scale // 2, meter_h // 2,
-                 max(1, scale), DIM_RGBA)  # fmt: skip
+            _box(
+                img,
+                top + meter_h // 4,
+                column(h.offset_ms) - scale // 2,
+                meter_h // 2,
+                max(1, scale),
+                DIM_RGBA,
+            )
     if panel.hits and panel.hits[-1].offset_ms is not None:
         last = panel.hits[-1]
         rgba = ON_TIME_RGBA if last.on_time else OFF_TIME_RGBA

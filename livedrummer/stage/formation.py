@@ -68,8 +68,9 @@ class Formation:
         if self.spacing <= 0 or self.radius <= 0 or self.columns < 1:
             raise ValueError("spacing and radius must be > 0, columns >= 1")
         if self.symmetric and self.shape != "explicit":
-            raise ValueError(f"symmetric: only for explicit positions ({self.shape} is "
-                             "symmetric already)")  # fmt: skip
+            raise ValueError(
+                f"symmetric: only for explicit positions ({self.shape} is symmetric already)"
+            )
 
 
 def place(formation: Formation, count: int) -> list[Placement]:
@@ -84,8 +85,9 @@ def place(formation: Formation, count: int) -> list[Placement]:
             if abs(x) > 1e-9:
                 points.append((-float(x), float(y), True))
         if len(points) < count:
-            raise ValueError(f"explicit symmetric formation: {len(points)} places for "
-                             f"{count} performers")  # fmt: skip
+            raise ValueError(
+                f"explicit symmetric formation: {len(points)} places for {count} performers"
+            )
         points = points[:count]
     else:
         points = [(x, y, False) for x, y in _points(f, count)]
@@ -145,5 +147,7 @@ def check_spacing(placements: Sequence[Placement], min_gap_m: float) -> None:
             b = placements[j]
             gap = math.hypot(a.x - b.x, a.y - b.y)
             if gap < min_gap_m:
-                raise ValueError(f"performers {i + 1} and {j + 1} stand {gap:.2f} m apart; "
-                                 f"their kits need {min_gap_m:.2f} m")  # fmt: skip
+                raise ValueError(
+                    f"performers {i + 1} and {j + 1} stand {gap:.2f} m apart; "
+                    f"their kits need {min_gap_m:.2f} m"
+                )

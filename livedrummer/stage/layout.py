@@ -108,8 +108,9 @@ def to_local(placement: Placement, points: np.ndarray) -> np.ndarray:
     return out
 
 
-def check_footprints(placements: Sequence[Placement], prints: Sequence[Footprint],
-                     labels: Sequence[str]) -> None:  # fmt: skip
+def check_footprints(
+    placements: Sequence[Placement], prints: Sequence[Footprint], labels: Sequence[str]
+) -> None:
     """ValueError naming the first two drummers whose footprints overlap: their footprint
     centres closer than the larger footprint's diameter."""
     centres = [to_world(p, np.array(f.centre)) for p, f in zip(placements, prints, strict=True)]
@@ -118,15 +119,18 @@ def check_footprints(placements: Sequence[Placement], prints: Sequence[Footprint
             gap = float(np.hypot(*(centres[i] - centres[j])))
             need = max(prints[i].diameter_m, prints[j].diameter_m)
             if gap < need - 1e-6:
-                raise ValueError(f"drummers {labels[i]} and {labels[j]} stand {gap:.2f} m apart; "
-                                 f"their kits need {need:.2f} m (one footprint): raise the "
-                                 "spacing or the radius, or move them")  # fmt: skip
+                raise ValueError(
+                    f"drummers {labels[i]} and {labels[j]} stand {gap:.2f} m apart; "
+                    f"their kits need {need:.2f} m (one footprint): raise the "
+                    "spacing or the radius, or move them"
+                )
 
 
 def group_points(placements: Sequence[Placement], prints: Sequence[Footprint]) -> np.ndarray:
     """Every drummer's box corners on the stage, (8 N, 3)."""
-    return np.concatenate([to_world(p, f.corners()) for p, f in zip(placements, prints,
-                                                                     strict=True)])  # fmt: skip
+    return np.concatenate(
+        [to_world(p, f.corners()) for p, f in zip(placements, prints, strict=True)]
+    )
 
 
 def fit_group_camera(base: Camera, points: np.ndarray, aspect: float, name: str) -> Camera:
@@ -160,16 +164,21 @@ def fit_group_camera(base: Camera, points: np.ndarray, aspect: float, name: str)
     return Camera(name, _vec(target + direction * distance), _vec(target), base.fov_deg)
 
 
-def cell_neighbours(placements: Sequence[Placement],
-                    pool_centres: Sequence[np.ndarray]) -> list[np.ndarray]:  # fmt: skip
+def cell_neighbours(
+    placements: Sequence[Placement], pool_centres: Sequence[np.ndarray]
+) -> list[np.ndarray]:
     """Per drummer, the other drummers' pool centres (each given in its own drummer's frame)
     whose cells can cut its floor disc, in its own frame, (M, 2) float32."""
-    world = [to_world(p, np.asarray(c, float)[:2]) for p, c in zip(placements, pool_centres,
-                                                                   strict=True)]  # fmt: skip
+    world = [
+        to_world(p, np.asarray(c, float)[:2]) for p, c in zip(placements, pool_centres, strict=True)
+    ]
     out = []
     for k, p in enumerate(placements):
-        near = [w for j, w in enumerate(world)
-                if j != k and float(np.hypot(*(w - world[k]))) < 2 * STAGE_RADIUS_M]  # fmt: skip
+        near = [
+            w
+            for j, w in enumerate(world)
+            if j != k and float(np.hypot(*(w - world[k]))) < 2 * STAGE_RADIUS_M
+        ]
         local = to_local(p, np.array(near).reshape(-1, 2))
         out.append(local.astype(np.float32))
     return out

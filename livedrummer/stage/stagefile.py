@@ -99,8 +99,9 @@ class Stage:
         and its spot. A copy (``copy > 0``) plays its performer's input through a synth of its
         own with :meth:`variation` (``synth --vary``). Raises StageError when none has a
         source."""
-        out = [(k, p, spot) for k, (p, spot, _var) in enumerate(self.players())
-               if p.source is not None]  # fmt: skip
+        out = [
+            (k, p, spot) for k, (p, spot, _var) in enumerate(self.players()) if p.source is not None
+        ]
         if not out:
             raise StageError(f'{self.source}: no performer has a live source = "..."')
         return out
@@ -166,10 +167,11 @@ def _formation(t: Table | None) -> Formation:
     if t.has("positions"):
         raw = t.raw("positions")
         if not isinstance(raw, list) or not all(
-            isinstance(p, list) and len(p) == 2
+            isinstance(p, list)
+            and len(p) == 2
             and all(isinstance(v, int | float) and not isinstance(v, bool) for v in p)
             for p in raw
-        ):  # fmt: skip
+        ):
             raise t.fail("positions", "expected a list of [x, y] pairs in metres", raw)
         positions = tuple((float(x), float(y)) for x, y in raw)
     try:

@@ -168,8 +168,9 @@ def gains(times: np.ndarray, edges: np.ndarray, variation: Variation) -> np.ndar
     return _smooth(knots, values, t)
 
 
-def vary_rows(onsets: np.ndarray, controls: np.ndarray, edges: np.ndarray,
-              variation: Variation) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def vary_rows(
+    onsets: np.ndarray, controls: np.ndarray, edges: np.ndarray, variation: Variation
+) -> tuple[np.ndarray, np.ndarray]:
     """Copies of the onset and control record arrays with times warped (both by the same
     ``w``) and onset velocities scaled by the gain, clipped to 1..127."""
     on, ctl = onsets.copy(), controls.copy()
@@ -184,8 +185,9 @@ def vary_rows(onsets: np.ndarray, controls: np.ndarray, edges: np.ndarray,
     return on[order_on], ctl[order_ctl]
 
 
-def _live_knots(times: np.ndarray, seed: int, stream: int, values: np.ndarray | None,
-                high: float) -> np.ndarray:  # fmt: skip
+def _live_knots(
+    times: np.ndarray, seed: int, stream: int, values: np.ndarray | None, high: float
+) -> np.ndarray:
     """The value at each time of a curve through seeded knots every :data:`LIVE_KNOT_S`
     seconds: uniform in ``0..high``, or picked from ``values`` when given."""
     k = np.floor(times / LIVE_KNOT_S).astype(np.int64)
@@ -206,8 +208,9 @@ def live_shift(times: np.ndarray, variation: Variation) -> np.ndarray:
     t = np.asarray(times, np.float64)
     if variation.warp_s == 0 or t.size == 0:
         return np.zeros_like(t)
-    shift: np.ndarray = np.clip(_live_knots(t, variation.seed, 3, None, variation.warp_s), 0,
-                                variation.warp_s)  # fmt: skip
+    shift: np.ndarray = np.clip(
+        _live_knots(t, variation.seed, 3, None, variation.warp_s), 0, variation.warp_s
+    )
     return shift
 
 

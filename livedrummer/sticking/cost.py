@@ -126,8 +126,9 @@ class CostModel:
         )
         lim = np.where(same, DOUBLE_STROKE_FACTOR * gmin, gmin)
         stroke = np.stack((dist, lim, gmin, gmin * comfort[:, None]), axis=1)
-        return cls(w, dist, gap, stroke, stance, bias, beat, drum, pass_stance,
-                   _homes(kit, lead), lead)  # fmt: skip
+        return cls(
+            w, dist, gap, stroke, stance, bias, beat, drum, pass_stance, _homes(kit, lead), lead
+        )
 
 
 def _homes(kit: Kit, lead: int) -> tuple[int, int]:

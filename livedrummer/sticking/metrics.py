@@ -144,10 +144,14 @@ def hard_notes(sticking: Sticking, kit: Kit) -> dict[int, str]:
             mine, theirs = LIMBS[int(sticking.limb[i])], LIMBS[1 - int(sticking.limb[i])]
             here = kit.pieces[int(sticking.piece[i])].name
             there = kit.pieces[int(other[i])].name
-            right, left = ((mine, here), (theirs, there)) if mine is Limb.RH else (
-                (theirs, there), (mine, here))  # fmt: skip
-            why.append(f"arms crossed: {right[0].value} on {right[1]} left of "
-                       f"{left[0].value} on {left[1]}")  # fmt: skip
+            right, left = (
+                ((mine, here), (theirs, there))
+                if mine is Limb.RH
+                else ((theirs, there), (mine, here))
+            )
+            why.append(
+                f"arms crossed: {right[0].value} on {right[1]} left of {left[0].value} on {left[1]}"
+            )
         out[i] = "; ".join(why)
     return out
 

@@ -277,8 +277,10 @@ class OnlineSticker:
                 r.reasons[i] = "hi-hat played with the pedal: both hands were already committed"
             else:
                 merge_into(r, i, step.played)
-                r.reasons[i] = ("merged: both hands were already committed at this instant; "
-                                "a flam of the nearest stroke's hand")  # fmt: skip
+                r.reasons[i] = (
+                    "merged: both hands were already committed at this instant; "
+                    "a flam of the nearest stroke's hand"
+                )
             return [self._decision(i)]
         first = step.played[0]
         p = int(r.piece[i])

@@ -319,8 +319,14 @@ def feed(
     t = float(routed.onsets["time_s"][notes[0]])
     if len(notes) == 1:
         b = beat[notes[0]]
-        trellis.step(int(routed.piece[notes[0]]), t, float(b["strength"]), forced,
-                     float(b["sixth_s"]), float(b["grouping"]))  # fmt: skip
+        trellis.step(
+            int(routed.piece[notes[0]]),
+            t,
+            float(b["strength"]),
+            forced,
+            float(b["sixth_s"]),
+            float(b["grouping"]),
+        )
     else:
         a, b = notes
         trellis.step_chord(int(routed.piece[a]), int(routed.piece[b]), t, forced)

@@ -149,8 +149,10 @@ def reduce_chord(members: list[int], routed: Routed, kit: Kit) -> tuple[list[int
     for i in members:  # a double stroke of a hi-hat stroke that went to the pedal
         if i in routed.merged and routed.merged[i] not in keep:
             merge_into(routed, i, keep)
-            reasons[i] = ("merged: one hi-hat stroke at a time, and that one went to the pedal; "
-                          "a flam of the nearest stroke's hand")  # fmt: skip
+            reasons[i] = (
+                "merged: one hi-hat stroke at a time, and that one went to the pedal; "
+                "a flam of the nearest stroke's hand"
+            )
     extra: list[int] = []
     while len(keep) > 2:
         quietest = min(keep, key=lambda j: (int(on["velocity"][j]), -j))
@@ -158,8 +160,10 @@ def reduce_chord(members: list[int], routed: Routed, kit: Kit) -> tuple[list[int
         extra.append(quietest)
     for i in extra:
         merge_into(routed, i, keep)
-        reasons[i] = ("merged: more than two hand notes at once, and this the quietest; "
-                      "a flam of the nearest stroke's hand")  # fmt: skip
+        reasons[i] = (
+            "merged: more than two hand notes at once, and this the quietest; "
+            "a flam of the nearest stroke's hand"
+        )
     return keep, reasons
 
 
@@ -259,8 +263,9 @@ def beat_features(times: np.ndarray, beat_s: np.ndarray | None, tol: float = 0.0
     return out
 
 
-def beat_features_at(time_s: float, beat_s: np.ndarray | None, tol: float = 0.08
-                     ) -> tuple[float, float, float]:  # fmt: skip
+def beat_features_at(
+    time_s: float, beat_s: np.ndarray | None, tol: float = 0.08
+) -> tuple[float, float, float]:
     """:func:`beat_features` of one time, as a (strength, sixth_s, grouping) tuple."""
     strength = beat_strength_at(time_s, beat_s, tol)
     if beat_s is None or beat_s.size < 2:

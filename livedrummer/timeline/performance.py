@@ -68,8 +68,9 @@ class Performance:
         """Onset counts per instrument, then per zone (hi-hat zones carry the articulation)."""
         out: dict[str, Counter[str]] = {}
         on = self.onsets
-        keys = zip(on["instrument"].tolist(), on["zone"].tolist(), on["hihat"].tolist(),
-                   strict=True)  # fmt: skip
+        keys = zip(
+            on["instrument"].tolist(), on["zone"].tolist(), on["hihat"].tolist(), strict=True
+        )
         for (inst, zone, hihat), n in Counter(keys).items():
             label = ZONES[zone].value
             if HIHATS[hihat] not in (HiHat.NONE, HiHat.PEDAL):

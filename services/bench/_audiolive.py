@@ -82,8 +82,20 @@ def play_into_daemon(
     channels = 1 if audio.ndim == 1 else audio.shape[1]
     before = set(_ports())
     any_port = "tcp://127.0.0.1:*"
-    cmd = [sys.executable, "-m", "services", "input", "--audio", "system", "--no-journal",
-           "--pub", any_port, "--control", any_port, *(extra or [])]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "services",
+        "input",
+        "--audio",
+        "system",
+        "--no-journal",
+        "--pub",
+        any_port,
+        "--control",
+        any_port,
+        *(extra or []),
+    ]
     if realtime:
         cmd += ["--realtime", str(realtime)]
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
@@ -97,8 +109,9 @@ def play_into_daemon(
         trace_file = Path(tmp) / "trace.json"
         if trace:
             cmd += ["--trace", str(trace_file)]
-        daemon = subprocess.Popen(cmd, cwd=WORKDIR, stdout=subprocess.PIPE,
-                                  stderr=subprocess.PIPE, text=True)  # fmt: skip
+        daemon = subprocess.Popen(
+            cmd, cwd=WORKDIR, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
         try:
             assert daemon.stdout is not None
             line = daemon.stdout.readline()
@@ -154,8 +167,16 @@ def play_into_daemon(
 
     onsets = np.concatenate(rows) if rows else np.zeros(0, ONSET_DTYPE)
     b = np.array(blocks, float).reshape(-1, 2)
-    return LiveRun(onsets, np.array(arrivals), b[:, 0].astype(np.int64), b[:, 1], err,
-                   np.array(sent), np.array(traced, float).reshape(-1, 3), policy)  # fmt: skip
+    return LiveRun(
+        onsets,
+        np.array(arrivals),
+        b[:, 0].astype(np.int64),
+        b[:, 1],
+        err,
+        np.array(sent),
+        np.array(traced, float).reshape(-1, 3),
+        policy,
+    )
 
 
 def _start_player(audio: np.ndarray, inputs: list[str], tmp: Path) -> tuple[Any, Path]:
@@ -168,9 +189,12 @@ def _start_player(audio: np.ndarray, inputs: list[str], tmp: Path) -> tuple[Any,
     before = set(_ports())
     player = subprocess.Popen(
         [sys.executable, "-m", "services.bench._audioplayer", str(path), str(stamps)],
-        cwd=WORKDIR, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        cwd=WORKDIR,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
         text=True,
-    )  # fmt: skip
+    )
     assert player.stdout is not None
     json.loads(player.stdout.readline())
     theirs = _wait_ports(before, "out_", channels)
@@ -186,8 +210,9 @@ def learn_from(audio: np.ndarray, args: list[str]) -> subprocess.CompletedProces
     channels = 1 if audio.ndim == 1 else audio.shape[1]
     before = set(_ports())
     cmd = [sys.executable, "-m", "services", "audio", "learn", "--audio", "system", *args]
-    learn = subprocess.Popen(cmd, cwd=WORKDIR, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             text=True)  # fmt: skip
+    learn = subprocess.Popen(
+        cmd, cwd=WORKDIR, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
     player = None
     with tempfile.TemporaryDirectory() as tmp:
         try:

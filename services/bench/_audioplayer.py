@@ -44,8 +44,14 @@ def main(argv: list[str]) -> int:
             state["pos"] = -1
             done.set()
 
-    with sd.OutputStream(device="system", channels=audio.shape[1], samplerate=48_000,
-                         blocksize=128, dtype="float32", callback=callback):  # fmt: skip
+    with sd.OutputStream(
+        device="system",
+        channels=audio.shape[1],
+        samplerate=48_000,
+        blocksize=128,
+        dtype="float32",
+        callback=callback,
+    ):
         print(json.dumps({"ready": True}), flush=True)
         sys.stdin.readline()
         state["pos"] = 0

@@ -60,8 +60,11 @@ def worktree(checkout: Path, rev: str) -> Iterator[Path]:
     """``rev`` checked out in a temporary git worktree of ``checkout`` (removed after)."""
     tmp = Path(tempfile.mkdtemp(prefix="ld-compare-"))
     path = tmp / "rev"
-    done = subprocess.run(["git", "-C", str(checkout), "worktree", "add", "--detach", "-q",
-                           str(path), rev], capture_output=True, text=True)  # fmt: skip
+    done = subprocess.run(
+        ["git", "-C", str(checkout), "worktree", "add", "--detach", "-q", str(path), rev],
+        capture_output=True,
+        text=True,
+    )
     if done.returncode != 0:
         tmp.rmdir()
         msg = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else "git failed"
@@ -72,8 +75,10 @@ def worktree(checkout: Path, rev: str) -> Iterator[Path]:
     try:
         yield path
     finally:
-        subprocess.run(["git", "-C", str(checkout), "worktree", "remove", "--force", str(path)],
-                       capture_output=True)  # fmt: skip
+        subprocess.run(
+            ["git", "-C", str(checkout), "worktree", "remove", "--force", str(path)],
+            capture_output=True,
+        )
         (tmp / "shared").unlink(missing_ok=True)
         if tmp.exists() and not any(tmp.iterdir()):
             tmp.rmdir()
@@ -128,8 +133,13 @@ def run_compare(checkout: Path, revs: list[str], argv: list[str], runs: int) -> 
         for k, name in enumerate(turns):
             print(f"\n--- run {k + 1} of {len(turns)}: {name} ({where[name]})", flush=True)
             env = {**os.environ, "PYTHONPATH": str(where[name])}
-            done = subprocess.run([*bench_argv(where[name]), *argv], cwd=where[name], env=env,
-                                  capture_output=True, text=True)  # fmt: skip
+            done = subprocess.run(
+                [*bench_argv(where[name]), *argv],
+                cwd=where[name],
+                env=env,
+                capture_output=True,
+                text=True,
+            )
             print(done.stdout, end="", flush=True)
             if done.returncode != 0:
                 tail = done.stderr.strip().splitlines()[-3:]
@@ -153,8 +163,10 @@ def print_side_by_side(results: dict[str, list[dict[str, dict[str, float]]]], re
     """Medians over the runs of each commit, REV / this (ratio this / REV)."""
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
     runs = len(results["this"])
-    print(f"\n{rev} / this checkout: medians of {runs} alternating runs each (ms; late and no "
-          f"pose: notes); load average {load} (1, 5, 15 min)")  # fmt: skip
+    print(
+        f"\n{rev} / this checkout: medians of {runs} alternating runs each (ms; late and no "
+        f"pose: notes); load average {load} (1, 5, 15 min)"
+    )
     labels = list(dict.fromkeys(label for r in [*results[rev], *results["this"]] for label in r))
     print(f"{'run':>10} | " + " | ".join(f"{head:>22}" for _, head in SHOWN))
     for label in labels:

@@ -89,8 +89,9 @@ def render_mix(ex: Excerpt, sf2: Path = DEFAULT_SF2, seed: int = 0) -> np.ndarra
     return (out / max(1.0, float(np.max(np.abs(out))) / 0.9)).astype(np.float32)
 
 
-def render_stems(ex: Excerpt, sf2: Path = DEFAULT_SF2, seed: int = 0,
-                 leak_db: float = LEAK_DB) -> tuple[np.ndarray, list[str]]:  # fmt: skip
+def render_stems(
+    ex: Excerpt, sf2: Path = DEFAULT_SF2, seed: int = 0, leak_db: float = LEAK_DB
+) -> tuple[np.ndarray, list[str]]:
     """(n, mics) float32: one microphone per drum that the excerpt plays, with crosstalk;
     and the mics' names (keys of :data:`MICS`)."""
     names, dry = [], []

@@ -126,11 +126,26 @@ class Rig:
         env.pop("DISPLAY", None)
         env.pop("WAYLAND_DISPLAY", None)
         self.proc = subprocess.Popen(
-            [*program_argv(), "up", "--serial", self.tty,
-             "--port-base", str(self.port_base), "--frames-dir", str(self.frames_dir), "--no-png",
-             "--fps", str(self.fps), *self.extra],
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
-        )  # fmt: skip
+            [
+                *program_argv(),
+                "up",
+                "--serial",
+                self.tty,
+                "--port-base",
+                str(self.port_base),
+                "--frames-dir",
+                str(self.frames_dir),
+                "--no-png",
+                "--fps",
+                str(self.fps),
+                *self.extra,
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env=env,
+            cwd=REPO,
+        )
         threading.Thread(target=self._read_lines, daemon=True).start()
         self.in_sub = self._sub(self.port_base, p.Kind.ONSET)
         self.pose_sub = self._sub(self.port_base + 10, p.Kind.POSE)

@@ -187,8 +187,11 @@ def mutations(data: bytes, rng: random.Random, per_kind: int = 1) -> Iterator[Va
         # At the body's start (always an event boundary): a delta of 0x0FFFFFFF, the largest
         # variable-length quantity, carried by a text meta event.
         huge = _varlen(0x0FFFFFFF) + b"\xff\x01\x01x"
-        yield Variant("huge-delta", f"0x0FFFFFFF ticks in track {track + 1}",
-                      _insert_into_track(data, track, 0, huge))  # fmt: skip
+        yield Variant(
+            "huge-delta",
+            f"0x0FFFFFFF ticks in track {track + 1}",
+            _insert_into_track(data, track, 0, huge),
+        )
 
         # 0x00FFFFFF ticks: hours of silence, yet within a reader's bounds at most divisions.
         long = _insert_into_track(data, track, 0, _varlen(0x00FFFFFF) + b"\xff\x01\x01x")

@@ -50,14 +50,28 @@ def dummy_jack(
     env = {**os.environ, **jack_env(name)}
     out = log if log is not None else subprocess.DEVNULL
     proc = subprocess.Popen(
-        ["jackd", "-R" if realtime else "--no-realtime", *(["-S"] if sync else []),
-         *(["-P", str(priority)] if realtime and priority is not None else []), "-n", name,
-         "-d", "dummy", "-r", str(rate), "-p", str(period)],
-        stdout=out, stderr=subprocess.STDOUT, env=env,
-    )  # fmt: skip
+        [
+            "jackd",
+            "-R" if realtime else "--no-realtime",
+            *(["-S"] if sync else []),
+            *(["-P", str(priority)] if realtime and priority is not None else []),
+            "-n",
+            name,
+            "-d",
+            "dummy",
+            "-r",
+            str(rate),
+            "-p",
+            str(period),
+        ],
+        stdout=out,
+        stderr=subprocess.STDOUT,
+        env=env,
+    )
     try:
-        waited = subprocess.run(["jack_wait", "-s", name, "-w", "-t", "10"], capture_output=True,
-                                env=env)  # fmt: skip
+        waited = subprocess.run(
+            ["jack_wait", "-s", name, "-w", "-t", "10"], capture_output=True, env=env
+        )
         if waited.returncode != 0 or proc.poll() is not None:
             raise JackError(f"jackd -d dummy ({name}) did not start")
         yield name

@@ -33,8 +33,11 @@ def build_recorder(folder: Path) -> Path:
     if cc is None:
         raise JackError("no C compiler (Debian: apt-get install gcc)")
     exe = folder / "jack_rec"
-    done = subprocess.run([cc, "-O2", "-o", str(exe), str(HERE / "jack_rec.c"), "-ljack"],
-                          capture_output=True, text=True)  # fmt: skip
+    done = subprocess.run(
+        [cc, "-O2", "-o", str(exe), str(HERE / "jack_rec.c"), "-ljack"],
+        capture_output=True,
+        text=True,
+    )
     if done.returncode != 0:
         last = done.stderr.strip().splitlines()[-1:]
         raise JackError(f"cannot build the recorder (Debian: libjack-jackd2-dev): {last}")
@@ -59,8 +62,9 @@ class JackRecorder:
         self._dir = Path(tempfile.mkdtemp(prefix="ldrec-"))
         exe = build_recorder(self._dir)
         self._out = self._dir / "rec.bin"
-        self.proc = subprocess.Popen([str(exe), str(self._out)], stdout=subprocess.PIPE,
-                                     text=True, env=env)  # fmt: skip
+        self.proc = subprocess.Popen(
+            [str(exe), str(self._out)], stdout=subprocess.PIPE, text=True, env=env
+        )
         assert self.proc.stdout is not None
         line = self.proc.stdout.readline().split()
         if not line or line[0] != "ready":
@@ -97,12 +101,18 @@ class JackRecorder:
             at += 12 + 4 * n
         if not chunks:
             return Recording(np.zeros(0, np.float32), np.zeros(0), sources, np.zeros(0), *stats)
-        return Recording(np.concatenate(chunks), np.concatenate(times), sources,
-                         np.array(cycles), *stats)  # fmt: skip
+        return Recording(
+            np.concatenate(chunks), np.concatenate(times), sources, np.array(cycles), *stats
+        )
 
 
-def steady(rec: Recording, at: np.ndarray, before_s: float = 0.1, after_s: float = 0.05,
-           slack_s: float = 0.001) -> np.ndarray:  # fmt: skip
+def steady(
+    rec: Recording,
+    at: np.ndarray,
+    before_s: float = 0.1,
+    after_s: float = 0.05,
+    slack_s: float = 0.001,
+) -> np.ndarray:
     """Per time in ``at``: whether the JACK graph ran on time around it (every cycle from
     ``before_s`` before to ``after_s`` after began within ``slack_s`` of one period after
     the previous one). A stalled cycle (the dummy driver of a loaded machine) moves every
@@ -115,8 +125,9 @@ def steady(rec: Recording, at: np.ndarray, before_s: float = 0.1, after_s: float
     return ok
 
 
-def attacks(rec: Recording, threshold: float = 0.02, rise: float = 3.0, gap_s: float = 0.08,
-            block: int = 64) -> np.ndarray:  # fmt: skip
+def attacks(
+    rec: Recording, threshold: float = 0.02, rise: float = 3.0, gap_s: float = 0.08, block: int = 64
+) -> np.ndarray:
     """Shared-clock times of the sound's attacks: the first sample above ``threshold`` of a
     ``block`` whose peak is ``rise`` times the peak of the 20 blocks before it (so a hit over
     a ringing one counts), at least ``gap_s`` after the previous attack."""

@@ -40,9 +40,15 @@ class AheadClock(MonotonicClock):
         return super().now() + self.offset_s
 
 
-def jitter_relay(ctx: zmq.Context[zmq.Socket[bytes]], upstream: str, stop: threading.Event,
-                 bound: list[str], low_s: float = 0.020, high_s: float = 0.060,
-                 seed: int = 11) -> None:  # fmt: skip
+def jitter_relay(
+    ctx: zmq.Context[zmq.Socket[bytes]],
+    upstream: str,
+    stop: threading.Event,
+    bound: list[str],
+    low_s: float = 0.020,
+    high_s: float = 0.060,
+    seed: int = 11,
+) -> None:
     """SUB from ``upstream``, PUB on, each message ``low_s..high_s`` later, in order."""
     rng = random.Random(seed)
     sub, pub = ctx.socket(zmq.SUB), ctx.socket(zmq.PUB)
@@ -65,8 +71,14 @@ def jitter_relay(ctx: zmq.Context[zmq.Socket[bytes]], upstream: str, stop: threa
     pub.close(0)
 
 
-def control_proxy(ctx: zmq.Context[zmq.Socket[bytes]], upstream: str, stop: threading.Event,
-                  bound: list[str], max_s: float = 0.010, seed: int = 5) -> None:  # fmt: skip
+def control_proxy(
+    ctx: zmq.Context[zmq.Socket[bytes]],
+    upstream: str,
+    stop: threading.Event,
+    bound: list[str],
+    max_s: float = 0.010,
+    seed: int = 5,
+) -> None:
     """ROUTER for one client's exchanges, DEALER on to ``upstream``; each way ``0..max_s``."""
     rng = random.Random(seed)
     front, back = ctx.socket(zmq.ROUTER), ctx.socket(zmq.DEALER)
@@ -106,8 +118,9 @@ class RemoteSession:
     summary: str  # the local daemon's stderr (its exit line has the clock figures)
 
 
-def remote_session(seconds: float, *, control: bool, offset_s: float, home: str,
-                   err_path: Path) -> RemoteSession:  # fmt: skip
+def remote_session(
+    seconds: float, *, control: bool, offset_s: float, home: str, err_path: Path
+) -> RemoteSession:
     """A remote site (an input daemon playing the demo groove on a clock ``offset_s`` ahead)
     reached through :func:`jitter_relay` (and, with ``control``, its control socket through
     :func:`control_proxy`) by a local ``livedrummer input --remote`` process; ``seconds`` of
@@ -125,8 +138,12 @@ def remote_session(seconds: float, *, control: bool, offset_s: float, home: str,
     source = FileSource(demo_groove(), remote_clock, load_note_map(DEMO_MAP))
     source.load()
     local = "tcp://127.0.0.1:*"
-    daemon = InputDaemon(source, DaemonConfig(pub=local, control=local, journal=False,
-                                              wait_subscribers=2), remote_clock, ctx)  # fmt: skip
+    daemon = InputDaemon(
+        source,
+        DaemonConfig(pub=local, control=local, journal=False, wait_subscribers=2),
+        remote_clock,
+        ctx,
+    )
     eps = daemon.start()
     stop = threading.Event()
     relay_at: list[str] = []
@@ -148,11 +165,25 @@ def remote_session(seconds: float, *, control: bool, offset_s: float, home: str,
     extra = ["--remote-control", proxy_at[0]] if control else []
     with err_path.open("w") as err:
         proc = subprocess.Popen(
-            [*program_argv("input", "--remote", relay_at[0], *extra, "--pub", local,
-                           "--control", local, "--no-journal")],
-            stdout=subprocess.PIPE, stderr=err, text=True, cwd=WORKDIR,
+            [
+                *program_argv(
+                    "input",
+                    "--remote",
+                    relay_at[0],
+                    *extra,
+                    "--pub",
+                    local,
+                    "--control",
+                    local,
+                    "--no-journal",
+                )
+            ],
+            stdout=subprocess.PIPE,
+            stderr=err,
+            text=True,
+            cwd=WORKDIR,
             env={**os.environ, "LIVEDRUMMER_HOME": home},
-        )  # fmt: skip
+        )
     sent: list[float] = []
     got: list[float] = []
     try:

@@ -121,8 +121,11 @@ def render_stem_takes(kit: KitSource, exs: list, split: str) -> list[tuple[np.nd
     out = []
     for i, (ex, start) in enumerate(zip(exs, starts, strict=True)):
         n = round(ex.duration_s * SR)
-        names = [m for m, cl in MICS.items() if m in tracks
-                 and np.isin(ex.classes, [CLASSES.index(c) for c in cl]).any()]  # fmt: skip
+        names = [
+            m
+            for m, cl in MICS.items()
+            if m in tracks and np.isin(ex.classes, [CLASSES.index(c) for c in cl]).any()
+        ]
         stems = np.stack([tracks[m][start : start + n] for m in names], axis=1)
         delay = int(0.001 * SR)
         late = np.zeros_like(stems)
@@ -165,32 +168,46 @@ def kit_candidates(kit: KitSource, root: Path, count: int, seconds: float) -> li
     if path.is_file():
         with np.load(path) as data:
             x, y, level, take = data["x"], data["y"], data["level"], data["take"]
-        return [TakeCandidates(x[take == i], y[take == i], level[take == i]) for i in
-                range(int(take.max()) + 1 if len(take) else 0)]  # fmt: skip
-    parts = [take_candidates(t) for t in render_takes(kit, excerpts(root, "train", count, seconds),
-                                                      "train")]  # fmt: skip
+        return [
+            TakeCandidates(x[take == i], y[take == i], level[take == i])
+            for i in range(int(take.max()) + 1 if len(take) else 0)
+        ]
+    parts = [
+        take_candidates(t)
+        for t in render_takes(kit, excerpts(root, "train", count, seconds), "train")
+    ]
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp.npz")
     take = np.concatenate([np.full(len(p.features), i) for i, p in enumerate(parts)])
-    np.savez(tmp, x=np.concatenate([p.features for p in parts]),
-             y=np.concatenate([p.labels for p in parts]),
-             level=np.concatenate([p.levels for p in parts]), take=take)  # fmt: skip
+    np.savez(
+        tmp,
+        x=np.concatenate([p.features for p in parts]),
+        y=np.concatenate([p.labels for p in parts]),
+        level=np.concatenate([p.levels for p in parts]),
+        take=take,
+    )
     tmp.replace(path)
     return parts
 
 
 GROUPS_MIX = {
-    "kick": ("kick",), "snare": ("snare",), "hihat": ("hihat_closed", "hihat_open"),
-    "toms": ("tom_high", "tom_mid", "tom_low"), "cymbals": ("crash", "ride"),
-}  # fmt: skip
+    "kick": ("kick",),
+    "snare": ("snare",),
+    "hihat": ("hihat_closed", "hihat_open"),
+    "toms": ("tom_high", "tom_mid", "tom_low"),
+    "cymbals": ("crash", "ride"),
+}
 
 
 def pick_files(root: Path, split: str, count: int | None, seed: int = 1) -> list[Path]:
     """``count`` beat (not fill) performances of ``split`` longer than 25 s, seeded choice
     (``None``: all of them)."""
     with (root / "info.csv").open() as f:
-        rows = [r for r in csv.DictReader(f) if r["split"] == split
-                and r["beat_type"] == "beat" and float(r["duration"]) > 25]  # fmt: skip
+        rows = [
+            r
+            for r in csv.DictReader(f)
+            if r["split"] == split and r["beat_type"] == "beat" and float(r["duration"]) > 25
+        ]
     if count is None:
         return [root / r["midi_filename"] for r in rows]
     rng = np.random.default_rng(seed)

@@ -90,8 +90,9 @@ def available_kits(names: list[str] | None = None) -> list[KitSource]:
         if kit.present():
             out.append(kit)
         else:
-            log.warning("kit %s skipped: %s absent (Debian package %s)", name, kit.path,
-                        kit.package)  # fmt: skip
+            log.warning(
+                "kit %s skipped: %s absent (Debian package %s)", name, kit.path, kit.package
+            )
     return out
 
 
@@ -146,17 +147,28 @@ def hydrogen_sfz(folder: Path, cache: Path) -> Path:
         if layers:
             instruments.append((name, layers, volume))
     if absent:
-        log.info("%s: %d sample files absent (%s), their layers skipped", folder.name,
-                 len(absent), ", ".join(sorted(set(absent))))  # fmt: skip
+        log.info(
+            "%s: %d sample files absent (%s), their layers skipped",
+            folder.name,
+            len(absent),
+            ", ".join(sorted(set(absent))),
+        )
     lines = []
     used: set[int] = set()
     taken: set[str] = set()
     for notes, words, nots in ROLES:
         if set(notes) & used:
             continue
-        pick = next((i for i in instruments if i[0] not in taken
-                     and any(w in i[0] for w in words)
-                     and not any(x in i[0] for x in nots)), None)  # fmt: skip
+        pick = next(
+            (
+                i
+                for i in instruments
+                if i[0] not in taken
+                and any(w in i[0] for w in words)
+                and not any(x in i[0] for x in nots)
+            ),
+            None,
+        )
         if pick is None:
             continue
         name, layers, volume = pick

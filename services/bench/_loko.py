@@ -27,17 +27,36 @@ COLUMNS = ("kick", "snare", "hihat", "toms", "cymbals")
 
 
 def add_options(ap: argparse.ArgumentParser) -> None:
-    ap.add_argument("--leave-one-kit-out", action="store_true",
-                    help="train on all kits but one, test on it, for every kit here")  # fmt: skip
-    ap.add_argument("--kits", default=None, metavar="LIST",
-                    help="--leave-one-kit-out: the kits (default: every one present)")  # fmt: skip
-    ap.add_argument("--train-files", type=int, default=24, metavar="N",
-                    help="--leave-one-kit-out: train excerpts per kit (default 24)")  # fmt: skip
-    ap.add_argument("--held-out", default=",".join(HELD_OUT), metavar="LIST",
-                    help="--leave-one-kit-out: kits never trained or tuned on, tested with the "
-                    f"model of all the others, or none (default {','.join(HELD_OUT)})")  # fmt: skip
-    ap.add_argument("--no-mics", action="store_true",
-                    help="--leave-one-kit-out: skip the one-mic-per-drum column")  # fmt: skip
+    ap.add_argument(
+        "--leave-one-kit-out",
+        action="store_true",
+        help="train on all kits but one, test on it, for every kit here",
+    )
+    ap.add_argument(
+        "--kits",
+        default=None,
+        metavar="LIST",
+        help="--leave-one-kit-out: the kits (default: every one present)",
+    )
+    ap.add_argument(
+        "--train-files",
+        type=int,
+        default=24,
+        metavar="N",
+        help="--leave-one-kit-out: train excerpts per kit (default 24)",
+    )
+    ap.add_argument(
+        "--held-out",
+        default=",".join(HELD_OUT),
+        metavar="LIST",
+        help="--leave-one-kit-out: kits never trained or tuned on, tested with the "
+        f"model of all the others, or none (default {','.join(HELD_OUT)})",
+    )
+    ap.add_argument(
+        "--no-mics",
+        action="store_true",
+        help="--leave-one-kit-out: skip the one-mic-per-drum column",
+    )
 
 
 def train_without(excluded: set[str], kits: list, root: Path, count: int, seconds: float):  # type: ignore[no-untyped-def,type-arg]
@@ -46,8 +65,9 @@ def train_without(excluded: set[str], kits: list, root: Path, count: int, second
 
     from ._kitcorpus import kit_candidates
 
-    takes = [t for k in kits if k.name not in excluded
-             for t in kit_candidates(k, root, count, seconds)]  # fmt: skip
+    takes = [
+        t for k in kits if k.name not in excluded for t in kit_candidates(k, root, count, seconds)
+    ]
     return fit(takes, name="+".join(k.name for k in kits if k.name not in excluded))
 
 
@@ -60,8 +80,9 @@ def _parse_held_out(text: str) -> set[str]:
         return set()
     names = {n.strip() for n in text.split(",") if n.strip()}
     for n in sorted(names - set(KIT_NAMES)):
-        raise LivedrummerError(f"--held-out: unknown kit {n!r} (one of {', '.join(KIT_NAMES)}, "
-                               "or none)")  # fmt: skip
+        raise LivedrummerError(
+            f"--held-out: unknown kit {n!r} (one of {', '.join(KIT_NAMES)}, or none)"
+        )
     return names
 
 
@@ -74,17 +95,21 @@ def run(args: argparse.Namespace, root: Path) -> int:
     rotation = [k for k in kits if k.name not in held]
     held_here = [k for k in kits if k.name in held]
     if len(rotation) < 2:
-        print("bench transcribe --leave-one-kit-out: fewer than two kits present outside "
-              "the held-out set")  # fmt: skip
+        print(
+            "bench transcribe --leave-one-kit-out: fewer than two kits present outside "
+            "the held-out set"
+        )
         return 2
     count = 6 if args.files is None else args.files
     tests = excerpts(root, "test", count, args.seconds)
     train_s = 12.0
-    print(f"bench transcribe --leave-one-kit-out: rotation {', '.join(k.name for k in rotation)}"
-          f"; held out {', '.join(k.name for k in held_here) or 'none'}; each model trained "
-          f"on {args.train_files} train-split excerpts of {train_s:g} s per training kit; "
-          f"tested on {count} test-split excerpts of {args.seconds:g} s of the kit it never "
-          "heard (F, +-25 ms; mics: the worst channel)")  # fmt: skip
+    print(
+        f"bench transcribe --leave-one-kit-out: rotation {', '.join(k.name for k in rotation)}"
+        f"; held out {', '.join(k.name for k in held_here) or 'none'}; each model trained "
+        f"on {args.train_files} train-split excerpts of {train_s:g} s per training kit; "
+        f"tested on {count} test-split excerpts of {args.seconds:g} s of the kit it never "
+        "heard (F, +-25 ms; mics: the worst channel)"
+    )
     head = "  ".join(f"{c:>7}" for c in COLUMNS)
     print(f"  {'kit':<14} {head}  {'mics':>6}  | templates: kick  snare  hihat")
     worsts = []
@@ -98,8 +123,9 @@ def run(args: argparse.Namespace, root: Path) -> int:
             excluded = frozenset({kit.name} | held)
             t0 = time.perf_counter()
             if excluded not in models:
-                models[excluded] = train_without(set(excluded), kits, root, args.train_files,
-                                                 train_s)  # fmt: skip
+                models[excluded] = train_without(
+                    set(excluded), kits, root, args.train_files, train_s
+                )
             model = models[excluded]
             line = _row(kit, model, tests, args.no_mics, worst)
             print(f"  {kit.name:<14} {line}   ({time.perf_counter() - t0:.0f} s)", flush=True)
@@ -115,8 +141,10 @@ def run(args: argparse.Namespace, root: Path) -> int:
 def _print_worst(title: str, worst: dict[str, float], no_mics: bool) -> None:
     last = "  ".join(f"{worst[c]:7.3f}" for c in COLUMNS)
     mics = f"{'-':>6}" if no_mics else f"{worst['mics']:6.3f}"
-    print(f"  {title:<14} {last}  {mics}  |      {worst['t_kick']:.3f}  "
-          f"{worst['t_snare']:.3f}  {worst['t_hihat']:.3f}")  # fmt: skip
+    print(
+        f"  {title:<14} {last}  {mics}  |      {worst['t_kick']:.3f}  "
+        f"{worst['t_snare']:.3f}  {worst['t_hihat']:.3f}"
+    )
 
 
 def _row(kit, model, tests: list, no_mics: bool, worst: dict[str, float]) -> str:  # type: ignore[no-untyped-def,type-arg]
@@ -142,8 +170,7 @@ def _row(kit, model, tests: list, no_mics: bool, worst: dict[str, float]) -> str
     mic_f = float("nan")
     if not no_mics:
         mic_tot: dict[str, Counts] = {}
-        for take, (stems, names) in zip(takes, render_stem_takes(kit, tests, "test"),
-                                        strict=True):  # fmt: skip
+        for take, (stems, names) in zip(takes, render_stem_takes(kit, tests, "test"), strict=True):
             chans = [CLASSES.index(MICS[n][0]) for n in names]
             hits = detect(stems, SR, profile, chans)
             ref = (take.ref_times, take.ref_classes, take.ref_velocities)
@@ -162,5 +189,7 @@ def _row(kit, model, tests: list, no_mics: bool, worst: dict[str, float]) -> str
         row.append(f"{tot[c].f:7.3f}" if n else f"{'-':>7}")
     for c in ("kick", "snare", "hihat"):
         worst[f"t_{c}"] = min(worst[f"t_{c}"], old[c].f)
-    return (f"{'  '.join(row)}  {mic_f:6.3f}  |      {old['kick'].f:.3f}  {old['snare'].f:.3f}  "
-            f"{old['hihat'].f:.3f}")  # fmt: skip
+    return (
+        f"{'  '.join(row)}  {mic_f:6.3f}  |      {old['kick'].f:.3f}  {old['snare'].f:.3f}  "
+        f"{old['hihat'].f:.3f}"
+    )

@@ -146,8 +146,13 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench answer", description=__doc__)
     parser.add_argument("--rates", type=float, nargs="+", default=[1.0, 100.0])
     parser.add_argument("--seconds", type=float, default=3.0, help="per rate")
-    parser.add_argument("--groove", type=float, default=20.0, metavar="S",
-                        help="also the first S s of the demo groove (0: not)")  # fmt: skip
+    parser.add_argument(
+        "--groove",
+        type=float,
+        default=20.0,
+        metavar="S",
+        help="also the first S s of the demo groove (0: not)",
+    )
     args = parser.parse_args(argv)
     from ..cli.files import DEMO_MAP, demo_groove
 
@@ -161,15 +166,19 @@ def main(argv: list[str]) -> int:
     for label, onsets in runs:
         times: Times = defaultdict(list)
         answers = drive(rig, onsets, times) * 1000
-        print(f"\n{label}: {answers.size} answers (hits arriving together are one), answered in "
-              f"p50 {np.percentile(answers, 50):.2f} ms, p99 {np.percentile(answers, 99):.2f} ms, "
-              f"max {answers.max():.2f} ms")  # fmt: skip
+        print(
+            f"\n{label}: {answers.size} answers (hits arriving together are one), answered in "
+            f"p50 {np.percentile(answers, 50):.2f} ms, p99 {np.percentile(answers, 99):.2f} ms, "
+            f"max {answers.max():.2f} ms"
+        )
         print(f"  {'stage':46} {'calls':>6} {'p50 ms':>8} {'p99 ms':>8} {'total ms':>9}")
         order = ["decode ONSET", *(label for _, _, label in STAGES), "encode POSE"]
         for name in [*order, *(k for k in times if k not in order)]:
             if name not in times:
                 continue
             v = np.array(times[name]) * 1000
-            print(f"  {name:46} {v.size:6d} {np.percentile(v, 50):8.3f} "
-                  f"{np.percentile(v, 99):8.3f} {v.sum():9.1f}")  # fmt: skip
+            print(
+                f"  {name:46} {v.size:6d} {np.percentile(v, 50):8.3f} "
+                f"{np.percentile(v, 99):8.3f} {v.sum():9.1f}"
+            )
     return 0

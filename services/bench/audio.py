@@ -54,8 +54,13 @@ def onset(t: float, k: int) -> np.ndarray:
 
 
 def spawn(args: list[str], env: dict[str, str], err: Path) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-m", "services", *args], stdout=subprocess.PIPE,
-                            stderr=err.open("w"), text=True, env=env)  # fmt: skip
+    return subprocess.Popen(
+        [sys.executable, "-m", "services", *args],
+        stdout=subprocess.PIPE,
+        stderr=err.open("w"),
+        text=True,
+        env=env,
+    )
 
 
 def stop(proc: subprocess.Popen[str]) -> None:
@@ -72,17 +77,27 @@ def pct(x: np.ndarray) -> str:
     if not x.size:
         return "n/a"
     q = np.percentile(np.abs(x) * 1000, [50, 90, 99])
-    return (f"p50 {q[0]:.2f} / p90 {q[1]:.2f} / p99 {q[2]:.2f} / max "
-            f"{np.abs(x).max() * 1000:.2f} ms (sizes; signed median "
-            f"{np.median(x) * 1000:+.2f})")  # fmt: skip
+    return (
+        f"p50 {q[0]:.2f} / p90 {q[1]:.2f} / p99 {q[2]:.2f} / max "
+        f"{np.abs(x).max() * 1000:.2f} ms (sizes; signed median "
+        f"{np.median(x) * 1000:+.2f})"
+    )
 
 
-def run(seconds: float, rate: float, delay_s: float, period: int, sync: bool = False,
-        realtime: bool = True, priority: int | None = None) -> int:  # fmt: skip
+def run(
+    seconds: float,
+    rate: float,
+    delay_s: float,
+    period: int,
+    sync: bool = False,
+    realtime: bool = True,
+    priority: int | None = None,
+) -> int:
     folder = Path(tempfile.mkdtemp(prefix="ldbench-audio-"))
     log = (folder / "jackd.log").open("w")
-    with dummy_jack("ldaudio", period=period, log=log, sync=sync, realtime=realtime,
-                    priority=priority) as name:  # fmt: skip
+    with dummy_jack(
+        "ldaudio", period=period, log=log, sync=sync, realtime=realtime, priority=priority
+    ) as name:
         env = {**os.environ, **jack_env(name)}
         env.pop("DISPLAY", None)
         ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
@@ -100,15 +115,39 @@ def run(seconds: float, rate: float, delay_s: float, period: int, sync: bool = F
 
         recorder = JackRecorder(env)
         try:
-            syn = spawn(["synth", "--sub", f"tcp://127.0.0.1:{port}", "--pub",
-                         "tcp://127.0.0.1:*", "--delay-ms", str(delay_s * 1000)], env,
-                        folder / "synth.err")  # fmt: skip
+            syn = spawn(
+                [
+                    "synth",
+                    "--sub",
+                    f"tcp://127.0.0.1:{port}",
+                    "--pub",
+                    "tcp://127.0.0.1:*",
+                    "--delay-ms",
+                    str(delay_s * 1000),
+                ],
+                env,
+                folder / "synth.err",
+            )
             procs.append(syn)
             assert syn.stdout is not None
             pub = json.loads(syn.stdout.readline())["pub"]
-            disp = spawn(["display", "--live", "--headless", "--no-render", "--sub", pub,
-                          "--sound", "--audio-device", "system, JACK", "--fps", "30"], env,
-                         folder / "display.err")  # fmt: skip
+            disp = spawn(
+                [
+                    "display",
+                    "--live",
+                    "--headless",
+                    "--no-render",
+                    "--sub",
+                    pub,
+                    "--sound",
+                    "--audio-device",
+                    "system, JACK",
+                    "--fps",
+                    "30",
+                ],
+                env,
+                folder / "display.err",
+            )
             procs.append(disp)
             assert disp.stdout is not None
             disp.stdout.readline()
@@ -118,8 +157,9 @@ def run(seconds: float, rate: float, delay_s: float, period: int, sync: bool = F
             shown.connect(pub)
             seq, deadline = 0, time.monotonic() + 20
             while not shown.poll(200) and time.monotonic() < deadline:
-                bus.send_multipart(p.encode(p.Message(p.Kind.ONSET, onset(time.monotonic(), 0),
-                                                      seq=seq)))  # fmt: skip
+                bus.send_multipart(
+                    p.encode(p.Message(p.Kind.ONSET, onset(time.monotonic(), 0), seq=seq))
+                )
                 seq += 1
             if not shown.poll(0):
                 print("bench audio: no onset came back from the synth", file=sys.stderr)
@@ -134,8 +174,9 @@ def run(seconds: float, rate: float, delay_s: float, period: int, sync: bool = F
                 while time.monotonic() < due:
                     time.sleep(0.0002)
                 t = time.monotonic()
-                bus.send_multipart(p.encode(p.Message(p.Kind.ONSET, onset(t, k), seq=seq,
-                                                      send_time_s=t)))  # fmt: skip
+                bus.send_multipart(
+                    p.encode(p.Message(p.Kind.ONSET, onset(t, k), seq=seq, send_time_s=t))
+                )
                 seq += 1
                 sent.append(t)
                 while shown.poll(0):
@@ -162,11 +203,15 @@ def run(seconds: float, rate: float, delay_s: float, period: int, sync: bool = F
     line = next((x for x in err.splitlines() if x.startswith("sound:")), "sound: (no summary)")
     late = re.search(r"(\d+) late", line)
     mode = ("synchronous (-S)" if sync else "asynchronous") + (
-        f", real-time (-R{'' if priority is None else f' -P {priority}'})" if realtime
-        else ", no real-time")  # fmt: skip
-    print(f"bench audio: {len(sent)} onsets at {rate:g}/s for {seconds:g} s, D {delay_s * 1000:g}"
-          f" ms, JACK dummy {period} frames at 48 kHz ({period / 48:.2f} ms), {mode}; load "
-          f"average {os.getloadavg()[0]:.2f}")  # fmt: skip
+        f", real-time (-R{'' if priority is None else f' -P {priority}'})"
+        if realtime
+        else ", no real-time"
+    )
+    print(
+        f"bench audio: {len(sent)} onsets at {rate:g}/s for {seconds:g} s, D {delay_s * 1000:g}"
+        f" ms, JACK dummy {period} frames at 48 kHz ({period / 48:.2f} ms), {mode}; load "
+        f"average {os.getloadavg()[0]:.2f}"
+    )
     print(f"  heard: {int(found.sum())} of {len(sent)} onsets")
     print(f"  onset on the bus -> sound at the output, - D: {pct(lag[found])}")
     print(f"    where the JACK graph ran steadily ({int(ok.sum())} onsets): {pct(lag[ok])}")
@@ -175,12 +220,16 @@ def run(seconds: float, rate: float, delay_s: float, period: int, sync: bool = F
     # cannot be placed on its sample
     in_time = delay_s - 0.0107
     late_fw, unseen = int(np.sum(forward > in_time)), int(np.sum(~np.isfinite(forward)))
-    print(f"  onset on the bus -> forwarded by the synth (SHOWN_ONSET): "
-          f"{pct(forward[np.isfinite(forward)])}; {late_fw} later than D - 10.7 ms (the "
-          f"sound's FIFO), {unseen} not seen")  # fmt: skip
+    print(
+        f"  onset on the bus -> forwarded by the synth (SHOWN_ONSET): "
+        f"{pct(forward[np.isfinite(forward)])}; {late_fw} later than D - 10.7 ms (the "
+        f"sound's FIFO), {unseen} not seen"
+    )
     print(f"  {line}")
-    print(f"  JACK: {rec.xruns} xruns, DSP load mean {rec.load_mean:.1f} % / max "
-          f"{rec.load_max:.1f} %; late onsets {late.group(1) if late else '?'}")  # fmt: skip
+    print(
+        f"  JACK: {rec.xruns} xruns, DSP load mean {rec.load_mean:.1f} % / max "
+        f"{rec.load_max:.1f} %; late onsets {late.group(1) if late else '?'}"
+    )
     return 0
 
 
@@ -190,16 +239,31 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--rate", type=float, default=10.0, help="onsets a second (default 10)")
     parser.add_argument("--delay-ms", type=float, default=30.0, help="D (default 30)")
     parser.add_argument("--period", type=int, default=128, help="JACK frames (default 128)")
-    parser.add_argument("--jack-sync", action="store_true",
-                        help="run jackd synchronous (-S; default: asynchronous)")  # fmt: skip
-    parser.add_argument("--jack-no-realtime", action="store_true",
-                        help="run jackd without real-time scheduling (default: -R)")  # fmt: skip
-    parser.add_argument("--jack-priority", type=int, metavar="P",
-                        help="jackd's real-time priority (-P; default: jackd's)")  # fmt: skip
+    parser.add_argument(
+        "--jack-sync", action="store_true", help="run jackd synchronous (-S; default: asynchronous)"
+    )
+    parser.add_argument(
+        "--jack-no-realtime",
+        action="store_true",
+        help="run jackd without real-time scheduling (default: -R)",
+    )
+    parser.add_argument(
+        "--jack-priority",
+        type=int,
+        metavar="P",
+        help="jackd's real-time priority (-P; default: jackd's)",
+    )
     args = parser.parse_args(argv)
     try:
-        return run(args.seconds, args.rate, args.delay_ms / 1000.0, args.period,
-                   args.jack_sync, not args.jack_no_realtime, args.jack_priority)  # fmt: skip
+        return run(
+            args.seconds,
+            args.rate,
+            args.delay_ms / 1000.0,
+            args.period,
+            args.jack_sync,
+            not args.jack_no_realtime,
+            args.jack_priority,
+        )
     except JackError as exc:
         print(f"bench audio: {exc}", file=sys.stderr)
         return 2

@@ -90,20 +90,27 @@ def main(argv: list[str]) -> int:
         onsets += on.size
     spent = time.perf_counter() - started
     part = "" if args.split is None else f", {args.split} split"
-    print(f"beats on {len(accs)} GMD 4/4 grooves (seed {args.seed}{part}): reference beats matched "
-          f"within +-70 ms after the first four bars: median {100 * statistics.median(accs):.1f} %,"
-          f" mean {100 * float(np.mean(accs)):.1f} %; grooves at >= 90 %: "
-          f"{100 * float(np.mean(np.array(accs) >= 0.9)):.0f} %; tempo within 4 % at the end: "
-          f"{tempo_ok}/{len(accs)}; {1e6 * spent / max(onsets, 1) / 2:.0f} us per onset"
-          )  # fmt: skip
+    print(
+        f"beats on {len(accs)} GMD 4/4 grooves (seed {args.seed}{part}): reference beats matched "
+        f"within +-70 ms after the first four bars: median {100 * statistics.median(accs):.1f} %,"
+        f" mean {100 * float(np.mean(accs)):.1f} %; grooves at >= 90 %: "
+        f"{100 * float(np.mean(np.array(accs) >= 0.9)):.0f} %; tempo within 4 % at the end: "
+        f"{tempo_ok}/{len(accs)}; {1e6 * spent / max(onsets, 1) / 2:.0f} us per onset"
+    )
     f1 = [_f(a, p) for a, p in zip(accs, precs, strict=True)]
-    print(f"precision: mean {100 * float(np.mean(precs)):.1f} %; F-measure: median "
-          f"{100 * statistics.median(f1):.1f} %, "
-          f"mean {100 * float(np.mean(f1)):.1f} %")  # fmt: skip
-    print("by family (grooves: matched mean, F mean): " + "; ".join(
-        f"{name} ({len(v)}: {100 * np.mean([a for a, _ in v]):.1f}, "
-        f"{100 * np.mean([_f(a, p) for a, p in v]):.1f})"
-        for name, v in sorted(families.items())))  # fmt: skip
+    print(
+        f"precision: mean {100 * float(np.mean(precs)):.1f} %; F-measure: median "
+        f"{100 * statistics.median(f1):.1f} %, "
+        f"mean {100 * float(np.mean(f1)):.1f} %"
+    )
+    print(
+        "by family (grooves: matched mean, F mean): "
+        + "; ".join(
+            f"{name} ({len(v)}: {100 * np.mean([a for a, _ in v]):.1f}, "
+            f"{100 * np.mean([_f(a, p) for a, p in v]):.1f})"
+            for name, v in sorted(families.items())
+        )
+    )
     return 0
 
 

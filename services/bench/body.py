@@ -57,8 +57,10 @@ def main(argv: list[str]) -> int:
         anim.world(times)
         runs.append(time.perf_counter() - t0)
     sec = statistics.median(runs)
-    print(f"body sample: {args.samples} samples x {N_JOINTS} joints in {sec:.3f} s "
-          f"(median of {args.repeat})")  # fmt: skip
+    print(
+        f"body sample: {args.samples} samples x {N_JOINTS} joints in {sec:.3f} s "
+        f"(median of {args.repeat})"
+    )
     print(f"  joint poses/s    {args.samples * N_JOINTS / sec:,.0f}")
 
     if args.skip_corpus:
@@ -78,8 +80,10 @@ def main(argv: list[str]) -> int:
         with ProcessPoolExecutor(args.jobs) as pool:
             list(pool.map(_perform_all, chunks, [args.kit] * args.jobs, [args.map] * args.jobs))
         par = time.perf_counter() - t0
-        print(f"  sticking + strokes  {par:.2f} s  ({onsets / par:,.0f} onsets/s), "
-              f"{args.jobs} processes (incl. start-up and transfer)")  # fmt: skip
+        print(
+            f"  sticking + strokes  {par:.2f} s  ({onsets / par:,.0f} onsets/s), "
+            f"{args.jobs} processes (incl. start-up and transfer)"
+        )
     return 0
 
 

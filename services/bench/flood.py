@@ -104,8 +104,9 @@ class Listener:
     """Subscriber thread: every message, sequence numbers, flood onset count, probe times."""
 
     def __init__(self, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str) -> None:
-        self.rx = StreamReceiver("flood listener", logging.getLogger("livedrummer.bench"),
-                                 list(p.Kind))  # fmt: skip
+        self.rx = StreamReceiver(
+            "flood listener", logging.getLogger("livedrummer.bench"), list(p.Kind)
+        )
         self.rx.connect(ctx, endpoint, "flood listener", hwm=0)
         self.clock = MonotonicClock()
         self.flood = 0
@@ -205,12 +206,30 @@ def run_flood(
     tty = os.ttyname(slave)
     err_path = home / "input.err"
     proc = subprocess.Popen(
-        [*program_argv(), "input", "--serial", tty, "--baud", "115200",
-         "--map", "roland-td", "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
-         "--wait-subscribers", "1", "--fsync-interval", "1"],
-        stdout=subprocess.PIPE, stderr=err_path.open("w"), text=True, cwd=REPO,
+        [
+            *program_argv(),
+            "input",
+            "--serial",
+            tty,
+            "--baud",
+            "115200",
+            "--map",
+            "roland-td",
+            "--pub",
+            "tcp://127.0.0.1:*",
+            "--control",
+            "tcp://127.0.0.1:*",
+            "--wait-subscribers",
+            "1",
+            "--fsync-interval",
+            "1",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=err_path.open("w"),
+        text=True,
+        cwd=REPO,
         env={**os.environ, "LIVEDRUMMER_HOME": str(home)},
-    )  # fmt: skip
+    )
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     listener: Listener | None = None
     try:
@@ -315,24 +334,33 @@ def main(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as home:
         r = run_flood(args.rate, args.seconds, Path(home), args.probe_rate, after_s=args.after)
-    print(f"flood: pty serial → input daemon → loopback TCP, {r.rate:g} notes/s for "
-          f"{r.seconds:g} s")  # fmt: skip
+    print(
+        f"flood: pty serial → input daemon → loopback TCP, {r.rate:g} notes/s for {r.seconds:g} s"
+    )
     print(f"  sent {r.sent} notes at {r.achieved_rate:,.0f} notes/s achieved")
-    print(f"  received {r.received}, journaled {r.journaled} (clean: {r.journal_clean}), "
-          f"sequence gaps {r.seq_missing}, GAP messages {r.gap_messages}")  # fmt: skip
+    print(
+        f"  received {r.received}, journaled {r.journaled} (clean: {r.journal_clean}), "
+        f"sequence gaps {r.seq_missing}, GAP messages {r.gap_messages}"
+    )
     print(f"  daemon exit status {r.daemon_exit}")
-    print(f"  daemon RSS {r.rss_before_kb / 1024:.1f} MB before, max {r.rss_max_kb / 1024:.1f} "
-          f"MB during (+{(r.rss_max_kb - r.rss_before_kb) / 1024:.1f} MB), "
-          f"{r.rss_after_kb / 1024:.1f} MB after")  # fmt: skip
+    print(
+        f"  daemon RSS {r.rss_before_kb / 1024:.1f} MB before, max {r.rss_max_kb / 1024:.1f} "
+        f"MB during (+{(r.rss_max_kb - r.rss_before_kb) / 1024:.1f} MB), "
+        f"{r.rss_after_kb / 1024:.1f} MB after"
+    )
     print(f"  max pty backlog {r.pty_backlog_max} bytes, max notes in flight {r.in_flight_max}")
     print(f"  baseline probe latency: {_pct(r.baseline_ms)}")
     print(f"  after the flood: {_pct(r.probes_ms)}")
     first = ", ".join(f"{x:.2f}" for x in r.probes_ms[:5])
     print(f"  first probes after the flood (ms, at +0.0, +{1 / args.probe_rate:g} s, ...): {first}")
     print(f"  drain: last flood onset received {r.drain_s * 1e3:.1f} ms after the flood ended")
-    print(f"  recovery: first probe back within {r.threshold_ms:.3f} ms (baseline median + "
-          f"max(1 ms, median)) sent +{r.recovery_s * 1e3:.0f} ms after the flood's last byte "
-          f"(probe period {1e3 / args.probe_rate:.0f} ms)")  # fmt: skip
-    print(f"  probes above that threshold: after the flood {above(r.probes_ms, r.threshold_ms)}, "
-          f"baseline {above(r.baseline_ms, r.threshold_ms)}")  # fmt: skip
+    print(
+        f"  recovery: first probe back within {r.threshold_ms:.3f} ms (baseline median + "
+        f"max(1 ms, median)) sent +{r.recovery_s * 1e3:.0f} ms after the flood's last byte "
+        f"(probe period {1e3 / args.probe_rate:.0f} ms)"
+    )
+    print(
+        f"  probes above that threshold: after the flood {above(r.probes_ms, r.threshold_ms)}, "
+        f"baseline {above(r.baseline_ms, r.threshold_ms)}"
+    )
     return 0

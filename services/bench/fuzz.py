@@ -53,8 +53,10 @@ def serial(size: int, seed: int) -> None:
     st = parser.stats
     print(f"serial: {len(data):,} bytes in {len(cuts) - 1:,} chunks, seed {seed}")
     print(f"  parse rate         {len(data) / elapsed / 1e6:.2f} MB/s ({elapsed:.2f} s)")
-    print(f"  inserted messages  {intact:,} of {len(stream.inserted):,} recovered intact "
-          f"({stream.realtime_inside:,} real-time bytes inside them)")  # fmt: skip
+    print(
+        f"  inserted messages  {intact:,} of {len(stream.inserted):,} recovered intact "
+        f"({stream.realtime_inside:,} real-time bytes inside them)"
+    )
     print(f"  messages out       {st.messages:,} (the rest made by the noise)")
     print(f"  garbage counted    {st.garbage_bytes:,} of {stream.garbage_bytes:,} noise bytes")
     print(f"  SysEx              {st.sysex_truncated:,} truncated, {st.sysex_too_long:,} too long")
@@ -68,8 +70,9 @@ def files(corpus: Path, count: int, variants: int, seed: int, map_name: str) -> 
     for path in rng.sample(paths, min(count, len(paths))):
         cases.extend(mutations(path.read_bytes(), rng, per_kind=variants))
     cases.append(Variant("absurd-notes", "200,000 note-ons at one tick", absurd_note_file(200_000)))
-    cases.append(Variant("absurd-notes", "200,000 note-ons 1 tick apart",
-                         absurd_note_file(200_000, delta=1)))  # fmt: skip
+    cases.append(
+        Variant("absurd-notes", "200,000 note-ons 1 tick apart", absurd_note_file(200_000, delta=1))
+    )
     errors: Counter[str] = Counter()
     results: Counter[str] = Counter()
     other: Counter[str] = Counter()
@@ -88,15 +91,19 @@ def files(corpus: Path, count: int, variants: int, seed: int, map_name: str) -> 
         times.append(elapsed)
         if elapsed > slowest[1]:
             slowest = (f"{case.kind} ({case.detail})", elapsed)
-    print(f"files: {len(cases):,} variants of {min(count, len(paths))} GMD files "
-          f"({variants} per kind) + 2 absurd note counts, seed {seed}")  # fmt: skip
+    print(
+        f"files: {len(cases):,} variants of {min(count, len(paths))} GMD files "
+        f"({variants} per kind) + 2 absurd note counts, seed {seed}"
+    )
     print(f"  {'kind':<16}{'named error':>12}{'result':>8}")
     for kind in dict.fromkeys(c.kind for c in cases):
         print(f"  {kind:<16}{errors[kind]:>12,}{results[kind]:>8,}")
     print(f"  total            {sum(errors.values()):>10,}{sum(results.values()):>8,}")
     print(f"  anything else    {sum(other.values())}" + (f"  {dict(other)}" if other else ""))
-    print(f"  time per file    median {statistics.median(times) * 1e3:.2f} ms, "
-          f"max {slowest[1] * 1e3:.0f} ms: {slowest[0]}")  # fmt: skip
+    print(
+        f"  time per file    median {statistics.median(times) * 1e3:.2f} ms, "
+        f"max {slowest[1] * 1e3:.0f} ms: {slowest[0]}"
+    )
     return 1 if other else 0
 
 

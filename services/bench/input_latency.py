@@ -81,8 +81,9 @@ class JackKit:
         os.environ.update(self.env)
         self.jackd = subprocess.Popen(
             ["jackd", "--no-realtime", "-S", "-n", name, "-d", "dummy", "-r", "48000", "-p", "64"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        )  # fmt: skip
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         subprocess.run(["jack_wait", "-s", name, "-w", "-t", "10"], check=True, capture_output=True)
         self.out = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
         self.out.open_virtual_port("pads")
@@ -101,12 +102,27 @@ def run_rate(rate: float, seconds: float, kit: PtyKit | JackKit, home: str) -> d
     clock = MonotonicClock()
     count = max(5, int(rate * seconds))
     proc = subprocess.Popen(
-        [*program_argv(), "input", *kit.args,
-         "--map", "roland-td", "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
-         "--wait-subscribers", "1", "--fsync-interval", "1"],
-        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, cwd=REPO,
+        [
+            *program_argv(),
+            "input",
+            *kit.args,
+            "--map",
+            "roland-td",
+            "--pub",
+            "tcp://127.0.0.1:*",
+            "--control",
+            "tcp://127.0.0.1:*",
+            "--wait-subscribers",
+            "1",
+            "--fsync-interval",
+            "1",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        cwd=REPO,
         env={**os.environ, **kit.env, "LIVEDRUMMER_HOME": home},
-    )  # fmt: skip
+    )
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     sub = ctx.socket(zmq.SUB)
     sub.setsockopt(zmq.LINGER, 0)

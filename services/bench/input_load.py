@@ -52,8 +52,12 @@ from ._paths import HERE, WORKDIR
 from .input_latency import _fmt, key
 
 #: JACK modes by name: (synchronous -S, realtime -R).
-MODES = {"sync": (True, True), "async": (False, True), "sync-nort": (True, False),
-         "async-nort": (False, False)}  # fmt: skip
+MODES = {
+    "sync": (True, True),
+    "async": (False, True),
+    "sync-nort": (True, False),
+    "async-nort": (False, False),
+}
 
 
 def modes_list(spec: str) -> list[str]:
@@ -77,8 +81,11 @@ def build_reference(folder: Path) -> Path:
     if cc is None:
         raise JackError("no C compiler (Debian: apt-get install gcc)")
     exe = folder / "jack_ref"
-    done = subprocess.run([cc, "-O2", "-o", str(exe), str(HERE / "jack_ref.c"),
-                           "-ljack"], capture_output=True, text=True)  # fmt: skip
+    done = subprocess.run(
+        [cc, "-O2", "-o", str(exe), str(HERE / "jack_ref.c"), "-ljack"],
+        capture_output=True,
+        text=True,
+    )
     if done.returncode != 0:
         last = done.stderr.strip().splitlines()[-1:]
         raise JackError(f"cannot build the reference client (Debian: libjack-jackd2-dev): {last}")
@@ -89,8 +96,13 @@ class Reference:
     """The C reference client: lines 'frame_us mono_ns status d1 d2' on its stdout."""
 
     def __init__(self, exe: Path, source: str, env: dict[str, str]) -> None:
-        self.proc = subprocess.Popen([str(exe), source], stdout=subprocess.PIPE, text=True,
-                                     env=env, stderr=subprocess.DEVNULL)  # fmt: skip
+        self.proc = subprocess.Popen(
+            [str(exe), source],
+            stdout=subprocess.PIPE,
+            text=True,
+            env=env,
+            stderr=subprocess.DEVNULL,
+        )
         assert self.proc.stdout is not None
         first = self.proc.stdout.readline().split()
         if not first or first[0] != "ready":
@@ -123,8 +135,16 @@ def stall(proc: subprocess.Popen[str], while_alive: threading.Thread, seed: int)
         time.sleep(float(rng.uniform(0.005, 0.030)))
 
 
-def one_run(mode: str, n_hogs: int, seconds: float, rate: float, code: Path | None,
-            exe: Path, seed: int, stalls: bool = False) -> dict[str, Any]:  # fmt: skip
+def one_run(
+    mode: str,
+    n_hogs: int,
+    seconds: float,
+    rate: float,
+    code: Path | None,
+    exe: Path,
+    seed: int,
+    stalls: bool = False,
+) -> dict[str, Any]:
     import rtmidi
 
     clock = MonotonicClock()
@@ -143,12 +163,30 @@ def one_run(mode: str, n_hogs: int, seconds: float, rate: float, code: Path | No
         kit.open_virtual_port("pads")
         ref = Reference(exe, "kit:pads", env)
         daemon = subprocess.Popen(
-            [sys.executable, "-m", package_in(code), "input", "--midi", "kit:pads", "--api", "jack",
-             "--map", "roland-td", "--pub", "tcp://127.0.0.1:*", "--control",
-             "tcp://127.0.0.1:*", "--wait-subscribers", "1"],
-            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env,
+            [
+                sys.executable,
+                "-m",
+                package_in(code),
+                "input",
+                "--midi",
+                "kit:pads",
+                "--api",
+                "jack",
+                "--map",
+                "roland-td",
+                "--pub",
+                "tcp://127.0.0.1:*",
+                "--control",
+                "tcp://127.0.0.1:*",
+                "--wait-subscribers",
+                "1",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+            env=env,
             cwd=code or WORKDIR,
-        )  # fmt: skip
+        )
         ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
         sub = ctx.socket(zmq.SUB)
         sub.setsockopt(zmq.LINGER, 0)
@@ -182,8 +220,7 @@ def one_run(mode: str, n_hogs: int, seconds: float, rate: float, code: Path | No
                 player = threading.Thread(target=play)
                 player.start()
                 if stalls:
-                    threading.Thread(target=stall, args=(daemon, player, seed),
-                                     daemon=True).start()  # fmt: skip
+                    threading.Thread(target=stall, args=(daemon, player, seed), daemon=True).start()
                 end = clock.now() + float(gaps.sum()) + 3.0
                 while clock.now() < end and (player.is_alive() or len(got) < len(sent)):
                     if sub.poll(100):
@@ -214,15 +251,30 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--runs", type=int, default=10, help="runs per row (default 10)")
     parser.add_argument("--seconds", type=float, default=20.0, help="seconds a run (default 20)")
     parser.add_argument("--rate", type=float, default=20.0, help="notes/s, mean (default 20)")
-    parser.add_argument("--modes", type=modes_list, default="sync,async",
-                        help=f"JACK modes, of {', '.join(MODES)} (default sync,async)")  # fmt: skip
-    parser.add_argument("--hogs", type=hog_levels, default="0,1x,2x",
-                        help="hogs per row: a count or Nx cores (default 0,1x,2x)")  # fmt: skip
-    parser.add_argument("--stalls", action="store_true",
-                        help="stop the daemon for 1-20 ms every 5-30 ms while the kit plays "
-                        "(a virtual machine taking its core away)")  # fmt: skip
-    parser.add_argument("--code", type=Path, default=None,
-                        help="checkout whose input daemon runs (default this one)")  # fmt: skip
+    parser.add_argument(
+        "--modes",
+        type=modes_list,
+        default="sync,async",
+        help=f"JACK modes, of {', '.join(MODES)} (default sync,async)",
+    )
+    parser.add_argument(
+        "--hogs",
+        type=hog_levels,
+        default="0,1x,2x",
+        help="hogs per row: a count or Nx cores (default 0,1x,2x)",
+    )
+    parser.add_argument(
+        "--stalls",
+        action="store_true",
+        help="stop the daemon for 1-20 ms every 5-30 ms while the kit plays "
+        "(a virtual machine taking its core away)",
+    )
+    parser.add_argument(
+        "--code",
+        type=Path,
+        default=None,
+        help="checkout whose input daemon runs (default this one)",
+    )
     args = parser.parse_args(argv)
     cores = os.cpu_count() or 1
     levels: list[int] = args.hogs
@@ -245,13 +297,19 @@ def main(argv: list[str]) -> int:
             )
             for mode in args.modes:
                 for n_hogs in levels:
-                    rows = [one_run(mode, n_hogs, args.seconds, args.rate, args.code, exe, seed,
-                                    args.stalls) for seed in range(args.runs)]  # fmt: skip
+                    rows = [
+                        one_run(
+                            mode, n_hogs, args.seconds, args.rate, args.code, exe, seed, args.stalls
+                        )
+                        for seed in range(args.runs)
+                    ]
                     err = np.concatenate([r["err"] for r in rows])
-                    print(f"{mode:>10} {n_hogs:>4} {sum(r['sent'] for r in rows):>6} "
-                          f"{sum(r['lost'] for r in rows):>5} "
-                          f"{sum(r['off_server'] for r in rows):>10}  {_fmt(err)}",
-                          flush=True)  # fmt: skip
+                    print(
+                        f"{mode:>10} {n_hogs:>4} {sum(r['sent'] for r in rows):>6} "
+                        f"{sum(r['lost'] for r in rows):>5} "
+                        f"{sum(r['off_server'] for r in rows):>10}  {_fmt(err)}",
+                        flush=True,
+                    )
     except JackError as exc:
         print(f"bench input_load: {exc}", file=sys.stderr)
         return 2

@@ -81,8 +81,14 @@ NOTES = (38, 42)  # snare head, closed hi-hat (roland-td)
 def _spawn(args: list[str], home: str, err: Path) -> subprocess.Popen[str]:
     env = {**os.environ, "LIVEDRUMMER_HOME": home}
     env.pop("DISPLAY", None)
-    return subprocess.Popen([*program_argv(), *args], text=True, env=env,
-                            stdout=subprocess.PIPE, stderr=err.open("w"), cwd=REPO)  # fmt: skip
+    return subprocess.Popen(
+        [*program_argv(), *args],
+        text=True,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=err.open("w"),
+        cwd=REPO,
+    )
 
 
 def _line(proc: subprocess.Popen[str]) -> dict[str, Any]:
@@ -113,9 +119,17 @@ class Jack:
         self._stack.close()
 
 
-def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], delay_ms: float,
-             lookahead_ms: float, tmp: Path, synth_args: list[str],
-             input_args: list[str], display_args: list[str]) -> dict[str, Any]:  # fmt: skip
+def run_rate(
+    jack: Jack,
+    label: str,
+    schedule: list[tuple[float, int, int]],
+    delay_ms: float,
+    lookahead_ms: float,
+    tmp: Path,
+    synth_args: list[str],
+    input_args: list[str],
+    display_args: list[str],
+) -> dict[str, Any]:
     """One pipeline fed ``schedule``: (seconds from the start, note, velocity) per note-on."""
     clock = MonotonicClock()
     home = str(tmp / "home")
@@ -202,8 +216,11 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
                 proc.wait()
         ctx.destroy(0)
     got_t = np.array([t for t, rows in onsets for _ in range(rows.size)])
-    stamps = np.concatenate([rows["time_s"] for _, rows in onsets]).astype(np.float64) if onsets \
-        else np.zeros(0)  # fmt: skip
+    stamps = (
+        np.concatenate([rows["time_s"] for _, rows in onsets]).astype(np.float64)
+        if onsets
+        else np.zeros(0)
+    )
     n = min(len(sent), got_t.size)
     sent_a = np.array(sent[:n])
     loop = np.array(jack.loop_times[:n]) - sent_a[: len(jack.loop_times[:n])]
@@ -235,7 +252,8 @@ def run_rate(jack: Jack, label: str, schedule: list[tuple[float, int, int]], del
     bunched = np.zeros(n, dtype=bool)
     if n > 2:
         bunched[2:] = (stamps[2:n] - stamps[: n - 2] <= CHORD_WINDOW_S) & (
-            plan[2:] - plan[:-2] > CHORD_WINDOW_S)  # fmt: skip
+            plan[2:] - plan[:-2] > CHORD_WINDOW_S
+        )
     no_pose = np.isnan(contact_at)
     late = int(np.sum(late_mask))
     # Where the late ones are: how far past D, and in which quarter of the run (queueing
@@ -293,19 +311,46 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench latency", description=__doc__)
     parser.add_argument("--rates", type=float, nargs="+", default=[1.0, 100.0, 1000.0])
     parser.add_argument("--seconds", type=float, default=2.0, help="per rate (min 5 notes)")
-    parser.add_argument("--groove", type=float, default=0.0, metavar="S",
-                        help="also play the first S s of the demo groove as performed")  # fmt: skip
-    parser.add_argument("--delay-ms", type=float, nargs="+", default=[30.0], metavar="D",
-                        help="visual delay(s), measured in turn (default 30)")  # fmt: skip
-    parser.add_argument("--lookahead-ms", type=float, default=None, metavar="L",
-                        help="the sticking's lookahead (default: min(30, D))")  # fmt: skip
-    parser.add_argument("--realtime", type=int, default=0, metavar="PRIO",
-                        help="input daemon at SCHED_FIFO PRIO (if permitted)")  # fmt: skip
-    parser.add_argument("--no-render", action="store_true",
-                        help="the display logs frames without drawing them (the CPU a GPU "
-                        "would spare: llvmpipe draws on the pipeline's cores)")  # fmt: skip
-    parser.add_argument("--no-provisional", action="store_true",
-                        help="the synth publishes a hit only once its hand is decided")  # fmt: skip
+    parser.add_argument(
+        "--groove",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="also play the first S s of the demo groove as performed",
+    )
+    parser.add_argument(
+        "--delay-ms",
+        type=float,
+        nargs="+",
+        default=[30.0],
+        metavar="D",
+        help="visual delay(s), measured in turn (default 30)",
+    )
+    parser.add_argument(
+        "--lookahead-ms",
+        type=float,
+        default=None,
+        metavar="L",
+        help="the sticking's lookahead (default: min(30, D))",
+    )
+    parser.add_argument(
+        "--realtime",
+        type=int,
+        default=0,
+        metavar="PRIO",
+        help="input daemon at SCHED_FIFO PRIO (if permitted)",
+    )
+    parser.add_argument(
+        "--no-render",
+        action="store_true",
+        help="the display logs frames without drawing them (the CPU a GPU "
+        "would spare: llvmpipe draws on the pipeline's cores)",
+    )
+    parser.add_argument(
+        "--no-provisional",
+        action="store_true",
+        help="the synth publishes a hit only once its hand is decided",
+    )
     parser.add_argument(
         "--osc",
         action="store_true",
@@ -317,17 +362,34 @@ def main(argv: list[str]) -> int:
         help="the display draws these strips over every frame: score, joints (needs "
         "rendering; default none; score,joints with --both)",
     )
-    parser.add_argument("--repeat", type=int, default=1, metavar="N",
-                        help="measure every rate N times (--both: median of medians)")  # fmt: skip
-    parser.add_argument("--both", action="store_true",
-                        help="measure each rate twice: without and with show control (OSC "
-                        "ports and the strips), alternating, and compare the medians")  # fmt: skip
-    parser.add_argument("--compare", metavar="REV", nargs="+",
-                        help="also run this bench from each commit REV (a temporary git "
-                        "worktree), alternating with this checkout, and print each beside "
-                        "it")  # fmt: skip
-    parser.add_argument("--compare-runs", type=int, default=2, metavar="N",
-                        help="with --compare: runs of each commit (default 2)")  # fmt: skip
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        metavar="N",
+        help="measure every rate N times (--both: median of medians)",
+    )
+    parser.add_argument(
+        "--both",
+        action="store_true",
+        help="measure each rate twice: without and with show control (OSC "
+        "ports and the strips), alternating, and compare the medians",
+    )
+    parser.add_argument(
+        "--compare",
+        metavar="REV",
+        nargs="+",
+        help="also run this bench from each commit REV (a temporary git "
+        "worktree), alternating with this checkout, and print each beside "
+        "it",
+    )
+    parser.add_argument(
+        "--compare-runs",
+        type=int,
+        default=2,
+        metavar="N",
+        help="with --compare: runs of each commit (default 2)",
+    )
     args = parser.parse_args(argv)
     if args.compare is not None:
         if CHECKOUT is None:
@@ -345,8 +407,7 @@ def main(argv: list[str]) -> int:
     render = ["--no-render"] if args.no_render else []
     # (name, synth options, display options) of each way measured
     if args.both:
-        modes = [("plain", synth_args, render), ("show", synth_args + osc,
-                                                  render + osc + overlay)]  # fmt: skip
+        modes = [("plain", synth_args, render), ("show", synth_args + osc, render + osc + overlay)]
     else:
         shown = (osc if args.osc else []) + (overlay if args.overlay else [])
         modes = [("", synth_args + (osc if args.osc else []), render + shown)]
@@ -355,9 +416,16 @@ def main(argv: list[str]) -> int:
     jack = Jack()
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            runs = [(f"{rate:g}", [(i / rate, NOTES[i % 2], 64 + i % 60)
-                                   for i in range(max(5, int(rate * args.seconds)))])
-                    for rate in args.rates]  # fmt: skip
+            runs = [
+                (
+                    f"{rate:g}",
+                    [
+                        (i / rate, NOTES[i % 2], 64 + i % 60)
+                        for i in range(max(5, int(rate * args.seconds)))
+                    ],
+                )
+                for rate in args.rates
+            ]
             if args.groove > 0:
                 runs.append(("groove", groove_schedule(args.groove)))
             todo = [
@@ -368,16 +436,29 @@ def main(argv: list[str]) -> int:
             for flip, delay_ms, (label, schedule) in todo:  # each way first as often
                 lookahead_ms = args.lookahead_ms or min(30.0, delay_ms)
                 if label == runs[0][0]:
-                    print(f"D = {delay_ms:g} ms, L = {lookahead_ms:g} ms; ms from note-on "
-                          f"sent, p50 p99; frame rendered within D + one frame at p99: "
-                          f"<= {delay_ms + 1000 / 60:.1f} ms")  # fmt: skip
-                    print(f"{'notes/s':>8} {'sent':>5} {'bus':>5} {'no-pose':>7} {'late':>5} | "
-                          f"{'JACK loop':>15} | {'onset on bus':>15} | {'pose at display':>15} | "
-                          f"{'frame rendered':>15} | {'pose - onset':>15} | "
-                          f"{'pose - bus':>15}")  # fmt: skip
+                    print(
+                        f"D = {delay_ms:g} ms, L = {lookahead_ms:g} ms; ms from note-on "
+                        f"sent, p50 p99; frame rendered within D + one frame at p99: "
+                        f"<= {delay_ms + 1000 / 60:.1f} ms"
+                    )
+                    print(
+                        f"{'notes/s':>8} {'sent':>5} {'bus':>5} {'no-pose':>7} {'late':>5} | "
+                        f"{'JACK loop':>15} | {'onset on bus':>15} | {'pose at display':>15} | "
+                        f"{'frame rendered':>15} | {'pose - onset':>15} | "
+                        f"{'pose - bus':>15}"
+                    )
                 for mode, synth_mode, display_mode in modes if flip % 2 == 0 else modes[::-1]:
-                    r = run_rate(jack, label, schedule, delay_ms, lookahead_ms,
-                                 Path(tmp), synth_mode, input_args, display_mode)  # fmt: skip
+                    r = run_rate(
+                        jack,
+                        label,
+                        schedule,
+                        delay_ms,
+                        lookahead_ms,
+                        Path(tmp),
+                        synth_mode,
+                        input_args,
+                        display_mode,
+                    )
                     results.append((mode, f"{label} D={delay_ms:g}", r))
                     _print_run(r, label if not mode else f"{label} {mode}")
             if args.both:
@@ -404,17 +485,22 @@ def _without_compare(argv: list[str]) -> list[str]:
 
 def _print_run(r: dict[str, Any], label: str) -> None:
     """One pipeline's row and its detail line."""
-    print(f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
-          f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
-          f"{_pct(r['pose'])} | {_pct(r['frame'])} | "
-          f"{_pct(r['after_onset'])} | {_pct(r['after_bus'])}", flush=True)  # fmt: skip
+    print(
+        f"{label:>8} {r['sent']:5d} {r['on_bus']:5d} {r['no_contact']:7d} "
+        f"{r['late']:5d} | {_pct(r['loopback'])} | {_pct(r['bus'])} | "
+        f"{_pct(r['pose'])} | {_pct(r['frame'])} | "
+        f"{_pct(r['after_onset'])} | {_pct(r['after_bus'])}",
+        flush=True,
+    )
     ab = r["after_bus"]
     fast = float(np.mean(ab <= 0.001)) if ab.size else 0.0
-    print(f"         pose within 1 ms of the onset on the bus: {fast:.0%} of "
-          f"contacts; frame - onset {_pct(r['frame_onset'])}; in the input daemon "
-          f"(stamp -> sent) {_pct(r['in_daemon'])}; {_bunching(r)}{r['late_where']}; "
-          f"{r['synth']}",
-          flush=True)  # fmt: skip
+    print(
+        f"         pose within 1 ms of the onset on the bus: {fast:.0%} of "
+        f"contacts; frame - onset {_pct(r['frame_onset'])}; in the input daemon "
+        f"(stamp -> sent) {_pct(r['in_daemon'])}; {_bunching(r)}{r['late_where']}; "
+        f"{r['synth']}",
+        flush=True,
+    )
 
 
 def _bunching(r: dict[str, Any]) -> str:
@@ -422,28 +508,45 @@ def _bunching(r: dict[str, Any]) -> str:
     for a run that did not measure them)."""
     if "sender_late" not in r:
         return ""
-    return (f"the bench's note-ons sent late {_pct(r['sender_late'])}; {r['bunched']} notes "
-            f"stamped within {CHORD_WINDOW_S * 1000:g} ms of the two before them though sent "
-            f"apart ({r['bunched_no_pose']} of them without a pose); ")  # fmt: skip
+    return (
+        f"the bench's note-ons sent late {_pct(r['sender_late'])}; {r['bunched']} notes "
+        f"stamped within {CHORD_WINDOW_S * 1000:g} ms of the two before them though sent "
+        f"apart ({r['bunched_no_pose']} of them without a pose); "
+    )
 
 
 def _print_both(results: list[tuple[str, str, dict[str, Any]]]) -> None:
     """``--both``: the medians of each stage without and with show control, per rate (with
     ``--repeat``, the median of the runs' medians)."""
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    print(f"\nshow control off / on (OSC ports and the strips): medians in ms; load average "
-          f"{load} (1, 5, 15 min)")  # fmt: skip
-    stages = (("bus", "onset on bus"), ("pose", "pose at display"), ("frame", "frame rendered"),
-              ("frame_onset", "frame - onset"), ("after_onset", "pose - onset"))  # fmt: skip
+    print(
+        f"\nshow control off / on (OSC ports and the strips): medians in ms; load average "
+        f"{load} (1, 5, 15 min)"
+    )
+    stages = (
+        ("bus", "onset on bus"),
+        ("pose", "pose at display"),
+        ("frame", "frame rendered"),
+        ("frame_onset", "frame - onset"),
+        ("after_onset", "pose - onset"),
+    )
     print(f"{'run':>14} | " + " | ".join(f"{name:>21}" for _, name in stages))
     for run in dict.fromkeys(label for _, label, _ in results):
         cells = []
         for key, _ in stages:
             med = [
-                float(np.median([np.median(r[key]) for m, label, r in results
-                                 if m == mode and label == run and r[key].size] or [np.nan]))
+                float(
+                    np.median(
+                        [
+                            np.median(r[key])
+                            for m, label, r in results
+                            if m == mode and label == run and r[key].size
+                        ]
+                        or [np.nan]
+                    )
+                )
                 * 1000
                 for mode in ("plain", "show")
-            ]  # fmt: skip
+            ]
             cells.append(f"{med[0]:6.2f} / {med[1]:6.2f} ({med[1] - med[0]:+5.2f})")
         print(f"{run:>14} | " + " | ".join(cells), flush=True)

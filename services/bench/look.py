@@ -41,8 +41,9 @@ def main(argv: list[str]) -> int:
     parser.add_argument("--size", default="1280x720")
     parser.add_argument("--cameras", default="front,stage,drummer")
     parser.add_argument("--times", default="3.0,6.5,10.0", help="seconds into the groove")
-    parser.add_argument("--looks", default="", help="themes, e.g. concert,studio (default: "
-                        "the renderer's own)")  # fmt: skip
+    parser.add_argument(
+        "--looks", default="", help="themes, e.g. concert,studio (default: the renderer's own)"
+    )
     parser.add_argument("--avatar", default=None, help="a .vrm/.glb file (default: built-in)")
     parser.add_argument("--kit", default="rock5")
     parser.add_argument("--save", type=Path, default=None, help="write the frames as PNGs here")
@@ -66,13 +67,30 @@ def main(argv: list[str]) -> int:
     if args.save is not None:
         args.save.mkdir(parents=True, exist_ok=True)
     ctx = headless_context()
-    print(f"render: {ctx.info['GL_RENDERER']}, {args.size}, kit {args.kit}, "
-          f"avatar {args.avatar or 'built-in'}, times {args.times} s")  # fmt: skip
-    bare = Renderer(ctx, build_kit_mesh(kit, floor=False), BODY_SKELETON, size, samples=0,
-                    avatar=avatar, background=parse_background("transparent"))  # fmt: skip
+    print(
+        f"render: {ctx.info['GL_RENDERER']}, {args.size}, kit {args.kit}, "
+        f"avatar {args.avatar or 'built-in'}, times {args.times} s"
+    )
+    bare = Renderer(
+        ctx,
+        build_kit_mesh(kit, floor=False),
+        BODY_SKELETON,
+        size,
+        samples=0,
+        avatar=avatar,
+        background=parse_background("transparent"),
+    )
     for look in looks:
-        r = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, avatar=avatar,
-                     fxaa=True, lights=_look(look) if look else None)  # fmt: skip
+        r = Renderer(
+            ctx,
+            build_kit_mesh(kit),
+            BODY_SKELETON,
+            size,
+            samples=0,
+            avatar=avatar,
+            fxaa=True,
+            lights=_look(look) if look else None,
+        )
         for name in args.cameras.split(","):
             cam = kit_cameras(kit, avatar.lengths if avatar is not None else None)[name]
             lit, subj, back, hall = [], [], [], []
@@ -87,10 +105,12 @@ def main(argv: list[str]) -> int:
                 hall.append(hall_luma(rgb, mask))
                 if args.save is not None:
                     write_png(args.save / f"{look or 'default'}-{name}-{t:05.1f}s.png", rgb)
-            print(f"  look {look or 'default':>8}  {name:>8}: lit {statistics.median(lit):5.1%}"
-                  f"  subject {statistics.median(subj):5.1%}"
-                  f"  background luma {statistics.median(back):.3f}"
-                  f"  hall luma {statistics.median(hall):.3f}")  # fmt: skip
+            print(
+                f"  look {look or 'default':>8}  {name:>8}: lit {statistics.median(lit):5.1%}"
+                f"  subject {statistics.median(subj):5.1%}"
+                f"  background luma {statistics.median(back):.3f}"
+                f"  hall luma {statistics.median(hall):.3f}"
+            )
     ctx.release()
     return 0
 

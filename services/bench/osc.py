@@ -49,10 +49,25 @@ def main(argv: list[str]) -> int:
     with tempfile.TemporaryDirectory(prefix="livedrummer-bench-osc-") as tmp:
         out = Path(tmp) / "frames"
         proc = subprocess.Popen(
-            [*program_argv(), "up", "--demo", "--headless", "--osc", str(port), "--port-base",
-             str(base), "--frames-dir", str(out), "--fps", str(args.fps), "--seconds", "600"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        )  # fmt: skip
+            [
+                *program_argv(),
+                "up",
+                "--demo",
+                "--headless",
+                "--osc",
+                str(port),
+                "--port-base",
+                str(base),
+                "--frames-dir",
+                str(out),
+                "--fps",
+                str(args.fps),
+                "--seconds",
+                "600",
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         sent: list[tuple[float, str, object]] = []
         want: tuple[str, object]
@@ -74,8 +89,11 @@ def main(argv: list[str]) -> int:
             client.close()
             proc.terminate()
             proc.wait(60)
-        rows = [json.loads(x) for x in (out / "frames.jsonl").read_text().splitlines()
-                if x.endswith("}")]  # fmt: skip
+        rows = [
+            json.loads(x)
+            for x in (out / "frames.jsonl").read_text().splitlines()
+            if x.endswith("}")
+        ]
     frames, ms = [], []
     for t, field, value in sent:
         after = [r for r in rows if float(r["render_s"]) >= t]
@@ -83,8 +101,11 @@ def main(argv: list[str]) -> int:
             dark = float(r.get("dark", 0.0))
             # a blackout shows from the first frame of its fade, its end from the first
             # frame lighter than black
-            shown = r.get("camera") == value if field == "camera" else (
-                dark > 0.0 if value else dark < 1.0)  # fmt: skip
+            shown = (
+                r.get("camera") == value
+                if field == "camera"
+                else (dark > 0.0 if value else dark < 1.0)
+            )
             if shown:
                 frames.append(k)
                 ms.append(1e3 * (float(r["done_s"]) - t))
@@ -92,8 +113,10 @@ def main(argv: list[str]) -> int:
     if not frames:
         print("bench osc: no change was seen in the frames", file=sys.stderr)
         return 1
-    print(f"osc -> frame at {args.fps:g} fps: {len(frames)}/{len(sent)} changes seen; "
-          f"first frame showing it: median {statistics.median(frames):g}, worst {max(frames)} "
-          f"frames after the message; {statistics.median(ms):.1f} ms median, "
-          f"{max(ms):.1f} ms worst (send to frame done)")  # fmt: skip
+    print(
+        f"osc -> frame at {args.fps:g} fps: {len(frames)}/{len(sent)} changes seen; "
+        f"first frame showing it: median {statistics.median(frames):g}, worst {max(frames)} "
+        f"frames after the message; {statistics.median(ms):.1f} ms median, "
+        f"{max(ms):.1f} ms worst (send to frame done)"
+    )
     return 0

@@ -49,9 +49,11 @@ def main(argv: list[str]) -> int:
     strips = overlay_image(size, frozenset(OVERLAYS), models)
     models_s = time.perf_counter() - t0
     r = strips.rect
-    print(f"overlay {args.size}: strips {r.width}x{r.height} at y {r.y}; models "
-          f"{models_s * 1e3:.1f} ms once ({len(models.angles.degrees)} angle samples, "
-          f"{models.score().time_s.size} notes)")  # fmt: skip
+    print(
+        f"overlay {args.size}: strips {r.width}x{r.height} at y {r.y}; models "
+        f"{models_s * 1e3:.1f} ms once ({len(models.angles.degrees)} angle samples, "
+        f"{models.score().time_s.size} notes)"
+    )
     times = np.linspace(2.0, performance.duration_s - 2.0, args.frames)
     ctx = headless_context()
     try:
@@ -82,8 +84,12 @@ def main(argv: list[str]) -> int:
         print(f"  {ctx.info['GL_RENDERER']}")
     finally:
         ctx.release()
-    print(f"  paint {_ms(paint):.3f} ms   upload+draw {_ms(upload):.3f} ms   "
-          f"overlay total {_ms(paint) + _ms(upload):.3f} ms per frame")  # fmt: skip
-    print(f"  frame: draw {_ms(bare):.2f} ms, draw+overlay {_ms(full):.2f} ms "
-          f"(+{_ms(full) - _ms(bare):.2f} ms)")  # fmt: skip
+    print(
+        f"  paint {_ms(paint):.3f} ms   upload+draw {_ms(upload):.3f} ms   "
+        f"overlay total {_ms(paint) + _ms(upload):.3f} ms per frame"
+    )
+    print(
+        f"  frame: draw {_ms(bare):.2f} ms, draw+overlay {_ms(full):.2f} ms "
+        f"(+{_ms(full) - _ms(bare):.2f} ms)"
+    )
     return 0

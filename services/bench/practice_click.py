@@ -53,16 +53,18 @@ def measure(clicks: int, bpm: float, period: int) -> dict[str, float]:
         rec = sd.InputStream(samplerate=RATE, channels=1, dtype="float32", callback=record)
         rec.start()
         try:
-            ports = subprocess.run(["jack_lsp"], capture_output=True, text=True,
-                                   env=os.environ, check=True).stdout.split()  # fmt: skip
+            ports = subprocess.run(
+                ["jack_lsp"], capture_output=True, text=True, env=os.environ, check=True
+            ).stdout.split()
             outs = [p for p in ports if "PortAudio" in p and "out" in p]
             ins = [p for p in ports if "PortAudio" in p and "in" in p]
             if not outs or not ins:
                 raise JackError(f"no PortAudio ports on {name}: {ports}")
             for p in ports:  # only the loopback: nothing from the dummy capture
                 if p.startswith("system:capture"):
-                    subprocess.run(["jack_disconnect", p, ins[0]], capture_output=True,
-                                   env=os.environ)  # fmt: skip
+                    subprocess.run(
+                        ["jack_disconnect", p, ins[0]], capture_output=True, env=os.environ
+                    )
             subprocess.run(["jack_connect", outs[0], ins[0]], check=True, env=os.environ)
             start = time.monotonic() + 1.0
             grid = start + np.arange(clicks) * 60.0 / bpm

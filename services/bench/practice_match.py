@@ -46,8 +46,10 @@ def main(argv: list[str]) -> int:
     ref = np.arange(args.notes) * 0.075
     played = np.sort(ref + rng.normal(0.0, 0.012, ref.size))
     dense = _median_s(lambda: monotone_match(ref, played, 0.1), args.repeat)
-    print(f"monotone matcher, {args.notes} notes 75 ms apart (window ±100 ms): "
-          f"{dense * 1e3:.1f} ms ({args.notes / dense:,.0f} notes/s)")  # fmt: skip
+    print(
+        f"monotone matcher, {args.notes} notes 75 ms apart (window ±100 ms): "
+        f"{dense * 1e3:.1f} ms ({args.notes / dense:,.0f} notes/s)"
+    )
     corpus = args.corpus or DEFAULT_CORPUS
     files = sorted(corpus.rglob("*.mid")) if corpus.is_dir() else []
     if not files:
@@ -60,6 +62,7 @@ def main(argv: list[str]) -> int:
     take["time_s"] += rng.normal(0.0, 0.012, take.size)
     take = take[np.argsort(take["time_s"])]
     whole = _median_s(lambda: summary(match_take(onsets, take)), args.repeat)
-    print(f"whole judgement with summary, {longest.name} ({onsets.size} notes): "
-          f"{whole * 1e3:.1f} ms")  # fmt: skip
+    print(
+        f"whole judgement with summary, {longest.name} ({onsets.size} notes): {whole * 1e3:.1f} ms"
+    )
     return 0

@@ -47,8 +47,10 @@ def main(argv: list[str]) -> int:
     kit = load_kit("rock5")
     t0 = time.perf_counter()
     body = BodyScene.perform(performance, kit, note_map)
-    print(f"practice_view {args.size}: {source.name}, teacher animated in "
-          f"{time.perf_counter() - t0:.2f} s ({performance.onsets.size} notes)")  # fmt: skip
+    print(
+        f"practice_view {args.size}: {source.name}, teacher animated in "
+        f"{time.perf_counter() - t0:.2f} s ({performance.onsets.size} notes)"
+    )
     times = np.linspace(1.0, max(1.5, performance.duration_s - 1.0), args.frames)
     frames = list(body.frames(times - 0.3))
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
@@ -58,16 +60,25 @@ def main(argv: list[str]) -> int:
     try:
         modes: tuple[TeacherMode, ...] = ("off", "ghost", "ahead")
         for mode in modes:
-            made = PracticeView(ctx, "tcp://127.0.0.1:9", kit, mode,
-                                body if mode != "off" else None, ahead_s=0.5)  # fmt: skip
+            made = PracticeView(
+                ctx, "tcp://127.0.0.1:9", kit, mode, body if mode != "off" else None, ahead_s=0.5
+            )
             made.clock.add(PassTime(0.0, 1.0, 0.0, performance.duration_s))
             views[mode] = made
         for k, (t, frame) in enumerate(zip(times, frames, strict=True)):
             for name, view in views.items():  # interleaved: each mode sees the same load
                 if view is not None:
-                    view.panel.apply({"hit": {"piece": "snare", "offset_ms": float(k % 40 - 20),
-                                              "on_time": True, "streak": k,
-                                              "accuracy_pct": 90.0}})  # fmt: skip
+                    view.panel.apply(
+                        {
+                            "hit": {
+                                "piece": "snare",
+                                "offset_ms": float(k % 40 - 20),
+                                "on_time": True,
+                                "streak": k,
+                                "accuracy_pct": 90.0,
+                            }
+                        }
+                    )
                 t0 = time.perf_counter()
                 surface.draw(frame, float(t))
                 if view is not None:

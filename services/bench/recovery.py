@@ -59,8 +59,12 @@ IN_FLIGHT_S = 0.05
 def _daemon(source: Source, clock: MonotonicClock, tmp: Path) -> Iterator[zmq.Socket[bytes]]:
     """An input daemon on ``source`` with the default reconnect interval; yields a SUB."""
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
-    config = DaemonConfig(pub="tcp://127.0.0.1:*", control="tcp://127.0.0.1:*",
-                          sessions_dir=tmp / "sessions", wait_subscribers=1)  # fmt: skip
+    config = DaemonConfig(
+        pub="tcp://127.0.0.1:*",
+        control="tcp://127.0.0.1:*",
+        sessions_dir=tmp / "sessions",
+        wait_subscribers=1,
+    )
     daemon = InputDaemon(source, config, clock, ctx)
     daemon.start()
     stop = threading.Event()
@@ -250,9 +254,12 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench recovery", description=__doc__)
     parser.add_argument("--kills", type=int, default=3, help="kill rounds (default 3)")
     parser.add_argument("--replugs", type=int, default=5, help="replugs per device (default 5)")
-    parser.add_argument("--hogs", type=hog_levels, default="0,1x",
-                        help="kill rounds at rest and loaded: hog processes, a count or Nx "
-                        "cores (default 0,1x)")  # fmt: skip
+    parser.add_argument(
+        "--hogs",
+        type=hog_levels,
+        default="0,1x",
+        help="kill rounds at rest and loaded: hog processes, a count or Nx cores (default 0,1x)",
+    )
     args = parser.parse_args(argv)
     levels: list[int] = args.hogs
     with tempfile.TemporaryDirectory() as tmp_text:
@@ -260,19 +267,25 @@ def main(argv: list[str]) -> int:
         for n_hogs in levels:
             back, ready, backoff, stale = kills(tmp / f"up{n_hogs}", args.kills, n_hogs)
             print(f"kill -9 with {n_hogs} CPU hogs (median of {args.kills}; back-off included; s):")
-            print(f"  {'':<8} {'kill -> working':>16} {'supervisor: death -> ready':>27}"
-                  f" {'start-up':>9}")  # fmt: skip
+            print(
+                f"  {'':<8} {'kill -> working':>16} {'supervisor: death -> ready':>27}"
+                f" {'start-up':>9}"
+            )
             for name, values in back.items():
                 startup = statistics.median(
                     v - b for v, b in zip(ready[name], backoff[name], strict=True)
                 )
-                print(f"  {name:<8} {statistics.median(values):>16.2f} "
-                      f"{statistics.median(ready[name]):>27.2f} {startup:>9.2f}  (all: "
-                      f"{', '.join(f'{v:.2f}' for v in values)}; back-off "
-                      f"{', '.join(f'{v:.1f}' for v in backoff[name])})")  # fmt: skip
+                print(
+                    f"  {name:<8} {statistics.median(values):>16.2f} "
+                    f"{statistics.median(ready[name]):>27.2f} {startup:>9.2f}  (all: "
+                    f"{', '.join(f'{v:.2f}' for v in values)}; back-off "
+                    f"{', '.join(f'{v:.1f}' for v in backoff[name])})"
+                )
             each = ", ".join(f"{v:.2f}" for v in stale)
-            print(f"  display stale-pose time while the synth restarts: median "
-                  f"{statistics.median(stale):.2f} s (all: {each})")  # fmt: skip
+            print(
+                f"  display stale-pose time while the synth restarts: median "
+                f"{statistics.median(stale):.2f} s (all: {each})"
+            )
         (tmp / "serial").mkdir()
         serial = serial_replug(tmp / "serial", args.replugs)
         with _jackd() as server:

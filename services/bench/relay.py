@@ -47,9 +47,15 @@ def _cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime + stime
 
 
-def _run(endpoint: str, n_subs: int, send: threading.Event, done: threading.Event,
-         ctx: zmq.Context[zmq.Socket[bytes]], fmt: p.PoseFormat,
-         out: list[list[float]]) -> None:  # fmt: skip
+def _run(
+    endpoint: str,
+    n_subs: int,
+    send: threading.Event,
+    done: threading.Event,
+    ctx: zmq.Context[zmq.Socket[bytes]],
+    fmt: p.PoseFormat,
+    out: list[list[float]],
+) -> None:
     """Subscriber thread: N SUB sockets, every receipt's latency (s) per socket."""
     clock = MonotonicClock()
     socks = []
@@ -86,8 +92,13 @@ def _run(endpoint: str, n_subs: int, send: threading.Event, done: threading.Even
         s.close(0)
 
 
-def _measure(pub: zmq.Socket[bytes], endpoint: str, args: argparse.Namespace,
-             fmt: p.PoseFormat, rows: np.ndarray) -> list[list[float]]:  # fmt: skip
+def _measure(
+    pub: zmq.Socket[bytes],
+    endpoint: str,
+    args: argparse.Namespace,
+    fmt: p.PoseFormat,
+    rows: np.ndarray,
+) -> list[list[float]]:
     clock = MonotonicClock()
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()  # the displays' own I/O thread
     send, done = threading.Event(), threading.Event()
@@ -115,8 +126,10 @@ def _report(name: str, lat: list[list[float]], sent: int) -> tuple[float, float]
     got = [len(x) for x in lat]
     flat = np.concatenate([np.asarray(x) for x in lat]) * 1000 if any(got) else np.zeros(1)
     p50, p99 = (float(v) for v in np.percentile(flat, [50, 99]))
-    print(f"{name:>8}: {sum(got):,} of {sent * len(lat):,} delivered (fewest to one display "
-          f"{min(got):,} of {sent:,}); latency p50 {p50:.2f} ms, p99 {p99:.2f} ms")  # fmt: skip
+    print(
+        f"{name:>8}: {sum(got):,} of {sent * len(lat):,} delivered (fewest to one display "
+        f"{min(got):,} of {sent:,}); latency p50 {p50:.2f} ms, p99 {p99:.2f} ms"
+    )
     return p50, p99
 
 
@@ -132,10 +145,15 @@ def main(argv: list[str]) -> int:
     fmt = p.PoseFormat.from_dtype(pose_dtype(len(kit.pieces)))
     rows = np.zeros(args.samples, pose_dtype(len(kit.pieces)))
     sent = round(args.seconds * args.rate)
-    size = len(b"".join(p.encode(p.Message(p.Kind.POSE, p.Pose(0.0, rows), 0, 0, 0.0,
-                                             p.Stream.POSES), fmt)))  # fmt: skip
-    print(f"bench relay: {args.displays} displays, {args.rate:g} pose messages/s of {size:,} "
-          f"bytes ({args.samples} samples), {args.seconds:g} s a run")  # fmt: skip
+    size = len(
+        b"".join(
+            p.encode(p.Message(p.Kind.POSE, p.Pose(0.0, rows), 0, 0, 0.0, p.Stream.POSES), fmt)
+        )
+    )
+    print(
+        f"bench relay: {args.displays} displays, {args.rate:g} pose messages/s of {size:,} "
+        f"bytes ({args.samples} samples), {args.seconds:g} s a run"
+    )
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()  # the publisher's I/O thread
     pub = ctx.socket(zmq.PUB)
     pub.setsockopt(zmq.LINGER, 0)
@@ -146,11 +164,22 @@ def main(argv: list[str]) -> int:
     direct = _measure(pub, upstream, args, fmt, rows)
     with tempfile.TemporaryDirectory() as home:
         relay = subprocess.Popen(
-            [*program_argv(), "relay", "--upstream", upstream, "--pub", "tcp://127.0.0.1:*",
-             "--control", "tcp://127.0.0.1:*"],
-            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, cwd=WORKDIR,
+            [
+                *program_argv(),
+                "relay",
+                "--upstream",
+                upstream,
+                "--pub",
+                "tcp://127.0.0.1:*",
+                "--control",
+                "tcp://127.0.0.1:*",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+            cwd=WORKDIR,
             env={**os.environ, "LIVEDRUMMER_HOME": home},
-        )  # fmt: skip
+        )
         try:
             assert relay.stdout is not None
             eps = json.loads(relay.stdout.readline())
@@ -165,15 +194,19 @@ def main(argv: list[str]) -> int:
     out_mbit = size * args.rate * args.displays * 8 / 1e6
     print(f"   relay: {100 * cpu:.1f} % of one core while forwarding, {out_mbit:.2f} Mbit/s out")
     a50, a99 = r50 - d50, r99 - d99
-    print(f"   relay minus direct: p50 {a50:+.2f} ms, p99 {a99:+.2f} ms (negative: serving "
-          f"{args.displays} sockets costs the publisher more than the hop costs)")  # fmt: skip
+    print(
+        f"   relay minus direct: p50 {a50:+.2f} ms, p99 {a99:+.2f} ms (negative: serving "
+        f"{args.displays} sockets costs the publisher more than the hop costs)"
+    )
     a99 = max(a99, r99)  # the tree's bound: a hop's whole p99, not the difference
     for depth in (1, 2, 3):
         fan = args.displays
         relays = (fan**depth - 1) // max(fan - 1, 1)
-        print(f"   tree of depth {depth}, {fan} per relay: {fan**depth:,} displays, {relays:,} "
-              f"relays, +{depth * a99:.1f} ms p99 (hops add up), {out_mbit:.2f} Mbit/s out of "
-              "each relay")  # fmt: skip
+        print(
+            f"   tree of depth {depth}, {fan} per relay: {fan**depth:,} displays, {relays:,} "
+            f"relays, +{depth * a99:.1f} ms p99 (hops add up), {out_mbit:.2f} Mbit/s out of "
+            "each relay"
+        )
     pub.close(0)
     ctx.term()
     sys.stdout.flush()

@@ -40,19 +40,27 @@ def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog="livedrummer bench remote_timing", description=__doc__)
     ap.add_argument("--seconds", type=float, default=20.0, help="each run (default 20)")
     args = ap.parse_args(argv)
-    print(f"bench remote_timing: demo groove from a remote clock {1000 * OFFSET_S:.1f} ms "
-          f"ahead, 20-60 ms of jitter, {args.seconds:g} s a run")  # fmt: skip
+    print(
+        f"bench remote_timing: demo groove from a remote clock {1000 * OFFSET_S:.1f} ms "
+        f"ahead, 20-60 ms of jitter, {args.seconds:g} s a run"
+    )
     with tempfile.TemporaryDirectory() as home:
         for control in (False, True):
-            run = remote_session(args.seconds, control=control, offset_s=OFFSET_S, home=home,
-                                 err_path=Path(home) / "input.err")  # fmt: skip
+            run = remote_session(
+                args.seconds,
+                control=control,
+                offset_s=OFFSET_S,
+                home=home,
+                err_path=Path(home) / "input.err",
+            )
             err, lag = intervals(run.sent, run.got, 3.0)
             p50, p99 = np.percentile(err, [50, 99])
             label = "--remote-control" if control else "stamped on arrival"
-            line = (f"  {label:>18}: {len(run.got)} of {len(run.sent)} hits; interval error "
-                    f"p50 {p50:.2f} ms, p99 {p99:.2f} ms, max {err.max():.2f} ms; "
-                    f"played {1000 * float(np.median(lag)):.1f} ms after the remote hit"
-                    )  # fmt: skip
+            line = (
+                f"  {label:>18}: {len(run.got)} of {len(run.sent)} hits; interval error "
+                f"p50 {p50:.2f} ms, p99 {p99:.2f} ms, max {err.max():.2f} ms; "
+                f"played {1000 * float(np.median(lag)):.1f} ms after the remote hit"
+            )
             print(line)
             m = re.search(r"remote clock ([+-][\d.]+) ms \(\+/- ([\d.]+)\).*", run.summary)
             if control and m:

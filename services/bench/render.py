@@ -76,32 +76,54 @@ def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench render")
     parser.add_argument("--sizes", default="1280x720,1920x1080")
     parser.add_argument("--frames", type=int, default=120, help="frames per measurement")
-    parser.add_argument("--aa", default="0",
-                        help="multisample counts or fxaa, e.g. 0,fxaa,4: measured interleaved, "
-                        "frame by frame, so each is loaded alike (default 0)")  # fmt: skip
+    parser.add_argument(
+        "--aa",
+        default="0",
+        help="multisample counts or fxaa, e.g. 0,fxaa,4: measured interleaved, "
+        "frame by frame, so each is loaded alike (default 0)",
+    )
     parser.add_argument("--seconds", type=float, default=20.0, help="export length (0: skip)")
     parser.add_argument("--export-fps", default="30,60")
-    parser.add_argument("--compare", metavar="REV",
-                        help="time the whole render command at git revision REV against this "
-                        "tree, alternating (see the module docstring)")  # fmt: skip
+    parser.add_argument(
+        "--compare",
+        metavar="REV",
+        help="time the whole render command at git revision REV against this "
+        "tree, alternating (see the module docstring)",
+    )
     parser.add_argument("--rounds", type=int, default=3, help="--compare: runs of each")
-    parser.add_argument("--compare-seconds", type=float, default=6.0,
-                        help="--compare: seconds of the demo groove rendered")  # fmt: skip
-    parser.add_argument("--stage-drummers", type=int, default=4,
-                        help="--compare: drummers of the render --stage run (0: skip)")  # fmt: skip
+    parser.add_argument(
+        "--compare-seconds",
+        type=float,
+        default=6.0,
+        help="--compare: seconds of the demo groove rendered",
+    )
+    parser.add_argument(
+        "--stage-drummers",
+        type=int,
+        default=4,
+        help="--compare: drummers of the render --stage run (0: skip)",
+    )
     parser.add_argument("--stage-size", default="640x360", help="--compare: render --stage size")
-    parser.add_argument("--live-drummers", default="1,4",
-                        help="--compare: live stage drawing capacity for these drummer counts "
-                        "('': skip)")  # fmt: skip
-    parser.add_argument("--layer", metavar="CAMERAS",
-                        help="draw+i420 ms a frame at 1280x720 (FXAA, shadows, character) with "
-                        "the static layer and without, alternating frame by frame, for these "
-                        "cameras (e.g. stage,front); --frames frames each")  # fmt: skip
-    parser.add_argument("--live-window", action="store_true",
-                        help="the live window's draw+present ms a frame at 1280x720, wall and "
-                        "CPU: into a 4x multisampled screen (before), a plain one, and off "
-                        "screen through the static layer with FXAA, then one blit (now); "
-                        "alternating frame by frame, --frames frames each")  # fmt: skip
+    parser.add_argument(
+        "--live-drummers",
+        default="1,4",
+        help="--compare: live stage drawing capacity for these drummer counts ('': skip)",
+    )
+    parser.add_argument(
+        "--layer",
+        metavar="CAMERAS",
+        help="draw+i420 ms a frame at 1280x720 (FXAA, shadows, character) with "
+        "the static layer and without, alternating frame by frame, for these "
+        "cameras (e.g. stage,front); --frames frames each",
+    )
+    parser.add_argument(
+        "--live-window",
+        action="store_true",
+        help="the live window's draw+present ms a frame at 1280x720, wall and "
+        "CPU: into a 4x multisampled screen (before), a plain one, and off "
+        "screen through the static layer with FXAA, then one blit (now); "
+        "alternating frame by frame, --frames frames each",
+    )
     args = parser.parse_args(argv)
     if args.compare:
         return compare(args)
@@ -128,9 +150,11 @@ def main(argv: list[str]) -> int:
         t0 = time.perf_counter()
         avatar = build_character()
         builds.append(time.perf_counter() - t0)
-    print(f"avatar: built-in character {avatar.mesh.vertex_count} vertices, "
-          f"{avatar.mesh.triangle_count} triangles, built in "
-          f"{statistics.median(builds) * 1e3:.1f} ms")  # fmt: skip
+    print(
+        f"avatar: built-in character {avatar.mesh.vertex_count} vertices, "
+        f"{avatar.mesh.triangle_count} triangles, built in "
+        f"{statistics.median(builds) * 1e3:.1f} ms"
+    )
     ctx = headless_context()
     counts = [v.strip() for v in args.aa.split(",")]  # multisample counts or "fxaa"
     print(f"render: {ctx.info['GL_RENDERER']} ({ctx.info['GL_VERSION']}), aa {args.aa}")
@@ -139,9 +163,18 @@ def main(argv: list[str]) -> int:
     frames = list(body.frames(times))
     for text in args.sizes.split(","):
         size = parse_size(text)
-        rs = [Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, avatar=avatar,
-                       samples=0 if aa == "fxaa" else int(aa), fxaa=aa == "fxaa")
-              for aa in counts]  # fmt: skip
+        rs = [
+            Renderer(
+                ctx,
+                build_kit_mesh(kit),
+                BODY_SKELETON,
+                size,
+                avatar=avatar,
+                samples=0 if aa == "fxaa" else int(aa),
+                fxaa=aa == "fxaa",
+            )
+            for aa in counts
+        ]
         for r in rs:
             r.draw(frames[0], cam)
             r.read_rgba()
@@ -174,9 +207,11 @@ def main(argv: list[str]) -> int:
             d, rd = statistics.median(draw[k]) * 1e3, statistics.median(read[k]) * 1e3
             pd = statistics.median(piped) * 1e3
             yuv = f"   draw+i420 {statistics.median(i420[k]) * 1e3:6.2f} ms" if i420[k] else ""
-            print(f"  {text:>9} aa {counts[k]:>4}  draw {d:6.2f} ms ({1e3 / d:6.1f} fps)   "
-                  f"draw+read {rd:6.2f} ms ({1e3 / rd:6.1f} fps){yuv}   "
-                  f"pipelined {pd:6.3f} ms ({1e3 / pd:7.1f} fps)")  # fmt: skip
+            print(
+                f"  {text:>9} aa {counts[k]:>4}  draw {d:6.2f} ms ({1e3 / d:6.1f} fps)   "
+                f"draw+read {rd:6.2f} ms ({1e3 / rd:6.1f} fps){yuv}   "
+                f"pipelined {pd:6.3f} ms ({1e3 / pd:7.1f} fps)"
+            )
     ctx.release()
     if args.seconds > 0:
         short = first_seconds(perf, args.seconds)
@@ -184,11 +219,19 @@ def main(argv: list[str]) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             for fps in (int(v) for v in args.export_fps.split(",")):
                 settings = VideoSettings(size=(1280, 720), fps=fps)
-                report = export(short, short_body, out=Path(tmp) / "bench.mp4", settings=settings,
-                                tail_s=0.0, samples=int(counts[0]) if counts[0].isdigit() else 0,
-                                fxaa=counts[0] == "fxaa")  # fmt: skip
-                print(f"  export 1280x720 @ {fps} fps: {report.frames} frames in "
-                      f"{report.wall_s:.2f} s = {report.realtime:.2f}x real time")  # fmt: skip
+                report = export(
+                    short,
+                    short_body,
+                    out=Path(tmp) / "bench.mp4",
+                    settings=settings,
+                    tail_s=0.0,
+                    samples=int(counts[0]) if counts[0].isdigit() else 0,
+                    fxaa=counts[0] == "fxaa",
+                )
+                print(
+                    f"  export 1280x720 @ {fps} fps: {report.frames} frames in "
+                    f"{report.wall_s:.2f} s = {report.realtime:.2f}x real time"
+                )
     return 0
 
 
@@ -219,15 +262,25 @@ def window_compare(count: int) -> int:
 
     shown = screen(0)
     ways: dict[str, tuple[Renderer, Any]] = {
-        "screen, 4 samples (before)": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
-                                                offscreen=False, avatar=avatar), screen(4)),
-        "screen, no samples": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
-                                        offscreen=False, avatar=avatar), shown),
-        "layer + blit, no AA": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
-                                         samples=0, avatar=avatar), None),
-        "layer + FXAA + blit (now)": (Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size,
-                                               samples=0, fxaa=True, avatar=avatar), None),
-    }  # fmt: skip
+        "screen, 4 samples (before)": (
+            Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False, avatar=avatar),
+            screen(4),
+        ),
+        "screen, no samples": (
+            Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, offscreen=False, avatar=avatar),
+            shown,
+        ),
+        "layer + blit, no AA": (
+            Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, avatar=avatar),
+            None,
+        ),
+        "layer + FXAA + blit (now)": (
+            Renderer(
+                ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, fxaa=True, avatar=avatar
+            ),
+            None,
+        ),
+    }
     wall: dict[str, list[float]] = {k: [] for k in ways}
     cpu: dict[str, list[float]] = {k: [] for k in ways}
     frames = list(body.frames(4.0 + np.arange(count + 2) / 30.0))
@@ -244,13 +297,17 @@ def window_compare(count: int) -> int:
             if n >= 2:  # the first frames compile shaders and build the layer
                 wall[name].append(time.perf_counter() - t0)
                 cpu[name].append(time.process_time() - c0)
-    print(f"live window 1280x720, {count} frames, {ctx.info['GL_RENDERER']}, "
-          f"load average {os.getloadavg()[0]:.2f}")  # fmt: skip
+    print(
+        f"live window 1280x720, {count} frames, {ctx.info['GL_RENDERER']}, "
+        f"load average {os.getloadavg()[0]:.2f}"
+    )
     base = statistics.median(cpu[next(iter(ways))])
     for name in ways:
         w, c = statistics.median(wall[name]) * 1e3, statistics.median(cpu[name]) * 1e3
-        print(f"  {name:<28} wall {w:6.1f} ms ({1e3 / w:5.1f} fps)   CPU {c:6.1f} ms "
-              f"({1e3 / c:5.1f} fps)   CPU before/this {base * 1e3 / c:4.2f}x")  # fmt: skip
+        print(
+            f"  {name:<28} wall {w:6.1f} ms ({1e3 / w:5.1f} fps)   CPU {c:6.1f} ms "
+            f"({1e3 / c:5.1f} fps)   CPU before/this {base * 1e3 / c:4.2f}x"
+        )
     # the idle window (no poses yet: the kit at rest, the same frame each time), the frame
     # drawn again each time (as before) against held (Renderer._held), alternating
     now = ways["layer + FXAA + blit (now)"][0]
@@ -282,12 +339,18 @@ def layer_compare(cameras: list[str], count: int) -> int:
     frames = list(body.frames(np.arange(count) / 30.0 + 4.0))
     size = (1280, 720)
     ctx = headless_context()
-    print(f"layer: {ctx.info['GL_RENDERER']}, 1280x720, FXAA, shadows, character; "
-          f"load average {os.getloadavg()[0]:.2f}")  # fmt: skip
+    print(
+        f"layer: {ctx.info['GL_RENDERER']}, 1280x720, FXAA, shadows, character; "
+        f"load average {os.getloadavg()[0]:.2f}"
+    )
     for name in cameras:
         cam = pick_camera(kit, name)
-        rs = [Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, fxaa=True,
-                       static_layer=on) for on in (False, True)]  # fmt: skip
+        rs = [
+            Renderer(
+                ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, fxaa=True, static_layer=on
+            )
+            for on in (False, True)
+        ]
         took: list[list[float]] = [[], []]
         cpu: list[list[float]] = [[], []]  # all threads' CPU time: steadier on a shared machine
         shares = []
@@ -307,10 +370,12 @@ def layer_compare(cameras: list[str], count: int) -> int:
         full, cached = (statistics.median(t) * 1e3 for t in took)
         full_cpu, cached_cpu = (statistics.median(t) * 1e3 for t in cpu)
         share = statistics.mean(shares or [1.0])
-        print(f"  {name:>9}: wall full {full:7.1f} ms  layer {cached:7.1f} ms "
-              f"({full / cached:.2f}x)"
-              f"   CPU full {full_cpu:7.1f} ms  layer {cached_cpu:7.1f} ms "
-              f"({full_cpu / cached_cpu:.2f}x)   redrawn {share:.0%} of the frame")  # fmt: skip
+        print(
+            f"  {name:>9}: wall full {full:7.1f} ms  layer {cached:7.1f} ms "
+            f"({full / cached:.2f}x)"
+            f"   CPU full {full_cpu:7.1f} ms  layer {cached_cpu:7.1f} ms "
+            f"({full_cpu / cached_cpu:.2f}x)   redrawn {share:.0%} of the frame"
+        )
     ctx.release()
     return 0
 
@@ -328,8 +393,9 @@ def compare(args: argparse.Namespace) -> int:
         before = Path(tmp) / "before"
         before.mkdir()
         # the revision's files (git archive): nothing is written into the repository itself
-        tar = subprocess.run(["git", "-C", str(here), "archive", "--format=tar", args.compare],
-                             capture_output=True)  # fmt: skip
+        tar = subprocess.run(
+            ["git", "-C", str(here), "archive", "--format=tar", args.compare], capture_output=True
+        )
         if tar.returncode != 0:
             print(f"bench render: --compare {args.compare}: {tar.stderr.decode().strip()}")
             return 2
@@ -337,13 +403,20 @@ def compare(args: argparse.Namespace) -> int:
         log = ["git", "-C", str(here), "log", "-1", "--format=%h %s", args.compare]
         rev = subprocess.run(log, capture_output=True, text=True).stdout.strip()
         print(f"before: {rev[:90]}\nafter: this tree ({here})")
-        print(f"load average at start: {os.getloadavg()[0]:.2f} (other processes share the "
-              "cores: compare the ratio, not the absolute figures)")  # fmt: skip
+        print(
+            f"load average at start: {os.getloadavg()[0]:.2f} (other processes share the "
+            "cores: compare the ratio, not the absolute figures)"
+        )
         secs = f"{args.compare_seconds:g}"
         single = ["render", "--end", secs, "--size", "1280x720", "--fps", "30"]
-        _alternate("render 1280x720 @ 30 fps, character, shadows, FXAA, --end " + secs,
-                   [*single, "-o", str(Path(tmp) / "single.mp4")], before, here, args.rounds,
-                   Path(tmp))  # fmt: skip
+        _alternate(
+            "render 1280x720 @ 30 fps, character, shadows, FXAA, --end " + secs,
+            [*single, "-o", str(Path(tmp) / "single.mp4")],
+            before,
+            here,
+            args.rounds,
+            Path(tmp),
+        )
         if args.stage_drummers > 0:
             from .stage import write_part
 
@@ -351,15 +424,31 @@ def compare(args: argparse.Namespace) -> int:
             # renders the whole part either way
             write_part(Path(tmp) / "part.mid", 8.0, args.compare_seconds, 0.0)
             stage = Path(tmp) / "line.toml"
-            performers = "".join(f'[[performer]]\nid = "d{k}"\nfile = "part.mid"\n'
-                                 'map = "roland-td"\n\n'
-                                 for k in range(args.stage_drummers))  # fmt: skip
+            performers = "".join(
+                f'[[performer]]\nid = "d{k}"\nfile = "part.mid"\nmap = "roland-td"\n\n'
+                for k in range(args.stage_drummers)
+            )
             stage.write_text('[formation]\nshape = "line"\nspacing = 2.6\n\n' + performers)
-            _alternate(f"render --stage, {args.stage_drummers} drummers, {args.stage_size}, "
-                       f"--end {secs}",
-                       ["render", "--stage", str(stage), "--end", secs, "--tail", "0", "--size",
-                        args.stage_size, "-o", str(Path(tmp) / "stage.mp4")],
-                       before, here, args.rounds, Path(tmp))  # fmt: skip
+            _alternate(
+                f"render --stage, {args.stage_drummers} drummers, {args.stage_size}, --end {secs}",
+                [
+                    "render",
+                    "--stage",
+                    str(stage),
+                    "--end",
+                    secs,
+                    "--tail",
+                    "0",
+                    "--size",
+                    args.stage_size,
+                    "-o",
+                    str(Path(tmp) / "stage.mp4"),
+                ],
+                before,
+                here,
+                args.rounds,
+                Path(tmp),
+            )
         for n in (int(v) for v in args.live_drummers.split(",") if v.strip()):
             _alternate_live(n, before, here, args.rounds)
     return 0
@@ -381,8 +470,13 @@ def _alternate_live(drummers: int, before: Path, after: Path, rounds: int) -> No
     for k in range(rounds):
         for label, root in (("before", before), ("after", after)):
             env = {**os.environ, "PYTHONPATH": str(root)}
-            run = subprocess.run([sys.executable, "-c", _LIVE, str(drummers)], cwd=root,
-                                 env=env, capture_output=True, text=True)  # fmt: skip
+            run = subprocess.run(
+                [sys.executable, "-c", _LIVE, str(drummers)],
+                cwd=root,
+                env=env,
+                capture_output=True,
+                text=True,
+            )
             found = re.search(r"median ([\d.]+) ms", run.stdout)
             if run.returncode != 0 or found is None:
                 print(f"  {label}: failed ({run.returncode}): {run.stderr.strip()[-200:]}")
@@ -392,12 +486,15 @@ def _alternate_live(drummers: int, before: Path, after: Path, rounds: int) -> No
             print(f"  round {k + 1} {label:>6}: {ms:.1f} ms a frame = {1000 / ms:.1f} fps")
     if took["before"] and took["after"]:
         b, a = statistics.median(took["before"]), statistics.median(took["after"])
-        print(f"  median before {1000 / b:.1f} fps, after {1000 / a:.1f} fps: "
-              f"after/before {b / a:.2f}")  # fmt: skip
+        print(
+            f"  median before {1000 / b:.1f} fps, after {1000 / a:.1f} fps: "
+            f"after/before {b / a:.2f}"
+        )
 
 
-def _alternate(title: str, command: list[str], before: Path, after: Path, rounds: int,
-               cwd: Path) -> None:  # fmt: skip
+def _alternate(
+    title: str, command: list[str], before: Path, after: Path, rounds: int, cwd: Path
+) -> None:
     """Run ``livedrummer COMMAND`` with the code of ``before`` then ``after``, ``rounds`` times,
     and print each real-time factor, the medians and their ratio."""
     print(title)
@@ -407,8 +504,13 @@ def _alternate(title: str, command: list[str], before: Path, after: Path, rounds
         for label, root in (("before", before), ("after", after)):
             env = {**os.environ, "PYTHONPATH": str(root)}
             t0, c0 = time.perf_counter(), _children_cpu_s()
-            run = subprocess.run([sys.executable, "-m", "services", "-v", *command], cwd=cwd,
-                                 env=env, capture_output=True, text=True)  # fmt: skip
+            run = subprocess.run(
+                [sys.executable, "-m", "services", "-v", *command],
+                cwd=cwd,
+                env=env,
+                capture_output=True,
+                text=True,
+            )
             wall = time.perf_counter() - t0
             used = _children_cpu_s() - c0
             told = _WORKERS.search(run.stderr)
@@ -421,15 +523,19 @@ def _alternate(title: str, command: list[str], before: Path, after: Path, rounds
             video_s = float(found.group(2))
             factors[label].append(video_s / wall)
             cpu[label].append(used)
-            print(f"  round {k + 1} {label:>6}: {found.group(1)} frames, {video_s:.2f} s of "
-                  f"video in {wall:.2f} s = {video_s / wall:.2f}x real time, "
-                  f"{used:.1f} CPU s")  # fmt: skip
+            print(
+                f"  round {k + 1} {label:>6}: {found.group(1)} frames, {video_s:.2f} s of "
+                f"video in {wall:.2f} s = {video_s / wall:.2f}x real time, "
+                f"{used:.1f} CPU s"
+            )
     if factors["before"] and factors["after"]:
         b, a = statistics.median(factors["before"]), statistics.median(factors["after"])
         print(f"  median before {b:.2f}x, after {a:.2f}x real time: after/before {a / b:.2f}")
         cb, ca = statistics.median(cpu["before"]), statistics.median(cpu["after"])
-        print(f"  median CPU before {cb:.1f} s, after {ca:.1f} s: before/after {cb / ca:.2f} "
-              "(all threads: the steadier figure where others share the cores)")  # fmt: skip
+        print(
+            f"  median CPU before {cb:.1f} s, after {ca:.1f} s: before/after {cb / ca:.2f} "
+            "(all threads: the steadier figure where others share the cores)"
+        )
 
 
 def _children_cpu_s() -> float:

@@ -102,22 +102,41 @@ def main(argv: list[str]) -> int:
         lines = ['[formation]\nshape = "arc"\nradius = 6.0\nfacing = "center"\n']
         for k in range(args.performers):
             write_part(folder / f"p{k}.mid", args.rate, 10.0, k / args.performers)
-            lines.append(f'[[performer]]\nid = "p{k}"\nsource = "file:p{k}.mid"\n'
-                         f'map = "roland-td"\n')  # fmt: skip
+            lines.append(
+                f'[[performer]]\nid = "p{k}"\nsource = "file:p{k}.mid"\nmap = "roland-td"\n'
+            )
         (folder / "stage.toml").write_text("\n".join(lines))
         frames = folder / "frames"
-        print(f"bench stage: {args.performers} live performers at {args.rate:g} notes/s each, "
-              f"display {args.size} at {args.fps:g} fps asked, {args.seconds:g} s")  # fmt: skip
+        print(
+            f"bench stage: {args.performers} live performers at {args.rate:g} notes/s each, "
+            f"display {args.size} at {args.fps:g} fps asked, {args.seconds:g} s"
+        )
         err_path = folder / "up.err"
         with err_path.open("w") as err:
             up = subprocess.Popen(
-                [*program_argv("up", "--stage", str(folder / "stage.toml"), "--headless",
-                               "--frames-dir", str(frames), "--size", args.size, "--fps",
-                               str(args.fps), "--port-base", str(args.port_base),
-                               "--no-journal")],
-                stdout=subprocess.PIPE, stderr=err, text=True, cwd=WORKDIR,
+                [
+                    *program_argv(
+                        "up",
+                        "--stage",
+                        str(folder / "stage.toml"),
+                        "--headless",
+                        "--frames-dir",
+                        str(frames),
+                        "--size",
+                        args.size,
+                        "--fps",
+                        str(args.fps),
+                        "--port-base",
+                        str(args.port_base),
+                        "--no-journal",
+                    )
+                ],
+                stdout=subprocess.PIPE,
+                stderr=err,
+                text=True,
+                cwd=WORKDIR,
                 env={**os.environ, "LIVEDRUMMER_HOME": str(folder / "home")},
-            )  # fmt: skip
+            )
             assert up.stdout is not None
             while "display running" not in (line := up.stdout.readline()):
                 if not line:
@@ -127,10 +146,15 @@ def main(argv: list[str]) -> int:
             up.send_signal(signal.SIGTERM)
             up.communicate(timeout=120)
         text = err_path.read_text()
-        for m in re.finditer(r"synth: (\d+) onsets.*answered in ([\d.]+)/([\d.]+) ms p50/p99"
-                             r".*?(\d+) contacts late", text):  # fmt: skip
-            print(f"  synth: {m.group(1)} onsets, answered in p50 {m.group(2)} ms, "
-                  f"p99 {m.group(3)} ms ({m.group(4)} contacts late)")  # fmt: skip
+        for m in re.finditer(
+            r"synth: (\d+) onsets.*answered in ([\d.]+)/([\d.]+) ms p50/p99"
+            r".*?(\d+) contacts late",
+            text,
+        ):
+            print(
+                f"  synth: {m.group(1)} onsets, answered in p50 {m.group(2)} ms, "
+                f"p99 {m.group(3)} ms ({m.group(4)} contacts late)"
+            )
         log = [json.loads(x) for x in (frames / "frames.jsonl").read_text().splitlines()]
         drawing = [r for r in log if any(p["pose_s"] is not None for p in r["performers"])]
         if len(drawing) < 2:
@@ -139,16 +163,20 @@ def main(argv: list[str]) -> int:
         span = drawing[-1]["done_s"] - drawing[0]["render_s"]
         took = np.array([r["done_s"] - r["render_s"] for r in drawing]) * 1000
         p50, p90 = np.percentile(took, [50, 90])
-        print(f"  display: {len(drawing)} frames with {args.performers} drummers in "
-              f"{span:.1f} s = {len(drawing) / span:.1f} fps drawn (goal >= 30); "
-              f"a frame takes p50 {p50:.0f} ms, p90 {p90:.0f} ms to draw")  # fmt: skip
+        print(
+            f"  display: {len(drawing)} frames with {args.performers} drummers in "
+            f"{span:.1f} s = {len(drawing) / span:.1f} fps drawn (goal >= 30); "
+            f"a frame takes p50 {p50:.0f} ms, p90 {p90:.0f} ms to draw"
+        )
         for line in text.splitlines():
             if line.startswith("display:"):
                 print(f"  {line}")
     w, h = (int(v) for v in args.size.split("x"))
     alone = draw_capacity(args.performers, (w, h), 32)
     p50 = float(np.median(alone))
-    print(f"  display alone (no synths running): a {args.size} frame of {args.performers} "
-          f"drummers in p50 {p50:.0f} ms, p90 {np.percentile(alone, 90):.0f} ms = "
-          f"{1000 / p50:.1f} fps")  # fmt: skip
+    print(
+        f"  display alone (no synths running): a {args.size} frame of {args.performers} "
+        f"drummers in p50 {p50:.0f} ms, p90 {np.percentile(alone, 90):.0f} ms = "
+        f"{1000 / p50:.1f} fps"
+    )
     return 0

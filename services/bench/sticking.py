@@ -45,8 +45,10 @@ def counts(result: Sticking, kit: Kit) -> tuple[int, int, int]:
 def annotated_table(folder: Path) -> None:
     tabs = [read_tab(f) for f in sorted(folder.glob("*.tab"))]
     if not tabs:
-        raise ConfigError(f"{folder}: no annotated .tab files; pass --annotated DIR (the "
-                          "checkout's tests/data/sticking) or --tables gmd,online")  # fmt: skip
+        raise ConfigError(
+            f"{folder}: no annotated .tab files; pass --annotated DIR (the "
+            "checkout's tests/data/sticking) or --tables gmd,online"
+        )
     print(f"annotated corpus: {len(tabs)} patterns, {sum(t.onsets.size for t in tabs)} notes")
     print(f"  {'strategy':<22} {'accuracy':>9} {'crossings':>10} {'too fast':>9} {'dropped':>8}")
     runs: list[tuple[str, object]] = [(name, name) for name in STRATEGIES]

@@ -94,10 +94,22 @@ class Synth:
     def __init__(self, sub: str, home: Path) -> None:
         env = {**os.environ, "LIVEDRUMMER_HOME": str(home)}
         self.proc = subprocess.Popen(
-            [*program_argv(), "synth", "--sub", sub,
-             "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*"],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=REPO,
-        )  # fmt: skip
+            [
+                *program_argv(),
+                "synth",
+                "--sub",
+                sub,
+                "--pub",
+                "tcp://127.0.0.1:*",
+                "--control",
+                "tcp://127.0.0.1:*",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+            cwd=REPO,
+        )
         assert self.proc.stdout is not None
         line = self.proc.stdout.readline()
         if not line:
@@ -125,8 +137,12 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--onsets", type=int, default=500_000, help="onsets to send (default 500000)")
     ap.add_argument("--rate", type=float, default=600.0, help="starting rate, notes/s (600)")
     ap.add_argument("--max-rate", type=float, default=3000.0, help="highest rate (3000)")
-    ap.add_argument("--max-lag-ms", type=float, default=1000.0,
-                    help="synth lag allowed before the rate drops (1000)")  # fmt: skip
+    ap.add_argument(
+        "--max-lag-ms",
+        type=float,
+        default=1000.0,
+        help="synth lag allowed before the rate drops (1000)",
+    )
     ap.add_argument("--verbose", action="store_true", help="the rate and lag every second")
     args = ap.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # the synth is stopped on the way
@@ -227,8 +243,11 @@ def main(argv: list[str]) -> int:
                         feed.lags_s.append(lag_sec)
                         feed.rates.append(rate)
                         if args.verbose:
-                            print(f"    {feed.sent:>7,} sent, rate {rate:,.0f}/s, synth behind by "
-                                  f"at least {lag_sec * 1000:,.0f} ms", flush=True)  # fmt: skip
+                            print(
+                                f"    {feed.sent:>7,} sent, rate {rate:,.0f}/s, synth behind by "
+                                f"at least {lag_sec * 1000:,.0f} ms",
+                                flush=True,
+                            )
                         if lag_sec > args.max_lag_ms / 1000:
                             rate = max(MIN_RATE, rate * 0.8)
                         elif lag_sec < args.max_lag_ms / 4000:
@@ -249,9 +268,11 @@ def main(argv: list[str]) -> int:
                 paused += clock.now() - pause_at
                 next_send = clock.now()
                 t_sec, lag_sec = clock.now(), np.inf
-                print(f"  {cp:>7,} onsets sent: synth RSS {feed.rss_kb[cp] / 1024:7.1f} MiB "
-                      f"(rate now {rate:,.0f}/s, {clock.now() - start:6.1f} s)",
-                      flush=True)  # fmt: skip
+                print(
+                    f"  {cp:>7,} onsets sent: synth RSS {feed.rss_kb[cp] / 1024:7.1f} MiB "
+                    f"(rate now {rate:,.0f}/s, {clock.now() - start:6.1f} s)",
+                    flush=True,
+                )
             feed.send_s = clock.now() - start - paused
             hwm = rss_kb(pid, "VmHWM")
             err = synth.stop()
@@ -263,18 +284,24 @@ def main(argv: list[str]) -> int:
     ctx.term()
     summary = next((ln for ln in err.splitlines() if ln.startswith("synth:")), err[-500:])
     lags = np.array(feed.lags_s) * 1000
-    print(f"synth_memory: {feed.sent:,} onsets and {feed.controls:,} controls sent in "
-          f"{feed.send_s:.1f} s ({feed.sent / feed.send_s:,.0f} onsets/s on average; the rate "
-          f"asked for ended at {feed.rates[-1] if feed.rates else args.rate:,.0f}/s)")  # fmt: skip
+    print(
+        f"synth_memory: {feed.sent:,} onsets and {feed.controls:,} controls sent in "
+        f"{feed.send_s:.1f} s ({feed.sent / feed.send_s:,.0f} onsets/s on average; the rate "
+        f"asked for ended at {feed.rates[-1] if feed.rates else args.rate:,.0f}/s)"
+    )
     if lags.size:
-        print(f"  synth's backlog (least lag within each second): p50 "
-              f"{np.percentile(lags, 50):.0f} ms, max {lags.max():.0f} ms")  # fmt: skip
+        print(
+            f"  synth's backlog (least lag within each second): p50 "
+            f"{np.percentile(lags, 50):.0f} ms, max {lags.max():.0f} ms"
+        )
     print(f"  the synth says: {summary}")
     print(f"  RSS at start {rss_start / 1024:.1f} MiB, peak {hwm / 1024:.1f} MiB")
     first = 50_000 if 50_000 in feed.rss_kb else checkpoints[0]
     last = checkpoints[-1]
     growth = (feed.rss_kb[last] - feed.rss_kb[first]) / 1024
-    print(f"  RSS at {first:,}: {feed.rss_kb[first] / 1024:.1f} MiB; at {last:,}: "
-          f"{feed.rss_kb[last] / 1024:.1f} MiB; growth {growth:+.2f} MiB "
-          "(goal < 5 MB)")  # fmt: skip
+    print(
+        f"  RSS at {first:,}: {feed.rss_kb[first] / 1024:.1f} MiB; at {last:,}: "
+        f"{feed.rss_kb[last] / 1024:.1f} MiB; growth {growth:+.2f} MiB "
+        "(goal < 5 MB)"
+    )
     return 0

@@ -51,20 +51,35 @@ def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog="livedrummer bench transcribe")
     ap.add_argument("--corpus", type=Path, default=DEFAULT_CORPUS)
     ap.add_argument("--split", default="test", choices=("train", "validation", "test"))
-    ap.add_argument("--files", type=int, default=None,
-                    help="excerpts (default: every one of the split, 65 of the test split; "
-                    "--live: 4, played in real time)")  # fmt: skip
+    ap.add_argument(
+        "--files",
+        type=int,
+        default=None,
+        help="excerpts (default: every one of the split, 65 of the test split; "
+        "--live: 4, played in real time)",
+    )
     ap.add_argument("--seconds", type=float, default=15.0, help="excerpt length (default 15)")
     ap.add_argument("--audio-profile", default=None)
-    ap.add_argument("--live", action="store_true",
-                    help="play the excerpts into input --audio through a JACK dummy server and "
-                    "measure attack -> onset-on-the-bus latency")  # fmt: skip
-    ap.add_argument("--realtime", type=int, default=0, metavar="PRIO",
-                    help="--live: run the daemon with input --realtime PRIO and the bench's "
-                    "subscriber at SCHED_FIFO PRIO too (1..60; default 0: off)")  # fmt: skip
-    ap.add_argument("--jackd-realtime", action="store_true",
-                    help="--live: run the dummy JACK server with -R (real-time scheduling, "
-                    "as a stage rig runs jackd)")  # fmt: skip
+    ap.add_argument(
+        "--live",
+        action="store_true",
+        help="play the excerpts into input --audio through a JACK dummy server and "
+        "measure attack -> onset-on-the-bus latency",
+    )
+    ap.add_argument(
+        "--realtime",
+        type=int,
+        default=0,
+        metavar="PRIO",
+        help="--live: run the daemon with input --realtime PRIO and the bench's "
+        "subscriber at SCHED_FIFO PRIO too (1..60; default 0: off)",
+    )
+    ap.add_argument(
+        "--jackd-realtime",
+        action="store_true",
+        help="--live: run the dummy JACK server with -R (real-time scheduling, "
+        "as a stage rig runs jackd)",
+    )
     from . import _loko
 
     _loko.add_options(ap)
@@ -103,16 +118,20 @@ def main(argv: list[str]) -> int:
         hits = detect(stems, SR, profile, chans)
         for k, v in score(hits["time_s"], hits["cls"], *ref, {n: MICS[n] for n in names}).items():
             mic_tot[k] = mic_tot.get(k, Counts(0, 0, 0)) + v
-    print(f"bench transcribe: {len(files)} excerpts of {args.seconds:g} s from the "
-          f"{args.split} split, profile {profile.name}")  # fmt: skip
+    print(
+        f"bench transcribe: {len(files)} excerpts of {args.seconds:g} s from the "
+        f"{args.split} split, profile {profile.name}"
+    )
     for title, tot in (("mix", mix_tot), ("one mic per drum", mic_tot)):
         print(f"  {title}: onset F-measure (precision / recall, true onsets counted)")
         for k, c in tot.items():
             print(
                 f"    {k:<10} F {c.f:.3f}  P {c.precision:.3f}  R {c.recall:.3f}  n {c.tp + c.fn}"
             )
-    print(f"  offline twin real-time factor: median {np.median(rtf):.4f} "
-          f"({1 / np.median(rtf):.0f}x faster than real time)")  # fmt: skip
+    print(
+        f"  offline twin real-time factor: median {np.median(rtf):.4f} "
+        f"({1 / np.median(rtf):.0f}x faster than real time)"
+    )
     print(
         f"  online detector CPU load (256-sample blocks): median {100 * np.median(load):.1f} "
         "% of one core"
@@ -166,21 +185,27 @@ def live(args: argparse.Namespace) -> int:
     lat = np.array(latencies) * 1000
     rt = f", SCHED_FIFO {args.realtime}" if args.realtime else ""
     rt += ", jackd -R" if args.jackd_realtime else ""
-    print(f"bench transcribe --live: {len(files)} excerpts of {args.seconds:g} s ({args.split}), "
-          f"input --audio through jackd -d dummy (128 frames, 48 kHz){rt}, "
-          f"load average {os.getloadavg()[0]:.1f}")  # fmt: skip
+    print(
+        f"bench transcribe --live: {len(files)} excerpts of {args.seconds:g} s ({args.split}), "
+        f"input --audio through jackd -d dummy (128 frames, 48 kHz){rt}, "
+        f"load average {os.getloadavg()[0]:.1f}"
+    )
     if len(lat):
         p50, p99 = np.percentile(lat, 50), np.percentile(lat, 99)
-        print(f"  attack -> onset on the bus: p50 {p50:.1f} ms, p99 {p99:.1f} ms, "
-              f"max {lat.max():.1f} ms ({len(lat)} hits)")  # fmt: skip
+        print(
+            f"  attack -> onset on the bus: p50 {p50:.1f} ms, p99 {p99:.1f} ms, "
+            f"max {lat.max():.1f} ms ({len(lat)} hits)"
+        )
     if stages:
         print("  where the time goes (ms, p50 / p99 over the hits):")
         table = np.concatenate(stages) * 1000
         for name, col in zip(STAGES, table.T, strict=True):
             print(f"    {name:<46} {np.percentile(col, 50):5.1f} / {np.percentile(col, 99):5.1f}")
         ours = table[:, 1:].sum(axis=1)  # from the deciding block's cycle on
-        print(f"    {'deciding block played -> subscriber has it':<46} "
-              f"{np.percentile(ours, 50):5.1f} / {np.percentile(ours, 99):5.1f}")  # fmt: skip
+        print(
+            f"    {'deciding block played -> subscriber has it':<46} "
+            f"{np.percentile(ours, 50):5.1f} / {np.percentile(ours, 99):5.1f}"
+        )
     for k, c in tot.items():
         print(f"    {k:<10} F {c.f:.3f}  P {c.precision:.3f}  R {c.recall:.3f}  n {c.tp + c.fn}")
     return 0
@@ -206,6 +231,11 @@ def _stages(run: LiveRun, offline: np.ndarray, s: DetectorSettings) -> np.ndarra
     from ._drumaudio import SR
 
     decided = np.round((offline + s.offset_ms / 1000) * SR).astype(np.int64) + s.lookahead * HOP
-    marks = [run.attack_times(offline), run.block_time(decided - 1), *run.trace.T, run.sent_s,
-             run.arrival_s]  # fmt: skip
+    marks = [
+        run.attack_times(offline),
+        run.block_time(decided - 1),
+        *run.trace.T,
+        run.sent_s,
+        run.arrival_s,
+    ]
     return np.diff(np.array(marks), axis=0).T

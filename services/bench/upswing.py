@@ -70,25 +70,46 @@ def measure(rig: Rig, path: Path, seconds: float, params: SynthParams, tick_hz: 
 def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(prog="livedrummer bench upswing", description=__doc__)
     parser.add_argument("--files", type=int, default=12, help="grooves drawn at random")
-    parser.add_argument("--corpus", type=Path, default=DEFAULT_CORPUS,
-                        help="the dataset (default ../shared/data/groove)")  # fmt: skip
+    parser.add_argument(
+        "--corpus",
+        type=Path,
+        default=DEFAULT_CORPUS,
+        help="the dataset (default ../shared/data/groove)",
+    )
     parser.add_argument("--seconds", type=float, default=15.0, help="of each groove")
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--delay-ms", type=float, nargs="+", default=[30.0], metavar="D",
-                        help="visual delay(s), measured in turn (default 30)")  # fmt: skip
-    parser.add_argument("--lookahead-ms", type=float, default=None, metavar="L",
-                        help="the sticking's lookahead (default: min(30, D))")  # fmt: skip
+    parser.add_argument(
+        "--delay-ms",
+        type=float,
+        nargs="+",
+        default=[30.0],
+        metavar="D",
+        help="visual delay(s), measured in turn (default 30)",
+    )
+    parser.add_argument(
+        "--lookahead-ms",
+        type=float,
+        default=None,
+        metavar="L",
+        help="the sticking's lookahead (default: min(30, D))",
+    )
     parser.add_argument("--tick-hz", type=float, default=120.0)
-    parser.add_argument("--prediction", choices=("both", "on", "off"), default="both",
-                        help="with the hand predictor, without, or both (default)")  # fmt: skip
+    parser.add_argument(
+        "--prediction",
+        choices=("both", "on", "off"),
+        default="both",
+        help="with the hand predictor, without, or both (default)",
+    )
     args = parser.parse_args(argv)
     files = sorted(corpus(args.corpus).rglob("*.mid"))
     beats = [f for f in files if "_beat_" in f.name]
     chosen = random.Random(args.seed).sample(beats, min(args.files, len(beats)))
     rig = build_rig(load_kit("rock5"))
-    print(f"{len(chosen)} GMD beats, first {args.seconds:g} s each; L = min(30 ms, D) unless "
-          f"given; upswing visible = live stick >= 1/2 offline height {PREP_S * 1000:g} ms before "
-          f"contact")  # fmt: skip
+    print(
+        f"{len(chosen)} GMD beats, first {args.seconds:g} s each; L = min(30 ms, D) unless "
+        f"given; upswing visible = live stick >= 1/2 offline height {PREP_S * 1000:g} ms before "
+        f"contact"
+    )
     modes = {"both": (False, True), "on": (True,), "off": (False,)}[args.prediction]
     for delay_ms, predict in ((d, p) for d in args.delay_ms for p in modes):
         lookahead_ms = args.lookahead_ms or min(30.0, delay_ms)
@@ -97,8 +118,11 @@ def main(argv: list[str]) -> int:
         for path in chosen:
             u = measure(rig, path, args.seconds, params, args.tick_hz)
             total = Upswing(total.notes + u.notes, total.visible + u.visible)
-        print(f"D = {delay_ms:g} ms, L = {lookahead_ms:g} ms, prediction "
-              f"{'on ' if predict else 'off'}: "
-              f"{total.visible}/{total.notes} notes "
-              f"= {100 * total.fraction:.1f} %", flush=True)  # fmt: skip
+        print(
+            f"D = {delay_ms:g} ms, L = {lookahead_ms:g} ms, prediction "
+            f"{'on ' if predict else 'off'}: "
+            f"{total.visible}/{total.notes} notes "
+            f"= {100 * total.fraction:.1f} %",
+            flush=True,
+        )
     return 0

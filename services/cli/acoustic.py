@@ -27,24 +27,39 @@ def register(sub: Subparsers) -> None:
     p = add_command(sub, "acoustic", _usage)
     actions = p.add_subparsers(dest="action", metavar="ACTION")
     train = actions.add_parser("train", help="train the hit classifier on the kits here")
-    train.add_argument("-o", "--output", type=Path, default=None,
-                       help="model .npz to write (default: the bundled kits/audio/"
-                       "acoustic-model.npz)")  # fmt: skip
-    train.add_argument("--kits", default=None, metavar="LIST",
-                       help="kits to train on (default: every one present)")  # fmt: skip
+    train.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=None,
+        help="model .npz to write (default: the bundled kits/audio/acoustic-model.npz)",
+    )
+    train.add_argument(
+        "--kits", default=None, metavar="LIST", help="kits to train on (default: every one present)"
+    )
     train.add_argument(
         "--hold-out",
         default=DEFAULT_HOLD_OUT,
         metavar="LIST",
         help=f"kits left out of training, or none (default {DEFAULT_HOLD_OUT})",
     )
-    train.add_argument("--files", type=int, default=24, metavar="N",
-                       help="train-split excerpts per kit (default 24)")  # fmt: skip
+    train.add_argument(
+        "--files",
+        type=int,
+        default=24,
+        metavar="N",
+        help="train-split excerpts per kit (default 24)",
+    )
     train.add_argument("--seconds", type=float, default=12.0, help="excerpt length (default 12)")
     train.add_argument("--epochs", type=int, default=8, help="passes over the data (default 8)")
-    train.add_argument("--copies", type=int, default=1, metavar="N",
-                       help="each take N times, the extra ones through a fresh EQ and gain "
-                       "(default 1: none; 3 cost the kick on unheard kits)")  # fmt: skip
+    train.add_argument(
+        "--copies",
+        type=int,
+        default=1,
+        metavar="N",
+        help="each take N times, the extra ones through a fresh EQ and gain "
+        "(default 1: none; 3 cost the kick on unheard kits)",
+    )
     train.add_argument("--seed", type=int, default=0)
     train.add_argument(
         "--corpus",
@@ -74,8 +89,9 @@ def run_train(args: argparse.Namespace) -> int:
     names = None if args.kits is None else [k.strip() for k in args.kits.split(",") if k.strip()]
     held = set() if args.hold_out == "none" else {h.strip() for h in args.hold_out.split(",")}
     for h in sorted(held - set(KIT_NAMES)):
-        raise LivedrummerError(f"--hold-out: unknown kit {h!r} "
-                               f"(one of {', '.join(KIT_NAMES)}, or none)")  # fmt: skip
+        raise LivedrummerError(
+            f"--hold-out: unknown kit {h!r} (one of {', '.join(KIT_NAMES)}, or none)"
+        )
     kits = [k for k in available_kits(names) if k.name not in held]
     if not kits:
         raise LivedrummerError("--kits: no kit to train on is present here")

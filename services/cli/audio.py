@@ -31,18 +31,32 @@ def register(sub: Subparsers) -> None:
     learn = actions.add_parser("learn", help="learn a kit's sound from its hits")
     learn.add_argument("--audio", metavar="DEVICE", required=True, help="audio input device")
     learn.add_argument("-o", "--output", type=Path, required=True, help="profile .toml to write")
-    learn.add_argument("--drums", default=DEFAULT_DRUMS,
-                       help=f"drums to learn, in order (default {DEFAULT_DRUMS})")  # fmt: skip
+    learn.add_argument(
+        "--drums", default=DEFAULT_DRUMS, help=f"drums to learn, in order (default {DEFAULT_DRUMS})"
+    )
     learn.add_argument("--hits", type=int, default=8, help="hits per drum (default 8)")
-    learn.add_argument("--other-strokes", metavar="LIST", default=DEFAULT_OTHER_STROKES,
-                       help="strokes to learn right after their drum's plain ones, when it "
-                       "is learnt: side-stick (snare), ride-bell (ride), or none (default "
-                       f"{DEFAULT_OTHER_STROKES})")  # fmt: skip
-    learn.add_argument("--channels", metavar="MAP", default=None,
-                       help="one mic per drum, as for input --audio (default: a mix)")  # fmt: skip
-    learn.add_argument("--timeout", type=float, default=60.0, metavar="S",
-                       help="seconds to wait for a drum's hits; an other stroke not heard "
-                       "in time is skipped (default 60)")  # fmt: skip
+    learn.add_argument(
+        "--other-strokes",
+        metavar="LIST",
+        default=DEFAULT_OTHER_STROKES,
+        help="strokes to learn right after their drum's plain ones, when it "
+        "is learnt: side-stick (snare), ride-bell (ride), or none (default "
+        f"{DEFAULT_OTHER_STROKES})",
+    )
+    learn.add_argument(
+        "--channels",
+        metavar="MAP",
+        default=None,
+        help="one mic per drum, as for input --audio (default: a mix)",
+    )
+    learn.add_argument(
+        "--timeout",
+        type=float,
+        default=60.0,
+        metavar="S",
+        help="seconds to wait for a drum's hits; an other stroke not heard "
+        "in time is skipped (default 60)",
+    )
     _lookahead_option(learn)
     learn.set_defaults(func=run_learn)
     prof = actions.add_parser("profile", help="make a profile from a SoundFont's drum kit")
@@ -53,10 +67,15 @@ def register(sub: Subparsers) -> None:
 
 
 def _lookahead_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--lookahead", type=int, default=2, metavar="N",
-                   help="frames of 2.67 ms the detector waits after an onset before deciding "
-                   "it, 1..8: 1 decides 2.7 ms sooner and tells a low tom from a kick less "
-                   "well (default 2)")  # fmt: skip
+    p.add_argument(
+        "--lookahead",
+        type=int,
+        default=2,
+        metavar="N",
+        help="frames of 2.67 ms the detector waits after an onset before deciding "
+        "it, 1..8: 1 decides 2.7 ms sooner and tells a low tom from a kick less "
+        "well (default 2)",
+    )
 
 
 def _settings(args: argparse.Namespace) -> DetectorSettings:
@@ -102,9 +121,17 @@ def run_learn(args: argparse.Namespace) -> int:
     if args.hits < 3:
         raise LivedrummerError(f"--hits: at least 3 (got {args.hits})")
     settings = _settings(args)
-    profile = learn_kit(args.audio, drums, args.output.stem, args.hits, mapping, args.timeout,
-                        say=lambda line: print(line, flush=True), settings=settings,
-                        other_strokes=strokes)  # fmt: skip
+    profile = learn_kit(
+        args.audio,
+        drums,
+        args.output.stem,
+        args.hits,
+        mapping,
+        args.timeout,
+        say=lambda line: print(line, flush=True),
+        settings=settings,
+        other_strokes=strokes,
+    )
     _write(args.output, profile.to_toml())
     print(f"{args.output}: {len(drums)} drums learnt; use --audio-profile {args.output}")
     return 0

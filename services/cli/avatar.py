@@ -25,12 +25,18 @@ from .performer import FITS
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "avatar", lambda _args: 2)
     actions = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    info = actions.add_parser("info", help="bones, proportions, triangles and textures",
-                              description="bones, proportions, triangles and textures")  # fmt: skip
+    info = actions.add_parser(
+        "info",
+        help="bones, proportions, triangles and textures",
+        description="bones, proportions, triangles and textures",
+    )
     info.add_argument("file", metavar="FILE|NAME", help="a .vrm, .glb or .gltf file, or a name")
-    info.add_argument("--bone-map", type=Path, metavar="FILE",
-                      help="TOML bone map (default: FILE.bones.toml beside the file, "
-                      "if any)")  # fmt: skip
+    info.add_argument(
+        "--bone-map",
+        type=Path,
+        metavar="FILE",
+        help="TOML bone map (default: FILE.bones.toml beside the file, if any)",
+    )
     info.add_argument("--json", action="store_true", help="print one JSON object")
     info.add_argument(
         "--kit", default="rock5", help="the kit it is fitted to, as render --kit (default: rock5)"
@@ -66,28 +72,36 @@ def run_info(args: argparse.Namespace) -> int:
 def text_lines(r: dict[str, Any]) -> list[str]:
     """The human-readable ``avatar info`` of :meth:`AvatarInfo.as_json`'s object."""
     found = r["humanoid_bones"]
-    lines = [f"{r['file']}: {r['convention'] or 'no humanoid map'}, {r['nodes']} nodes, "
-             f"{'usable' if r['usable'] else 'NOT usable'}"]  # fmt: skip
+    lines = [
+        f"{r['file']}: {r['convention'] or 'no humanoid map'}, {r['nodes']} nodes, "
+        f"{'usable' if r['usable'] else 'NOT usable'}"
+    ]
     lines.append(f"  humanoid bones   {len(found)} found: {', '.join(found) or '-'}")
     lines.append(f"  required missing {', '.join(r['required_missing']) or 'none'}")
     if "proportions_m" not in r:
         return lines
-    lines.append(f"  frame            faces {r['faces']}, up {r['up']}, unit "
-                 f"{r['unit_scale']:g} m, height {r['height_m']:.3f} m, "
-                 f"digest {r['digest']}")  # fmt: skip
+    lines.append(
+        f"  frame            faces {r['faces']}, up {r['up']}, unit "
+        f"{r['unit_scale']:g} m, height {r['height_m']:.3f} m, "
+        f"digest {r['digest']}"
+    )
     mapped = ", ".join(f"{ours}<-{node}" for ours, node in r["mapped"].items())
     lines.append(f"  mapped           {mapped}")
     props = r["proportions_m"]
     lines.append("  proportions m    " + " ".join(f"{k} {v:.3f}" for k, v in props.items()))
-    lines.append(f"  mesh             {r['triangles']} triangles, {r['vertices']} vertices, "
-                 f"{r['primitives']} primitives, {r['curled_finger_bones']} finger bones "
-                 "curled")  # fmt: skip
+    lines.append(
+        f"  mesh             {r['triangles']} triangles, {r['vertices']} vertices, "
+        f"{r['primitives']} primitives, {r['curled_finger_bones']} finger bones "
+        "curled"
+    )
     mats = []
     for m in r["materials"]:
         tex = f"texture {m['texture'][0]}x{m['texture'][1]}" if m["texture"] else "colour"
         mats.append(f"{m['name']} ({tex}, {m['alpha']}, {m['shading']})")
     lines.append(f"  materials        {r['textures']} textures: {'; '.join(mats)}")
     if "fit" in r:
-        lines.append(f"  fit              --fit {r['fit']['asked']} on kit {r['fit']['kit']}: "
-                     f"{r['fit']['said']}")  # fmt: skip
+        lines.append(
+            f"  fit              --fit {r['fit']['asked']} on kit {r['fit']['kit']}: "
+            f"{r['fit']['said']}"
+        )
     return lines

@@ -40,8 +40,11 @@ def register(sub: Subparsers) -> None:
     add_api_option(p)
     p.add_argument("--clicks", type=int, default=16, help="clicks to hit along to (default 16)")
     p.add_argument("--bpm", type=float, default=100.0, help="click tempo (default 100)")
-    p.add_argument("--no-sound", action="store_true",
-                   help="show the clicks in the terminal instead of playing them")  # fmt: skip
+    p.add_argument(
+        "--no-sound",
+        action="store_true",
+        help="show the clicks in the terminal instead of playing them",
+    )
     p.add_argument("--dry-run", action="store_true", help="print the result, write nothing")
     p.add_argument("--json", action="store_true", help="print JSON (schedule, then result)")
 
@@ -58,8 +61,9 @@ class ClickTrack:
 
         self._np = np
         self.clicks = np.asarray(clicks_s, np.float64)
-        self.stream = sd.OutputStream(samplerate=self.RATE, channels=1, dtype="float32",
-                                      callback=self._fill)  # fmt: skip
+        self.stream = sd.OutputStream(
+            samplerate=self.RATE, channels=1, dtype="float32", callback=self._fill
+        )
         self._offset = 0.0
         self._offset = time.monotonic() - float(self.stream.time)
         self.stream.start()
@@ -114,13 +118,16 @@ def run(args: argparse.Namespace) -> int:
             try:
                 player = ClickTrack(clicks)
             except Exception as exc:
-                print(f"calibrate: no sound ({exc}); the clicks are shown here instead",
-                      file=sys.stderr)  # fmt: skip
+                print(
+                    f"calibrate: no sound ({exc}); the clicks are shown here instead",
+                    file=sys.stderr,
+                )
         if args.json:
             print(json.dumps({"clicks_s": clicks.tolist()}), flush=True)
         else:
-            print(f"hit any pad once on each of the {args.clicks} clicks; starting in 2 s",
-                  flush=True)  # fmt: skip
+            print(
+                f"hit any pad once on each of the {args.clicks} clicks; starting in 2 s", flush=True
+            )
         shown = 0
         end = clicks[-1] + 60.0 / args.bpm
         while clock.now() < end:
@@ -137,17 +144,28 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise ConfigError(f"calibrate: {exc}") from None
     old = Calibration.load()
-    new = Calibration(input_ms=round(-got.median_ms, 2), audio_ms=old.audio_ms,
-                      display_ms=old.display_ms)  # fmt: skip
+    new = Calibration(
+        input_ms=round(-got.median_ms, 2), audio_ms=old.audio_ms, display_ms=old.display_ms
+    )
     path = None if args.dry_run else new.save()
     if args.json:
-        print(json.dumps({"lag_ms": round(got.median_ms, 3), "spread_ms": round(got.spread_ms, 3),
-                          "hits_used": got.used, "hits_dropped": got.dropped,
-                          "input_ms": new.input_ms,
-                          "written": str(path) if path else None}))  # fmt: skip
+        print(
+            json.dumps(
+                {
+                    "lag_ms": round(got.median_ms, 3),
+                    "spread_ms": round(got.spread_ms, 3),
+                    "hits_used": got.used,
+                    "hits_dropped": got.dropped,
+                    "input_ms": new.input_ms,
+                    "written": str(path) if path else None,
+                }
+            )
+        )
     else:
         where = f"wrote {path}" if path else f"not written (--dry-run; {default_path()})"
-        print(f"your hits land {got.median_ms:+.1f} ms after the click (spread ±"
-              f"{got.spread_ms:.1f} ms, {got.used} hits, {got.dropped} off the clicks): "
-              f"input_ms = {new.input_ms:+.1f}; {where}")  # fmt: skip
+        print(
+            f"your hits land {got.median_ms:+.1f} ms after the click (spread ±"
+            f"{got.spread_ms:.1f} ms, {got.used} hits, {got.dropped} off the clicks): "
+            f"input_ms = {new.input_ms:+.1f}; {where}"
+        )
     return 0

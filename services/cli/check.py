@@ -47,9 +47,12 @@ if TYPE_CHECKING:
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "check", run)
     p.add_argument("files", nargs="*", help="Standard MIDI File(s) or folders of them")
-    p.add_argument("--stage", type=Path, metavar="TOML",
-                   help="check each drummer of a stage file on its own kit "
-                   "(default: none)")  # fmt: skip
+    p.add_argument(
+        "--stage",
+        type=Path,
+        metavar="TOML",
+        help="check each drummer of a stage file on its own kit (default: none)",
+    )
     add_kit_option(p)
     add_map_option(p)
     add_channel_option(p)
@@ -89,8 +92,9 @@ def run(args: argparse.Namespace) -> int:
     strokes = StrokeParams(model=args.strokes)
     files = midi_files(args.files)
     if args.score is not None and len(files) != 1:
-        raise LivedrummerError(f"--score {args.score}: a score is of one MIDI file, "
-                               f"not of {len(files)}")  # fmt: skip
+        raise LivedrummerError(
+            f"--score {args.score}: a score is of one MIDI file, not of {len(files)}"
+        )
     errors: list[np.ndarray] = []
     worst: dict[str, Any] = {"penetration_mm": 0.0, "file": None, "at_s": 0.0}
     totals = {"notes": 0, "not_played": 0, "joint_limit_violations": 0, "frames": 0}
@@ -112,8 +116,14 @@ def run(args: argparse.Namespace) -> int:
             no_drums += 1
             continue
         map_names.add(note_map.name)
-        done = perform(performance, rig, note_map, expression, strokes,
-                       sticking=sticking_of(args, performance, kit))  # fmt: skip
+        done = perform(
+            performance,
+            rig,
+            note_map,
+            expression,
+            strokes,
+            sticking=sticking_of(args, performance, kit),
+        )
         r = check(done.animation, done.sticking, args.fps)
         errors.append(r.contact_error_m)
         if args.json and not args.summary:
@@ -127,8 +137,11 @@ def run(args: argparse.Namespace) -> int:
         for k, v in r.violations_by_limit.items():
             by_limit[k] = by_limit.get(k, 0) + v
         if r.penetration_m * 1000 > worst["penetration_mm"]:
-            worst = {"penetration_mm": r.penetration_m * 1000, "file": str(path),
-                     "at_s": r.penetration_at_s}  # fmt: skip
+            worst = {
+                "penetration_mm": r.penetration_m * 1000,
+                "file": str(path),
+                "at_s": r.penetration_at_s,
+            }
         if r.contact_error_m.size and r.contact_error_m.max() > worst_contact[0]:
             worst_contact = (float(r.contact_error_m.max()), str(path))
     e = np.concatenate(errors) * 1000.0 if errors else np.zeros(0)
@@ -165,27 +178,36 @@ def run(args: argparse.Namespace) -> int:
     else:
         c = summary["contact_error_mm"] or {"max": 0.0, "p99": 0.0, "mean": 0.0, "within_5mm": 0.0}
         print(f"{summary['files']} file(s), kit {kit.name}, map {summary['map']}")
-        print(f"  notes checked      {summary['notes']}  (not played: {summary['not_played']}"
-              f"{no_piece_words(no_piece, kit.name, summary['kit_that_plays_them'])})")  # fmt: skip
-        print(f"  too hard to play   {hard['too_fast']} too fast for one hand, "
-              f"{hard['crossed']} with the arms crossed")  # fmt: skip
+        print(
+            f"  notes checked      {summary['notes']}  (not played: {summary['not_played']}"
+            f"{no_piece_words(no_piece, kit.name, summary['kit_that_plays_them'])})"
+        )
+        print(
+            f"  too hard to play   {hard['too_fast']} too fast for one hand, "
+            f"{hard['crossed']} with the arms crossed"
+        )
         if summary["contact_error_mm"] is None:
             print("  contact error mm   none (no note played)")
         else:
-            print(f"  contact error mm   max {c['max']:.4f}  p99 {c['p99']:.4f}  "
-                  f"mean {c['mean']:.4f}  within 5 mm {c['within_5mm'] * 100:.3f} %")  # fmt: skip
+            print(
+                f"  contact error mm   max {c['max']:.4f}  p99 {c['p99']:.4f}  "
+                f"mean {c['mean']:.4f}  within 5 mm {c['within_5mm'] * 100:.3f} %"
+            )
         print(
             f"  penetration mm     {summary['penetration_mm']:.3f}"
             + (f"  ({worst['file']} at {worst['at_s']:.3f} s)" if worst["file"] else "")
         )
-        print(f"  joint-limit hits   {summary['joint_limit_violations']} of "
-              f"{summary['frames']} frames  {by_limit}")  # fmt: skip
+        print(
+            f"  joint-limit hits   {summary['joint_limit_violations']} of "
+            f"{summary['frames']} frames  {by_limit}"
+        )
     if no_drums:
-        print(f"livedrummer: {no_drums} of {len(files)} files have no drum notes",
-              file=sys.stderr)  # fmt: skip
+        print(f"livedrummer: {no_drums} of {len(files)} files have no drum notes", file=sys.stderr)
     if unreadable:
-        print(f"livedrummer: error: {unreadable} of {len(files)} files could not be read",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"livedrummer: error: {unreadable} of {len(files)} files could not be read",
+            file=sys.stderr,
+        )
         return 2
     return 0
 
@@ -254,8 +276,14 @@ def run_stage(args: argparse.Namespace) -> int:
             kit, avatar = fitted(args, kit, avatar)
         expression = load_expression(p.preset) if p.preset else None
         sticking = sticking_of(args, part.performance, kit)
-        done = perform(part.performance, rig_for(kit, avatar), part.note_map, expression,
-                       StrokeParams(model=args.strokes), sticking=sticking)  # fmt: skip
+        done = perform(
+            part.performance,
+            rig_for(kit, avatar),
+            part.note_map,
+            expression,
+            StrokeParams(model=args.strokes),
+            sticking=sticking,
+        )
         r = check(done.animation, done.sticking, args.fps)
         e = r.contact_error_m * 1000.0
         drummers.append({
@@ -272,8 +300,10 @@ def run_stage(args: argparse.Namespace) -> int:
     else:
         print(f"stage {args.stage}: {len(drummers)} drummers")
         for d in drummers:
-            print(f"  {d['id']:<12} kit {d['kit']:<12} at ({d['at'][0]:+.2f}, {d['at'][1]:+.2f}) "
-                  f"yaw {d['yaw_deg']:+.0f}  {d['notes']} notes, contact max "
-                  f"{d['contact_error_mm_max']:.3f} mm, "
-                  f"penetration {d['penetration_mm']:.3f} mm")  # fmt: skip
+            print(
+                f"  {d['id']:<12} kit {d['kit']:<12} at ({d['at'][0]:+.2f}, {d['at'][1]:+.2f}) "
+                f"yaw {d['yaw_deg']:+.0f}  {d['notes']} notes, contact max "
+                f"{d['contact_error_mm_max']:.3f} mm, "
+                f"penetration {d['penetration_mm']:.3f} mm"
+            )
     return 0

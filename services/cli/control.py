@@ -24,15 +24,22 @@ def register(sub: Subparsers) -> None:
     p = add_command(sub, "control", _usage)
     what = p.add_subparsers(dest="action", required=True, metavar="ACTION")
     learn = what.add_parser(
-        "learn", help="move each control, name its target; write a map",
+        "learn",
+        help="move each control, name its target; write a map",
         description="Move each control, name its target; write a map.",
-    )  # fmt: skip
+    )
     src = learn.add_mutually_exclusive_group(required=True)
     src.add_argument("--midi", metavar="PORT", help="the controller's MIDI port")
     src.add_argument("--virtual", metavar="NAME", help="open a virtual MIDI input port NAME")
     add_api_option(learn)
-    learn.add_argument("-o", "--output", type=Path, required=True, metavar="FILE.toml",
-                       help="the control map to write")  # fmt: skip
+    learn.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        metavar="FILE.toml",
+        help="the control map to write",
+    )
     learn.set_defaults(func=run_learn)
 
 
@@ -74,8 +81,9 @@ def run_learn(args: argparse.Namespace) -> int:
 
     decoder = MessageDecoder(load_note_map("general-midi"))  # unused: only the tap is read
     virtual = args.virtual is not None
-    source = MidiPortSource(args.virtual or args.midi, MonotonicClock(), decoder, api=args.api,
-                            virtual=virtual)  # fmt: skip
+    source = MidiPortSource(
+        args.virtual or args.midi, MonotonicClock(), decoder, api=args.api, virtual=virtual
+    )
     if not virtual:
         source.check()
     source.tap = tap
@@ -100,8 +108,10 @@ def run_learn(args: argparse.Namespace) -> int:
             if msg is None:
                 break
             kind, number = _key(msg)[:2]
-            print(f"heard {kind} {number} on channel {msg.channel + 1}: target? ({choices} | "
-                  "skip)", flush=True)  # fmt: skip
+            print(
+                f"heard {kind} {number} on channel {msg.channel + 1}: target? ({choices} | skip)",
+                flush=True,
+            )
             while True:
                 answer = _read_line()
                 if answer is None or answer == "skip":
@@ -123,8 +133,10 @@ def run_learn(args: argparse.Namespace) -> int:
         source.close()
     out.write_text(ControlMap(bindings).toml())
     learned = load_control_map(out)  # what up --control reads, checked now
-    print(f"wrote {out}: {len(learned.bindings)} controls; use it with "
-          f"up --control {out} --control-midi PORT")  # fmt: skip
+    print(
+        f"wrote {out}: {len(learned.bindings)} controls; use it with "
+        f"up --control {out} --control-midi PORT"
+    )
     return 0
 
 

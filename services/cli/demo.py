@@ -43,32 +43,56 @@ LIVE_SECONDS = 30.0
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "demo", run)
-    p.add_argument("--seconds", type=float, metavar="S",
-                   help=f"play S s (default {LIVE_SECONDS:g}; --offline: the first S s, "
-                   "default all)")  # fmt: skip
-    add_renamed(p, "--file", p.add_argument(
-        "--offline", action="store_true", help="the groove as a file, not live"))  # fmt: skip
-    add_renamed(p, "--render", p.add_argument(
-        "--headless", action="store_true", help="record the video even with a screen"))  # fmt: skip
-    p.add_argument("-o", "--output", type=Path, default=DEMO_VIDEO,
-                   help=f"video file (default {DEMO_VIDEO})")  # fmt: skip
-    p.add_argument("--soundfont", type=Path, metavar="SF2",
-                   help="video: drum sounds from this General MIDI SoundFont "
-                   "(default: the built-in kit)")  # fmt: skip
+    p.add_argument(
+        "--seconds",
+        type=float,
+        metavar="S",
+        help=f"play S s (default {LIVE_SECONDS:g}; --offline: the first S s, default all)",
+    )
+    add_renamed(
+        p,
+        "--file",
+        p.add_argument("--offline", action="store_true", help="the groove as a file, not live"),
+    )
+    add_renamed(
+        p,
+        "--render",
+        p.add_argument(
+            "--headless", action="store_true", help="record the video even with a screen"
+        ),
+    )
+    p.add_argument(
+        "-o", "--output", type=Path, default=DEMO_VIDEO, help=f"video file (default {DEMO_VIDEO})"
+    )
+    p.add_argument(
+        "--soundfont",
+        type=Path,
+        metavar="SF2",
+        help="video: drum sounds from this General MIDI SoundFont (default: the built-in kit)",
+    )
     p.add_argument(
         "--size",
         metavar="WxH",
         help=f"window or video size (default {DEMO_SIZE[0]}x{DEMO_SIZE[1]})",
     )
-    p.add_argument("--camera", metavar="NAME",
-                   help="viewpoint (default stage live, front --offline)")  # fmt: skip
+    p.add_argument(
+        "--camera", metavar="NAME", help="viewpoint (default stage live, front --offline)"
+    )
     add_kit_option(p)
-    p.add_argument("--map", default=DEMO_MAP,
-                   help=f"note map the groove is read with (default {DEMO_MAP}, the "
-                   "Groove MIDI Dataset's TD-11)")  # fmt: skip
-    p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
-                   help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
-                   "default: the built-in kit)")  # fmt: skip
+    p.add_argument(
+        "--map",
+        default=DEMO_MAP,
+        help=f"note map the groove is read with (default {DEMO_MAP}, the "
+        "Groove MIDI Dataset's TD-11)",
+    )
+    p.add_argument(
+        "--sfz",
+        type=Path,
+        metavar="SFZ",
+        dest="soundfont",
+        help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+        "default: the built-in kit)",
+    )
 
 
 def sticking_line(st: Sticking) -> str:
@@ -107,10 +131,21 @@ def run_live(args: argparse.Namespace) -> int:
     else:
         out: Path = args.output
         size = args.size or f"{DEMO_SIZE[0]}x{DEMO_SIZE[1]}"
-        print(f"demo: no screen: recording {seconds:g} s of the live show to {out} "
-              f"({size} @ {DEMO_FPS} fps)", flush=True)  # fmt: skip
-        argv += ["--video", str(out), "--size", size, "--fps", str(DEMO_FPS),
-                 "--frames-dir", str(out.parent / "live")]  # fmt: skip
+        print(
+            f"demo: no screen: recording {seconds:g} s of the live show to {out} "
+            f"({size} @ {DEMO_FPS} fps)",
+            flush=True,
+        )
+        argv += [
+            "--video",
+            str(out),
+            "--size",
+            size,
+            "--fps",
+            str(DEMO_FPS),
+            "--frames-dir",
+            str(out.parent / "live"),
+        ]
         if args.soundfont is not None:
             argv += ["--soundfont", str(args.soundfont)]
     return up(build_parser(argv).parse_args(argv))
@@ -153,14 +188,26 @@ def run_file(args: argparse.Namespace) -> int:
     out: Path = args.output
     out.parent.mkdir(parents=True, exist_ok=True)
     settings = VideoSettings(size=size, fps=DEMO_FPS)
-    print(f"no screen: rendering {performance.duration_s:.0f} s to {out} "
-          f"({size[0]}x{size[1]} @ {DEMO_FPS} fps, camera {camera}, kit {kit.name})",
-          flush=True)  # fmt: skip
+    print(
+        f"no screen: rendering {performance.duration_s:.0f} s to {out} "
+        f"({size[0]}x{size[1]} @ {DEMO_FPS} fps, camera {camera}, kit {kit.name})",
+        flush=True,
+    )
     bar = ProgressBar("demo", True, DEMO_FPS, every_s=0.2 if sys.stderr.isatty() else 10.0)
     start = time.perf_counter()
-    report = export(performance, body, out=out, settings=settings, camera=camera,
-                    progress=bar, soundfont=args.soundfont, jobs=None)  # fmt: skip
+    report = export(
+        performance,
+        body,
+        out=out,
+        settings=settings,
+        camera=camera,
+        progress=bar,
+        soundfont=args.soundfont,
+        jobs=None,
+    )
     took = time.perf_counter() - start
-    print(f"demo: wrote {out.resolve()} ({report.duration_s:.1f} s of video with sound) "
-          f"in {took:.1f} s ({report.realtime:.2f}x real time)")  # fmt: skip
+    print(
+        f"demo: wrote {out.resolve()} ({report.duration_s:.1f} s of video with sound) "
+        f"in {took:.1f} s ({report.realtime:.2f}x real time)"
+    )
     return 0

@@ -30,13 +30,24 @@ UNIT_NAME = "livedrummer-rig.service"
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "deploy", run, "write a systemd user unit that starts the rig at boot")
     what = p.add_subparsers(dest="target", required=True, metavar="TARGET")
-    sd = what.add_parser("systemd", help="a user unit running `up --rig FILE --wait`",
-                         description="A user unit running `up --rig FILE --wait`.")  # fmt: skip
+    sd = what.add_parser(
+        "systemd",
+        help="a user unit running `up --rig FILE --wait`",
+        description="A user unit running `up --rig FILE --wait`.",
+    )
     sd.add_argument("--print", action="store_true", help="print the unit instead of writing it")
-    sd.add_argument("--unit-dir", type=Path, metavar="DIR",
-                    help="where to write it (default ~/.config/systemd/user)")  # fmt: skip
-    sd.add_argument("--rig", type=Path, metavar="FILE",
-                    help="rig profile to run (default $LIVEDRUMMER_HOME/rig.toml)")  # fmt: skip
+    sd.add_argument(
+        "--unit-dir",
+        type=Path,
+        metavar="DIR",
+        help="where to write it (default ~/.config/systemd/user)",
+    )
+    sd.add_argument(
+        "--rig",
+        type=Path,
+        metavar="FILE",
+        help="rig profile to run (default $LIVEDRUMMER_HOME/rig.toml)",
+    )
 
 
 def unit_text(rig: Path, argv: list[str]) -> str:
@@ -73,8 +84,11 @@ def run(args: argparse.Namespace) -> int:
     if rig.exists():
         RigProfile.load(rig)  # a broken profile is one line now, not a unit failing at boot
     else:
-        print(f"deploy: note: {rig} does not exist yet; write it before starting the unit "
-              "(see 'Run the rig at boot' in docs/guide/rig.md)", file=sys.stderr)  # fmt: skip
+        print(
+            f"deploy: note: {rig} does not exist yet; write it before starting the unit "
+            "(see 'Run the rig at boot' in docs/guide/rig.md)",
+            file=sys.stderr,
+        )
     text = unit_text(rig, program_argv())
     if args.print:
         print(text, end="")

@@ -19,9 +19,13 @@ def has_screen() -> bool:
 
 def add_api_option(parser: argparse.ArgumentParser) -> None:
     """``--api``: which MIDI system to find ``--midi`` ports on (services.input.midiport)."""
-    parser.add_argument("--api", choices=("auto", "jack", "alsa"), default="auto",
-                        help="MIDI system of --midi: jack, alsa, or auto (default: the one the "
-                        "port is on, ALSA first when both have it)")  # fmt: skip
+    parser.add_argument(
+        "--api",
+        choices=("auto", "jack", "alsa"),
+        default="auto",
+        help="MIDI system of --midi: jack, alsa, or auto (default: the one the "
+        "port is on, ALSA first when both have it)",
+    )
 
 
 def kit_source(args: argparse.Namespace, clock: Any, decoder: Any) -> Any:
@@ -41,8 +45,9 @@ def kit_source(args: argparse.Namespace, clock: Any, decoder: Any) -> Any:
         from ..input.midiport import MidiPortSource
 
         virtual = getattr(args, "virtual", None)  # up has no --virtual
-        source = MidiPortSource(virtual or args.midi, clock, decoder, api=args.api,
-                                virtual=virtual is not None)  # fmt: skip
+        source = MidiPortSource(
+            virtual or args.midi, clock, decoder, api=args.api, virtual=virtual is not None
+        )
     if not getattr(args, "wait", False):
         source.check()
     return source

@@ -42,97 +42,194 @@ if TYPE_CHECKING:
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "display", run)
-    p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove; "
-                   "--live --practice: the reference the teacher plays)")  # fmt: skip
+    p.add_argument(
+        "file",
+        nargs="?",
+        help="Standard MIDI File (default: the demo groove; "
+        "--live --practice: the reference the teacher plays)",
+    )
     add_kit_option(p)
-    p.add_argument("--map", help="note map name or .toml path (default auto: the bundled map "
-                   "that knows the most of the file's notes; roland-td for the demo; --live "
-                   "--sound: the synth's map, which reads its grabs and pedal, default "
-                   "roland-td)")  # fmt: skip
+    p.add_argument(
+        "--map",
+        help="note map name or .toml path (default auto: the bundled map "
+        "that knows the most of the file's notes; roland-td for the demo; --live "
+        "--sound: the synth's map, which reads its grabs and pedal, default "
+        "roland-td)",
+    )
     add_channel_option(p)
     p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="first viewpoint")
     p.add_argument("--size", default="1280x720", help="window size WIDTHxHEIGHT")
     p.add_argument("--fullscreen", action="store_true", help="full screen (projectors)")
-    p.add_argument("--screenshot", type=Path, metavar="PNG",
-                   help="file window: its last frame as PNG at close (default none)")  # fmt: skip
+    p.add_argument(
+        "--screenshot",
+        type=Path,
+        metavar="PNG",
+        help="file window: its last frame as PNG at close (default none)",
+    )
     p.add_argument("--monitor", type=int, default=0, help="monitor index for --fullscreen")
-    p.add_argument("--aa", type=int, default=4, metavar="N",
-                   help="multisample N: 0, 2, 4 or 8 (default 4; the live window: FXAA "
-                   "where N > 0)")  # fmt: skip
-    add_renamed(p, "--quit-after", p.add_argument(
-        "--seconds", type=float, metavar="S",
-        help="stop after S seconds; --live: S seconds after the first frame with the drummer "
-        "(default: when closed or stopped)"))  # fmt: skip
-    p.add_argument("--overlay", default="", metavar="LIST",
-                   help="strips shown first: score, joints or both; keys o, g "
-                   "(default: none)")  # fmt: skip
+    p.add_argument(
+        "--aa",
+        type=int,
+        default=4,
+        metavar="N",
+        help="multisample N: 0, 2, 4 or 8 (default 4; the live window: FXAA where N > 0)",
+    )
+    add_renamed(
+        p,
+        "--quit-after",
+        p.add_argument(
+            "--seconds",
+            type=float,
+            metavar="S",
+            help="stop after S seconds; --live: S seconds after the first frame with the drummer "
+            "(default: when closed or stopped)",
+        ),
+    )
+    p.add_argument(
+        "--overlay",
+        default="",
+        metavar="LIST",
+        help="strips shown first: score, joints or both; keys o, g (default: none)",
+    )
     sound = p.add_argument_group("sound (the file window)")
-    sound.add_argument("--audio-device", metavar="NAME",
-                       help="sound output: a device name or part of it, e.g. 'system, JACK' "
-                       "(default: the system's default output)")  # fmt: skip
-    sound.add_argument("--soundfont", type=Path, metavar="SF2",
-                       help="drum sounds from this General MIDI SoundFont via FluidSynth "
-                       "(default: the built-in kit)")  # fmt: skip
-    sound.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
-                       help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
-                       "default: the built-in kit)")  # fmt: skip
+    sound.add_argument(
+        "--audio-device",
+        metavar="NAME",
+        help="sound output: a device name or part of it, e.g. 'system, JACK' "
+        "(default: the system's default output)",
+    )
+    sound.add_argument(
+        "--soundfont",
+        type=Path,
+        metavar="SF2",
+        help="drum sounds from this General MIDI SoundFont via FluidSynth "
+        "(default: the built-in kit)",
+    )
+    sound.add_argument(
+        "--sfz",
+        type=Path,
+        metavar="SFZ",
+        dest="soundfont",
+        help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+        "default: the built-in kit)",
+    )
     sound.add_argument("--no-sound", action="store_true", help="a silent window")
-    sound.add_argument("--midi-out", metavar="PORT",
-                       help="file window: send the file's notes to this MIDI port (a sampler; "
-                       "a virtual port of that name where none is there) as the picture "
-                       "plays them (default: none)")  # fmt: skip
-    sound.add_argument("--frame-log", type=Path, metavar="JSONL",
-                       help="file window: per frame the monotonic time after the swap and "
-                       "the position shown (default: none)")  # fmt: skip
+    sound.add_argument(
+        "--midi-out",
+        metavar="PORT",
+        help="file window: send the file's notes to this MIDI port (a sampler; "
+        "a virtual port of that name where none is there) as the picture "
+        "plays them (default: none)",
+    )
+    sound.add_argument(
+        "--frame-log",
+        type=Path,
+        metavar="JSONL",
+        help="file window: per frame the monotonic time after the swap and "
+        "the position shown (default: none)",
+    )
     add_motion_options(p)
     add_avatar_option(p)
     add_background_option(p, transparent=False)
     add_look_option(p)
     live = p.add_argument_group("live (poses from a running synth)")
     live.add_argument("--live", action="store_true", help="show a synth's poses as they come")
-    live.add_argument("--sub", default="tcp://127.0.0.1:5720",
-                      help="the synth's pose endpoint (default tcp://127.0.0.1:5720)")  # fmt: skip
-    live.add_argument("--keys-port", metavar="PORT",
-                      help="window: the drum keys (Z X C V T Y N J K U P E) play MIDI notes into "
-                      "this input port, e.g. an `input --virtual PORT` (default: keys play "
-                      "nothing live)")  # fmt: skip
-    live.add_argument("--control", metavar="ENDPOINT",
-                      help="answer HELLO with READY here, e.g. tcp://127.0.0.1:5731 "
-                           "(default: no control socket)")  # fmt: skip
-    live.add_argument("--synth-control", metavar="ENDPOINT",
-                      help="ask the synth here which avatar it plays; warn when it is not "
-                      "--avatar (default: not asked)")  # fmt: skip
-    live.add_argument("--stage", type=Path, metavar="FILE",
-                      help="draw every live performer of this stage file; --sub lists their "
-                      "synths' pose endpoints, comma-separated, in the file's order "
-                      "(default: one drummer)")  # fmt: skip
+    live.add_argument(
+        "--sub",
+        default="tcp://127.0.0.1:5720",
+        help="the synth's pose endpoint (default tcp://127.0.0.1:5720)",
+    )
+    live.add_argument(
+        "--keys-port",
+        metavar="PORT",
+        help="window: the drum keys (Z X C V T Y N J K U P E) play MIDI notes into "
+        "this input port, e.g. an `input --virtual PORT` (default: keys play "
+        "nothing live)",
+    )
+    live.add_argument(
+        "--control",
+        metavar="ENDPOINT",
+        help="answer HELLO with READY here, e.g. tcp://127.0.0.1:5731 (default: no control socket)",
+    )
+    live.add_argument(
+        "--synth-control",
+        metavar="ENDPOINT",
+        help="ask the synth here which avatar it plays; warn when it is not "
+        "--avatar (default: not asked)",
+    )
+    live.add_argument(
+        "--stage",
+        type=Path,
+        metavar="FILE",
+        help="draw every live performer of this stage file; --sub lists their "
+        "synths' pose endpoints, comma-separated, in the file's order "
+        "(default: one drummer)",
+    )
     live.add_argument("--headless", action="store_true", help="no window: render off screen")
-    live.add_argument("--practice", metavar="ENDPOINT",
-                      help="draw a practice rig's readout from this endpoint, and its teacher "
-                      "playing FILE (livedrummer practice starts this; default: none)")  # fmt: skip
-    live.add_argument("--teacher", default="off", metavar="MODE",
-                      help="--practice: ghost, ahead[:SECONDS] or off (default off)")  # fmt: skip
-    live.add_argument("--sound", action="store_true",
-                      help="sound each onset the synth forwards at its show time (onset + D), "
-                      "on --audio-device: the built-in kit, --soundfont or --sfz")  # fmt: skip
-    add_renamed(live, "--frames", live.add_argument(
-        "--max-frames", type=int, metavar="N",
-        help="stop after N frames (default: when stopped)"))  # fmt: skip
-    add_renamed(live, "--out", live.add_argument(
-        "--frames-dir", type=Path, metavar="DIR",
-        help="write frame PNGs and frames.jsonl into DIR (default: none)"))  # fmt: skip
+    live.add_argument(
+        "--practice",
+        metavar="ENDPOINT",
+        help="draw a practice rig's readout from this endpoint, and its teacher "
+        "playing FILE (livedrummer practice starts this; default: none)",
+    )
+    live.add_argument(
+        "--teacher",
+        default="off",
+        metavar="MODE",
+        help="--practice: ghost, ahead[:SECONDS] or off (default off)",
+    )
+    live.add_argument(
+        "--sound",
+        action="store_true",
+        help="sound each onset the synth forwards at its show time (onset + D), "
+        "on --audio-device: the built-in kit, --soundfont or --sfz",
+    )
+    add_renamed(
+        live,
+        "--frames",
+        live.add_argument(
+            "--max-frames",
+            type=int,
+            metavar="N",
+            help="stop after N frames (default: when stopped)",
+        ),
+    )
+    add_renamed(
+        live,
+        "--out",
+        live.add_argument(
+            "--frames-dir",
+            type=Path,
+            metavar="DIR",
+            help="write frame PNGs and frames.jsonl into DIR (default: none)",
+        ),
+    )
     live.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
-    live.add_argument("--clock", choices=("auto", "audio", "monotonic"), default="auto",
-                      help="frame clock: the audio output's (auto: when not headless)")  # fmt: skip
-    live.add_argument("--no-png", action="store_true",
-                      help="--frames-dir: frames.jsonl only, no PNGs")  # fmt: skip
-    live.add_argument("--video", type=Path, metavar="FILE",
-                      help="with --headless: record the frames on show time as MP4 "
-                      "(default: none)")  # fmt: skip
-    live.add_argument("--no-render", action="store_true",
-                      help="only log frames (benchmarks without a GPU context)")  # fmt: skip
-    live.add_argument("--no-render-ahead", action="store_true",
-                      help="draw each frame for when it is begun, not when it is done")  # fmt: skip
+    live.add_argument(
+        "--clock",
+        choices=("auto", "audio", "monotonic"),
+        default="auto",
+        help="frame clock: the audio output's (auto: when not headless)",
+    )
+    live.add_argument(
+        "--no-png", action="store_true", help="--frames-dir: frames.jsonl only, no PNGs"
+    )
+    live.add_argument(
+        "--video",
+        type=Path,
+        metavar="FILE",
+        help="with --headless: record the frames on show time as MP4 (default: none)",
+    )
+    live.add_argument(
+        "--no-render",
+        action="store_true",
+        help="only log frames (benchmarks without a GPU context)",
+    )
+    live.add_argument(
+        "--no-render-ahead",
+        action="store_true",
+        help="draw each frame for when it is begun, not when it is done",
+    )
     add_osc_options(p, "--live: camera, camera/cut, blackout, state")
     add_curve_options(p, server=False, client=True)
     add_settings_option(p)
@@ -167,11 +264,17 @@ def run(args: argparse.Namespace) -> int:
     if not performance.onsets.size:  # said on stderr: nothing for the drummer to play
         return 0
     options = WindowOptions(
-        size=parse_size(args.size), fullscreen=args.fullscreen, monitor=args.monitor,
-        camera=args.camera, samples=args.aa, quit_after_s=args.seconds,
-        overlays=parse_overlays(args.overlay), screenshot=args.screenshot, background=background,
+        size=parse_size(args.size),
+        fullscreen=args.fullscreen,
+        monitor=args.monitor,
+        camera=args.camera,
+        samples=args.aa,
+        quit_after_s=args.seconds,
+        overlays=parse_overlays(args.overlay),
+        screenshot=args.screenshot,
+        background=background,
         frame_log=args.frame_log,
-    )  # fmt: skip
+    )
     kit, avatar = fitted(args, load_kit(args.kit), avatar_of(args))
     options = dataclasses.replace(options, lights=lights_of(args, kit))
     body = body_scene(args, performance, kit, note_map, avatar)
@@ -223,8 +326,9 @@ def run_live(args: argparse.Namespace) -> int:
 
     # --settings FILE (from up): kit, avatar and sound as resolved there; a practice display's
     # --map is its teacher's reference, not the kit's
-    settings = settings_of(args, note_map=args.map or DEMO_MAP,
-                           skip=("map",) if args.practice is not None else ())  # fmt: skip
+    settings = settings_of(
+        args, note_map=args.map or DEMO_MAP, skip=("map",) if args.practice is not None else ()
+    )
     window = None
     overlays = parse_overlays(args.overlay)
     background = background_of(args, window=True)  # live video has no alpha: opaque only
@@ -232,12 +336,20 @@ def run_live(args: argparse.Namespace) -> int:
         from ..display.window import WindowOptions
 
         if args.video is not None or args.frames_dir is not None:
-            raise ConfigError("display --live: --video and --frames-dir record off screen: "
-                              "add --headless")  # fmt: skip
-        window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
-                               monitor=args.monitor, camera=args.camera, samples=args.aa,
-                               vsync=False, background=background,
-                               overlays=overlays, keys_port=args.keys_port)  # fmt: skip
+            raise ConfigError(
+                "display --live: --video and --frames-dir record off screen: add --headless"
+            )
+        window = WindowOptions(
+            size=parse_size(args.size),
+            fullscreen=args.fullscreen,
+            monitor=args.monitor,
+            camera=args.camera,
+            samples=args.aa,
+            vsync=False,
+            background=background,
+            overlays=overlays,
+            keys_port=args.keys_port,
+        )
     if args.max_frames is not None and args.max_frames < 1:
         raise ConfigError(f"--max-frames: expected >= 1 (got {args.max_frames})")
     if not 0 < args.fps <= 1000:
@@ -253,21 +365,36 @@ def run_live(args: argparse.Namespace) -> int:
         try:  # a stage window follows the sound the audience hears, where there is an output
             clock = AudioFrameClock(calibration.audio_ms / 1000.0)
         except DisplayError as exc:
-            logging.getLogger("livedrummer.display").warning("%s: frames on the monotonic clock",
-                                                             exc)  # fmt: skip
+            logging.getLogger("livedrummer.display").warning(
+                "%s: frames on the monotonic clock", exc
+            )
             clock = MonotonicFrameClock(calibration.audio_ms / 1000.0)
     else:
         clock = MonotonicFrameClock(calibration.audio_ms / 1000.0)
     config = LiveConfig(
-        sub=args.sub, fps=args.fps, frames=args.max_frames, out=args.frames_dir,
-        size=parse_size(args.size), camera=args.camera,
-        display_offset_s=calibration.display_ms / 1000.0, render=not args.no_render,
-        png=not args.no_png, security=security_from_args(args), window=window,
-        video=args.video, render_ahead=not args.no_render_ahead, seconds=args.seconds,
-        control=args.control, avatar=avatar, osc_port=args.osc, osc_allow=osc_allow(args),
-        cues=cues_of(args), background=background, overlays=overlays,
+        sub=args.sub,
+        fps=args.fps,
+        frames=args.max_frames,
+        out=args.frames_dir,
+        size=parse_size(args.size),
+        camera=args.camera,
+        display_offset_s=calibration.display_ms / 1000.0,
+        render=not args.no_render,
+        png=not args.no_png,
+        security=security_from_args(args),
+        window=window,
+        video=args.video,
+        render_ahead=not args.no_render_ahead,
+        seconds=args.seconds,
+        control=args.control,
+        avatar=avatar,
+        osc_port=args.osc,
+        osc_allow=osc_allow(args),
+        cues=cues_of(args),
+        background=background,
+        overlays=overlays,
         lights=lights_of(args, kit),
-    )  # fmt: skip
+    )
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     if args.practice is not None:
         config.extra = practice_view(args, ctx, kit, avatar)
@@ -295,14 +422,21 @@ def run_live(args: argparse.Namespace) -> int:
         from livedrummer.midi.notemap import load_note_map
 
         load_note_map(settings.note_map)  # a bad map is one line here, not a silent sound
-        sound = LiveSound(SoundConfig(args.sub, settings.sound.device, settings.kit,
-                                      security_from_args(args), sfz=sfz, soundfont=sf2,
-                                      note_map=settings.note_map))  # fmt: skip
+        sound = LiveSound(
+            SoundConfig(
+                args.sub,
+                settings.sound.device,
+                settings.kit,
+                security_from_args(args),
+                sfz=sfz,
+                soundfont=sf2,
+                note_map=settings.note_map,
+            )
+        )
         if not sound.start():
             sound = None
     try:
-        code = serve(display, lambda endpoints: endpoints["sub"],
-                     {"settings": settings.summary()})  # fmt: skip
+        code = serve(display, lambda endpoints: endpoints["sub"], {"settings": settings.summary()})
     finally:
         if sound is not None:
             sound.close()
@@ -312,8 +446,11 @@ def run_live(args: argparse.Namespace) -> int:
         pngs = not getattr(args, "no_png", False)
         log = f"{args.frames_dir}/frames.jsonl"
         where = f" into {args.frames_dir}" if pngs else f", frame log in {log}"
-    print(f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "
-          f"{s['missing']} pose messages lost", file=sys.stderr)  # fmt: skip
+    print(
+        f"display: {s['frames']} frames{where}, {s['pose_samples']} pose samples, "
+        f"{s['missing']} pose messages lost",
+        file=sys.stderr,
+    )
     if sound is not None and sound.stats is not None:
         print(sound.stats.line(), file=sys.stderr)
     return code

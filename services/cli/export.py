@@ -27,9 +27,12 @@ def register(sub: Subparsers) -> None:
     p = add_command(sub, "export", run)
     p.add_argument("file", help="Standard MIDI File")
     p.add_argument("-o", "--output", required=True, help="output .bvh or .glb path")
-    p.add_argument("--format", choices=("bvh", "gltf"),
-                   help="bvh (skeleton and motion) or gltf (binary .glb: avatar, sticks and "
-                   "motion) (default: from the output's suffix, .glb is gltf)")  # fmt: skip
+    p.add_argument(
+        "--format",
+        choices=("bvh", "gltf"),
+        help="bvh (skeleton and motion) or gltf (binary .glb: avatar, sticks and "
+        "motion) (default: from the output's suffix, .glb is gltf)",
+    )
     p.add_argument("--fps", type=float, default=60.0, help="frames per second (default 60)")
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
     add_kit_option(p)

@@ -38,20 +38,23 @@ def add_map_option(parser: argparse.ArgumentParser, default: str = "auto") -> No
     """``--map``; for a file, ``auto`` (the default) picks the bundled map that knows the most
     of the file's notes and says which."""
     parser.add_argument(
-        "--map", default=default,
+        "--map",
+        default=default,
         help=f"note map name or .toml path; auto: the bundled map that knows the most of the "
         f"file's notes (default {default})",
-    )  # fmt: skip
+    )
 
 
 def add_channel_option(parser: Any, default: str = "auto") -> None:
     """``--channel N|all``: which MIDI channel is the drums (parsed by
     :func:`livedrummer.midi.channels.parse_channel`)."""
     parser.add_argument(
-        "--channel", default=default, metavar="N|all",
+        "--channel",
+        default=default,
+        metavar="N|all",
         help="MIDI channel 1-16 read as drums, or all; auto: channel 10 when notes are on "
         f"several channels (default {default})",
-    )  # fmt: skip
+    )
 
 
 #: What a folder given as input is searched for (any case).

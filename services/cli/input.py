@@ -30,52 +30,91 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--serial", metavar="DEV", help="serial device sending raw MIDI bytes")
     src.add_argument("--file", metavar="F.mid", type=Path, help="play a MIDI file as if live")
     src.add_argument("--remote", metavar="ENDPOINT", help="another site's input daemon (pub)")
-    src.add_argument("--virtual", metavar="NAME",
-                     help="open a virtual MIDI input NAME for a keyboard or DAW")  # fmt: skip
-    src.add_argument("--audio", metavar="DEVICE",
-                     help="drums heard through an audio input (name or index)")  # fmt: skip
+    src.add_argument(
+        "--virtual", metavar="NAME", help="open a virtual MIDI input NAME for a keyboard or DAW"
+    )
+    src.add_argument(
+        "--audio", metavar="DEVICE", help="drums heard through an audio input (name or index)"
+    )
     from .transcribe import add_audio_options
 
     add_audio_options(p)
-    p.add_argument("--wait", action="store_true",
-                   help="wait for a --midi port or --serial device that is not there yet "
-                        "(default: one line naming what exists, exit 2)")  # fmt: skip
-    p.add_argument("--remote-control", metavar="ENDPOINT",
-                   help="--remote: the other site's control endpoint; keeps the remote "
-                   "drummer's timing (clock offset and jitter buffer) instead of stamping "
-                   "hits on arrival (default: stamped on arrival)")  # fmt: skip
+    p.add_argument(
+        "--wait",
+        action="store_true",
+        help="wait for a --midi port or --serial device that is not there yet "
+        "(default: one line naming what exists, exit 2)",
+    )
+    p.add_argument(
+        "--remote-control",
+        metavar="ENDPOINT",
+        help="--remote: the other site's control endpoint; keeps the remote "
+        "drummer's timing (clock offset and jitter buffer) instead of stamping "
+        "hits on arrival (default: stamped on arrival)",
+    )
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
     p.add_argument("--loop", action="store_true", help="--file: start again at the end")
-    p.add_argument("--thru", metavar="PORT",
-                   help="forward what the kit sends to this MIDI port (a DAW or sampler; a "
-                   "virtual port of that name where none is there) (default: none)")  # fmt: skip
-    p.add_argument("--thru-map", choices=("general-midi",),
-                   help="--thru: re-map notes to General MIDI drums on channel 10 "
-                   "(default: forwarded unchanged)")  # fmt: skip
+    p.add_argument(
+        "--thru",
+        metavar="PORT",
+        help="forward what the kit sends to this MIDI port (a DAW or sampler; a "
+        "virtual port of that name where none is there) (default: none)",
+    )
+    p.add_argument(
+        "--thru-map",
+        choices=("general-midi",),
+        help="--thru: re-map notes to General MIDI drums on channel 10 "
+        "(default: forwarded unchanged)",
+    )
     p.add_argument("--pub", default=DEFAULT_PUB, help=f"publish endpoint (default {DEFAULT_PUB})")
-    p.add_argument("--control", default=DEFAULT_CONTROL,
-                   help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
-    p.add_argument("--map", default="auto",
-                   help="note map name or .toml path; auto: for --file the bundled map that "
-                        "knows most of its notes, roland-td for a kit (default auto)")  # fmt: skip
+    p.add_argument(
+        "--control",
+        default=DEFAULT_CONTROL,
+        help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})",
+    )
+    p.add_argument(
+        "--map",
+        default="auto",
+        help="note map name or .toml path; auto: for --file the bundled map that "
+        "knows most of its notes, roland-td for a kit (default auto)",
+    )
     add_channel_option(p, "all")  # live: the kit's channel; a keyboard on the port is not drums
     p.add_argument("--performer", type=int, default=0, help="performer id 0..65535 (default 0)")
-    p.add_argument("--wait-subscribers", type=int, default=0, metavar="N",
-                   help="open the source after N subscriptions (1 per SUB topic)")  # fmt: skip
+    p.add_argument(
+        "--wait-subscribers",
+        type=int,
+        default=0,
+        metavar="N",
+        help="open the source after N subscriptions (1 per SUB topic)",
+    )
     p.add_argument("--exit-at-end", action="store_true", help="--file: exit when played")
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
-    p.add_argument("--trace", type=Path, metavar="FILE",
-                   help="--audio: on exit, write each hit's times through the daemon (audio "
-                   "callback, hand-off, detector) to FILE as JSON, for bench transcribe --live "
-                   "(default: none)")  # fmt: skip
-    p.add_argument("--realtime", type=int, default=0, metavar="PRIO",
-                   help="SCHED_FIFO priority 1..60 when permitted (default 0: off)")  # fmt: skip
+    p.add_argument(
+        "--trace",
+        type=Path,
+        metavar="FILE",
+        help="--audio: on exit, write each hit's times through the daemon (audio "
+        "callback, hand-off, detector) to FILE as JSON, for bench transcribe --live "
+        "(default: none)",
+    )
+    p.add_argument(
+        "--realtime",
+        type=int,
+        default=0,
+        metavar="PRIO",
+        help="SCHED_FIFO priority 1..60 when permitted (default 0: off)",
+    )
     p.add_argument(
         "--sessions-dir", type=Path, help="journal folder (default $LIVEDRUMMER_HOME/sessions)"
     )
-    p.add_argument("--fsync-interval", type=float, default=1.0, metavar="S",
-                   help="fsync the journal at most every S s (0: every batch)")  # fmt: skip
+    p.add_argument(
+        "--fsync-interval",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="fsync the journal at most every S s (0: every batch)",
+    )
     add_curve_options(p, server=True, client=True)
     add_settings_option(p)
 
@@ -109,8 +148,10 @@ def run(args: argparse.Namespace) -> int:
     if args.settings is not None:  # up resolved the map: taken as it is
         settings = settings_of(args, note_map="")
         if args.audio is not None and settings.note_map != AUDIO_MAP:
-            raise ConfigError(f"--settings {args.settings}: note_map {settings.note_map!r}: "
-                              f"--audio writes {AUDIO_MAP} notes")  # fmt: skip
+            raise ConfigError(
+                f"--settings {args.settings}: note_map {settings.note_map!r}: "
+                f"--audio writes {AUDIO_MAP} notes"
+            )
         note_map = load_note_map(settings.note_map)
     elif args.audio is not None:
         note_map = load_note_map(AUDIO_MAP)  # what its onsets' notes mean
@@ -130,8 +171,7 @@ def run(args: argparse.Namespace) -> int:
     source: Source
     thru = None
     if args.thru is not None and (args.midi is None and args.virtual is None):
-        raise ConfigError("--thru forwards a MIDI port's messages: use it with --midi or "
-                          "--virtual")  # fmt: skip
+        raise ConfigError("--thru forwards a MIDI port's messages: use it with --midi or --virtual")
     if args.thru_map is not None and args.thru is None:
         raise ConfigError("--thru-map re-maps what --thru forwards: add --thru PORT")
     if args.trace is not None and args.audio is None:
@@ -145,19 +185,28 @@ def run(args: argparse.Namespace) -> int:
 
         mapping = parse_channel_map(args.channels) if args.channels else None
         model = mix_model(args) if mapping is None else None
-        source = AudioSource(args.audio, clock, load_profile(args.audio_profile), mapping,
-                             args.performer, trace=args.trace, model=model)  # fmt: skip
+        source = AudioSource(
+            args.audio,
+            clock,
+            load_profile(args.audio_profile),
+            mapping,
+            args.performer,
+            trace=args.trace,
+            model=model,
+        )
     elif args.file is not None:
         from ..input.fileplayer import FileSource
 
-        source = FileSource(args.file, clock, note_map, args.performer, loop=args.loop,
-                            channel=channel)  # fmt: skip
+        source = FileSource(
+            args.file, clock, note_map, args.performer, loop=args.loop, channel=channel
+        )
         source.load()
     elif args.remote is not None:
         from ..input.remote import RemoteSource
 
-        source = RemoteSource(args.remote, clock, ctx, security=security,
-                              control=args.remote_control)  # fmt: skip
+        source = RemoteSource(
+            args.remote, clock, ctx, security=security, control=args.remote_control
+        )
     elif args.serial is not None:
         from ..input.serialport import BAUD_RATES, SerialSource
 
@@ -175,11 +224,15 @@ def run(args: argparse.Namespace) -> int:
 
             from ..input.thru import MidiThru
 
-            thru = MidiThru(args.thru, args.api,
-                            gm_remap(note_map) if args.thru_map else None)  # fmt: skip
-        source = MidiPortSource(args.virtual if virtual else args.midi, clock, decoder,
-                                api=args.api, virtual=virtual,
-                                thru=thru.send if thru is not None else None)  # fmt: skip
+            thru = MidiThru(args.thru, args.api, gm_remap(note_map) if args.thru_map else None)
+        source = MidiPortSource(
+            args.virtual if virtual else args.midi,
+            clock,
+            decoder,
+            api=args.api,
+            virtual=virtual,
+            thru=thru.send if thru is not None else None,
+        )
     if not args.wait:
         source.check()  # a device that is not there: one line naming what is, exit 2
     config = DaemonConfig(
@@ -217,6 +270,8 @@ def run(args: argparse.Namespace) -> int:
         )
     print(line, file=sys.stderr)
     if thru is not None:
-        print(f"thru: {thru.sent} messages forwarded to {thru.port_name!r}, {thru.failed} failed",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"thru: {thru.sent} messages forwarded to {thru.port_name!r}, {thru.failed} failed",
+            file=sys.stderr,
+        )
     return code

@@ -76,8 +76,10 @@ def tempo_words(tempos: list[tuple[float, float]]) -> str:
         return ", ".join(f"{bpm:g} bpm at {t:.2f} s" for t, bpm in tempos)
     bpms = [bpm for _, bpm in tempos]
     t0, bpm0 = tempos[0]
-    return (f"{len(tempos)} tempos, {min(bpms):.3g}-{max(bpms):.3g} bpm "
-            f"(first {bpm0:.3g} bpm at {t0:.2f} s; --json lists them)")  # fmt: skip
+    return (
+        f"{len(tempos)} tempos, {min(bpms):.3g}-{max(bpms):.3g} bpm "
+        f"(first {bpm0:.3g} bpm at {t0:.2f} s; --json lists them)"
+    )
 
 
 def meter_words(meters: list[tuple[float, int, int]]) -> str:

@@ -44,9 +44,16 @@ def register(sub: Subparsers) -> None:
     lst = actions.add_parser("list", help="list the public keys in the key folder")
     lst.set_defaults(func=run_list)
     for action in (new, lst):  # --dir: its former spelling
-        add_renamed(action, "--dir", action.add_argument(
-            "--keys-dir", type=Path, metavar="DIR",
-            help="key folder (default $LIVEDRUMMER_HOME/keys)"))  # fmt: skip
+        add_renamed(
+            action,
+            "--dir",
+            action.add_argument(
+                "--keys-dir",
+                type=Path,
+                metavar="DIR",
+                help="key folder (default $LIVEDRUMMER_HOME/keys)",
+            ),
+        )
 
 
 def _usage(args: argparse.Namespace) -> int:  # unreachable: ACTION is required
@@ -108,19 +115,32 @@ def run_list(args: argparse.Namespace) -> int:
 def add_curve_options(parser: argparse.ArgumentParser, *, server: bool, client: bool) -> None:
     """Add the CURVE options: ``server`` for commands that bind, ``client`` for connecting."""
     g = parser.add_argument_group("security (CURVE; see 'livedrummer keys')")
-    g.add_argument("--curve-secret", type=Path, metavar="FILE",
-                   help="our NAME.key_secret: encrypt and authenticate remote streams "
-                   "(default: none, plain text)")  # fmt: skip
+    g.add_argument(
+        "--curve-secret",
+        type=Path,
+        metavar="FILE",
+        help="our NAME.key_secret: encrypt and authenticate remote streams "
+        "(default: none, plain text)",
+    )
     if client:
-        g.add_argument("--server-key", type=Path, metavar="FILE",
-                       help="the public .key of the service we connect to "
-                       "(default: none, plain text)")  # fmt: skip
+        g.add_argument(
+            "--server-key",
+            type=Path,
+            metavar="FILE",
+            help="the public .key of the service we connect to (default: none, plain text)",
+        )
     if server:
-        g.add_argument("--allow", type=Path, metavar="DIR",
-                       help="only clients with a public .key file in DIR may connect "
-                       "(default: any client)")  # fmt: skip
-        g.add_argument("--insecure", action="store_true",
-                       help="allow binding a non-loopback address without CURVE")  # fmt: skip
+        g.add_argument(
+            "--allow",
+            type=Path,
+            metavar="DIR",
+            help="only clients with a public .key file in DIR may connect (default: any client)",
+        )
+        g.add_argument(
+            "--insecure",
+            action="store_true",
+            help="allow binding a non-loopback address without CURVE",
+        )
 
 
 def security_from_args(args: argparse.Namespace) -> Security:

@@ -21,19 +21,32 @@ from .parsing import Subparsers, add_command
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "map", run, "learn a note map for a new module by hitting its pads")
     what = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    learn = what.add_parser("learn", help="hit each pad in turn; write a note map",
-                            description="Hit each pad in turn; write a note map.")  # fmt: skip
+    learn = what.add_parser(
+        "learn",
+        help="hit each pad in turn; write a note map",
+        description="Hit each pad in turn; write a note map.",
+    )
     src = learn.add_mutually_exclusive_group(required=True)
     src.add_argument("--midi", metavar="PORT", help="MIDI input port (name or substring)")
     src.add_argument("--virtual", metavar="NAME", help="open a virtual MIDI input port NAME")
     src.add_argument("--serial", metavar="DEV", help="serial device sending raw MIDI bytes")
-    learn.add_argument("--baud", type=int, default=31_250,
-                       help="serial baud rate (default 31250)")  # fmt: skip
+    learn.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(learn)
-    learn.add_argument("-o", "--output", type=Path, required=True, metavar="FILE.toml",
-                       help="the note map to write")  # fmt: skip
-    learn.add_argument("--hihat-cc", type=int, default=4, metavar="N",
-                       help="the pedal's controller number (default 4)")  # fmt: skip
+    learn.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        required=True,
+        metavar="FILE.toml",
+        help="the note map to write",
+    )
+    learn.add_argument(
+        "--hihat-cc",
+        type=int,
+        default=4,
+        metavar="N",
+        help="the pedal's controller number (default 4)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:

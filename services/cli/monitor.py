@@ -29,13 +29,16 @@ def register(sub: Subparsers) -> None:
     src.add_argument("--serial", metavar="DEV", help="serial device sending raw MIDI bytes")
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
-    p.add_argument("--map", default="roland-td",
-                   help="note map name or .toml path (default roland-td)")  # fmt: skip
+    p.add_argument(
+        "--map", default="roland-td", help="note map name or .toml path (default roland-td)"
+    )
     p.add_argument("--json", action="store_true", help="one JSON object per message")
-    p.add_argument("--seconds", type=float, metavar="S",
-                   help="stop after S seconds (default: at Ctrl-C)")  # fmt: skip
-    p.add_argument("--wait", action="store_true",
-                   help="wait for a port or device that is not there yet")  # fmt: skip
+    p.add_argument(
+        "--seconds", type=float, metavar="S", help="stop after S seconds (default: at Ctrl-C)"
+    )
+    p.add_argument(
+        "--wait", action="store_true", help="wait for a port or device that is not there yet"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -82,8 +85,11 @@ def run(args: argparse.Namespace) -> int:
     waiting_since: float | None = None
     next_status = 0.0
     if not args.json:
-        print(f"monitoring {source.name} with map {note_map.name} (Ctrl-C to stop)",
-              file=sys.stderr, flush=True)  # fmt: skip
+        print(
+            f"monitoring {source.name} with map {note_map.name} (Ctrl-C to stop)",
+            file=sys.stderr,
+            flush=True,
+        )
     try:
         while not stop.is_set() and clock.now() < end:
             if not source.is_open:
@@ -93,8 +99,11 @@ def run(args: argparse.Namespace) -> int:
                     now = clock.now()
                     waiting_since = now if waiting_since is None else waiting_since
                     if now >= next_status:
-                        print(f"monitor: waiting ({now - waiting_since:.0f} s): {exc}",
-                              file=sys.stderr, flush=True)  # fmt: skip
+                        print(
+                            f"monitor: waiting ({now - waiting_since:.0f} s): {exc}",
+                            file=sys.stderr,
+                            flush=True,
+                        )
                         next_status = now + 5.0
                     stop.wait(0.1)
                     continue
@@ -108,6 +117,5 @@ def run(args: argparse.Namespace) -> int:
                 source.close()
     finally:
         source.close()
-    print(f"monitor: {counts['messages']} messages, {counts['unknown']} unknown",
-          file=sys.stderr)  # fmt: skip
+    print(f"monitor: {counts['messages']} messages, {counts['unknown']} unknown", file=sys.stderr)
     return 0

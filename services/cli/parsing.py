@@ -58,8 +58,9 @@ class Parser(argparse.ArgumentParser):
 class _Renamed(argparse.Action):
     """A former spelling of an option: warns, then acts as the option's current spelling."""
 
-    def __init__(self, option_strings: Sequence[str], dest: str, *, new: argparse.Action,
-                 **kwargs: Any) -> None:  # fmt: skip
+    def __init__(
+        self, option_strings: Sequence[str], dest: str, *, new: argparse.Action, **kwargs: Any
+    ) -> None:
         super().__init__(option_strings, dest, **kwargs)
         self.new = new
 
@@ -81,9 +82,16 @@ def add_renamed(parser: Any, old: str, new: argparse.Action) -> None:
     ``parser``: the parser or argument group ``new`` was added to.
     """
     parser.add_argument(
-        old, action=_Renamed, new=new, nargs=new.nargs, type=new.type, choices=new.choices,
-        metavar=new.metavar, default=argparse.SUPPRESS, help=argparse.SUPPRESS,
-    )  # fmt: skip
+        old,
+        action=_Renamed,
+        new=new,
+        nargs=new.nargs,
+        type=new.type,
+        choices=new.choices,
+        metavar=new.metavar,
+        default=argparse.SUPPRESS,
+        help=argparse.SUPPRESS,
+    )
 
 
 def add_command(

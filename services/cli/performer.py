@@ -37,21 +37,26 @@ def add_avatar_option(parser: Any) -> None:
     """``--avatar FILE|NAME`` and ``--bone-map FILE``: who plays. The rig takes the avatar's
     proportions (:func:`rig_for`), the renderer its mesh; the same in every command."""
     parser.add_argument(
-        "--avatar", metavar="FILE|NAME",
+        "--avatar",
+        metavar="FILE|NAME",
         help="the drummer: a .vrm, .glb or .gltf file, or a name from `livedrummer avatars` "
         "(default: the built-in character)",
-    )  # fmt: skip
+    )
     parser.add_argument(
-        "--bone-map", type=Path, metavar="FILE",
+        "--bone-map",
+        type=Path,
+        metavar="FILE",
         help="TOML bone map for a glTF rig whose bone names are not known (default: "
         "FILE.bones.toml beside the avatar, else the VRM map or known rig names)",
-    )  # fmt: skip
+    )
     parser.add_argument(
-        "--fit", choices=FITS, default="auto",
+        "--fit",
+        choices=FITS,
+        default="auto",
         help="an avatar whose size does not suit the kit: scale the avatar to the body the kit "
         "is built for, move the throne, pedals and stands to the avatar, or neither; auto "
         "leaves an avatar that reaches the kit alone (default: auto)",
-    )  # fmt: skip
+    )
 
 
 def avatar_of(args: argparse.Namespace) -> Avatar | None:
@@ -88,8 +93,7 @@ def fitting_of(args: argparse.Namespace, kit: Kit, avatar: Avatar | None) -> Fit
     return done
 
 
-def fitted(args: argparse.Namespace, kit: Kit, avatar: Avatar | None
-           ) -> tuple[Kit, Avatar | None]:  # fmt: skip
+def fitted(args: argparse.Namespace, kit: Kit, avatar: Avatar | None) -> tuple[Kit, Avatar | None]:
     """The kit and avatar to play, as :func:`fitting_of` settles them."""
     done = fitting_of(args, kit, avatar)
     return done.kit, done.avatar
@@ -116,15 +120,23 @@ STICKING_STRATEGIES = ("optimal", "kragtwijk-basic", "kragtwijk-pair", "smed")
 
 def add_sticking_options(p: argparse.ArgumentParser) -> None:
     """``--sticking`` and ``--score``: who plays each note, the same in every command."""
-    add_renamed(p, "--strategy", p.add_argument(  # checked by the entry point: one line
-        "--sticking", default=STICKING_STRATEGIES[0], metavar="STRATEGY",
-        help=f"limb assignment: {', '.join(STICKING_STRATEGIES)}",
-    ))  # fmt: skip
+    add_renamed(
+        p,
+        "--strategy",
+        p.add_argument(  # checked by the entry point: one line
+            "--sticking",
+            default=STICKING_STRATEGIES[0],
+            metavar="STRATEGY",
+            help=f"limb assignment: {', '.join(STICKING_STRATEGIES)}",
+        ),
+    )
     p.add_argument(
-        "--score", type=Path, metavar="FILE",
+        "--score",
+        type=Path,
+        metavar="FILE",
         help="edited text sticking score (sticking --format text) whose limbs are played "
         "(default: none, the strategy decides every note)",
-    )  # fmt: skip
+    )
 
 
 def add_motion_options(p: argparse.ArgumentParser) -> None:

@@ -21,18 +21,23 @@ def add_background_option(parser: Any, transparent: bool = True) -> None:
         else ("#rrggbb, an image file or chroma")
     )
     parser.add_argument(
-        "--background", metavar="COLOUR|IMAGE|chroma" + ("|transparent" if transparent else ""),
+        "--background",
+        metavar="COLOUR|IMAGE|chroma" + ("|transparent" if transparent else ""),
         help=f"behind the stage: {kinds} (default: the dark hall)",
-    )  # fmt: skip
+    )
 
 
 def add_look_option(parser: Any) -> None:
     """``--look NAME``: the show lights' theme (:data:`livedrummer.kit.lights.LOOKS`)."""
     from livedrummer.kit.lights import DEFAULT_LOOK, LOOKS
 
-    parser.add_argument("--look", choices=tuple(LOOKS), default=None,
-                        help="the show lights' theme, over the [lights] of the stage, preset "
-                        f"and kit files (default: theirs, else {DEFAULT_LOOK})")  # fmt: skip
+    parser.add_argument(
+        "--look",
+        choices=tuple(LOOKS),
+        default=None,
+        help="the show lights' theme, over the [lights] of the stage, preset "
+        f"and kit files (default: theirs, else {DEFAULT_LOOK})",
+    )
 
 
 def lights_of(args: argparse.Namespace, kit: Any, stage: Any = None) -> Any:
@@ -43,9 +48,12 @@ def lights_of(args: argparse.Namespace, kit: Any, stage: Any = None) -> Any:
     from livedrummer.kit.lights import resolve_lights
 
     preset = getattr(args, "preset", None)
-    return resolve_lights(getattr(args, "look", None), getattr(kit, "lights", None),
-                          preset_lights(preset) if preset else None,
-                          getattr(stage, "lights", None))  # fmt: skip
+    return resolve_lights(
+        getattr(args, "look", None),
+        getattr(kit, "lights", None),
+        preset_lights(preset) if preset else None,
+        getattr(stage, "lights", None),
+    )
 
 
 def background_of(args: argparse.Namespace, window: bool = False) -> Background:

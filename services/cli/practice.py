@@ -86,39 +86,68 @@ def register(sub: Subparsers) -> None:
         "(practice history)."
     )
     actions = p.add_subparsers(dest="action", metavar="ACTION", action=_Actions)
-    play = actions.add_parser("play", help="play along with a reference (the default action: "
-                              "practice REF.mid ...)", description="Play along with a reference "
-                              "to a click; each pass scored.")  # fmt: skip
+    play = actions.add_parser(
+        "play",
+        help="play along with a reference (the default action: practice REF.mid ...)",
+        description="Play along with a reference to a click; each pass scored.",
+    )
     add_live_options(play)
     play.set_defaults(func=_run_live)
-    sc = actions.add_parser("score", help="judge a recorded take against its reference",
-                            description="Judge a recorded take against its reference, note "
-                            "by note.")  # fmt: skip
+    sc = actions.add_parser(
+        "score",
+        help="judge a recorded take against its reference",
+        description="Judge a recorded take against its reference, note by note.",
+    )
     sc.add_argument("reference", type=Path, metavar="REF.mid", help="the reference (what to play)")
     sc.add_argument("take", type=Path, metavar="TAKE.mid", help="what was played")
     add_map_option(sc)
-    sc.add_argument("--take-map", default="auto", metavar="MAP",
-                    help="note map of the take (name or .toml; auto as for --map)")  # fmt: skip
+    sc.add_argument(
+        "--take-map",
+        default="auto",
+        metavar="MAP",
+        help="note map of the take (name or .toml; auto as for --map)",
+    )
     add_channel_option(sc)
     add_judge_options(sc)
     add_pass_options(sc)
-    sc.add_argument("--shift-ms", type=float, default=0.0,
-                    help="add this to every take time before judging (ms)")  # fmt: skip
-    sc.add_argument("--align", choices=("none", "first"), default="none",
-                    help="first: move the take so its first hit lands on the reference's first "
-                    "note (a sessions export starts at its first hit) (default none)")  # fmt: skip
+    sc.add_argument(
+        "--shift-ms",
+        type=float,
+        default=0.0,
+        help="add this to every take time before judging (ms)",
+    )
+    sc.add_argument(
+        "--align",
+        choices=("none", "first"),
+        default="none",
+        help="first: move the take so its first hit lands on the reference's first "
+        "note (a sessions export starts at its first hit) (default none)",
+    )
     sc.add_argument("--json", action="store_true", help="print one JSON object")
-    sc.add_argument("--report", type=Path, metavar="FILE.html",
-                    help="write a self-contained HTML report (default: none)")  # fmt: skip
-    sc.add_argument("--save", action="store_true",
-                    help="keep the result in the practice database (practice history)")  # fmt: skip
+    sc.add_argument(
+        "--report",
+        type=Path,
+        metavar="FILE.html",
+        help="write a self-contained HTML report (default: none)",
+    )
+    sc.add_argument(
+        "--save",
+        action="store_true",
+        help="keep the result in the practice database (practice history)",
+    )
     add_db_option(sc)
     sc.set_defaults(func=run_score)
-    hi = actions.add_parser("history", help="sessions kept, and progress over days",
-                            description="List the practice sessions kept, and plot progress "
-                            "over days.")  # fmt: skip
-    hi.add_argument("--report", type=Path, metavar="FILE.html",
-                    help="write an HTML report of progress over days (default: none)")  # fmt: skip
+    hi = actions.add_parser(
+        "history",
+        help="sessions kept, and progress over days",
+        description="List the practice sessions kept, and plot progress over days.",
+    )
+    hi.add_argument(
+        "--report",
+        type=Path,
+        metavar="FILE.html",
+        help="write an HTML report of progress over days (default: none)",
+    )
     hi.add_argument("--json", action="store_true", help="print the sessions as JSON")
     add_db_option(hi)
     hi.set_defaults(func=run_history)

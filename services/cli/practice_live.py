@@ -67,36 +67,80 @@ def add_live_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
     add_map_option(p)
-    p.add_argument("--take-map", default="roland-td", metavar="MAP",
-                   help="note map of the kit's hits (default roland-td)")  # fmt: skip
+    p.add_argument(
+        "--take-map",
+        default="roland-td",
+        metavar="MAP",
+        help="note map of the kit's hits (default roland-td)",
+    )
     add_channel_option(p)
     add_judge_options(p)
     add_pass_options(p)
-    p.add_argument("--passes", type=int, metavar="N",
-                   help="passes (default 1; 4 with --bars; until a stop with --ramp)")  # fmt: skip
-    p.add_argument("--count-in", type=int, default=1, metavar="BARS",
-                   help="bars of click before the first pass (default 1)")  # fmt: skip
+    p.add_argument(
+        "--passes",
+        type=int,
+        metavar="N",
+        help="passes (default 1; 4 with --bars; until a stop with --ramp)",
+    )
+    p.add_argument(
+        "--count-in",
+        type=int,
+        default=1,
+        metavar="BARS",
+        help="bars of click before the first pass (default 1)",
+    )
     p.add_argument("--click-level", type=float, default=0.5, help="click volume 0..1")
-    p.add_argument("--click-sound", choices=("beep", "wood", "cowbell"), default="beep",
-                   help="click sound (default beep)")  # fmt: skip
-    p.add_argument("--quiet-count", metavar="ON:OFF",
-                   help="click ON bars, then OFF bars silent (default: always on)")  # fmt: skip
-    p.add_argument("--ramp", type=float, metavar="BPM",
-                   help="auto up/down: tempo change per pass (default: none)")  # fmt: skip
-    p.add_argument("--ramp-target", type=float, metavar="BPM",
-                   help="stop after the pass at this tempo (default: none)")  # fmt: skip
-    p.add_argument("--ramp-min-accuracy", type=float, metavar="PCT",
-                   help="stop once a pass's accuracy is below PCT (default: none)")  # fmt: skip
+    p.add_argument(
+        "--click-sound",
+        choices=("beep", "wood", "cowbell"),
+        default="beep",
+        help="click sound (default beep)",
+    )
+    p.add_argument(
+        "--quiet-count",
+        metavar="ON:OFF",
+        help="click ON bars, then OFF bars silent (default: always on)",
+    )
+    p.add_argument(
+        "--ramp",
+        type=float,
+        metavar="BPM",
+        help="auto up/down: tempo change per pass (default: none)",
+    )
+    p.add_argument(
+        "--ramp-target",
+        type=float,
+        metavar="BPM",
+        help="stop after the pass at this tempo (default: none)",
+    )
+    p.add_argument(
+        "--ramp-min-accuracy",
+        type=float,
+        metavar="PCT",
+        help="stop once a pass's accuracy is below PCT (default: none)",
+    )
     p.add_argument("--no-sound", action="store_true", help="no click sound (scripted use)")
     p.add_argument("--json", action="store_true", help="print JSON lines (see above)")
-    p.add_argument("--take", type=Path, metavar="FILE.mid",
-                   help="write each pass's hits as a take (default: none)")  # fmt: skip
-    p.add_argument("--report", type=Path, metavar="FILE.html",
-                   help="write each pass's HTML report (default: none)")  # fmt: skip
+    p.add_argument(
+        "--take",
+        type=Path,
+        metavar="FILE.mid",
+        help="write each pass's hits as a take (default: none)",
+    )
+    p.add_argument(
+        "--report",
+        type=Path,
+        metavar="FILE.html",
+        help="write each pass's HTML report (default: none)",
+    )
     p.add_argument("--no-save", action="store_true", help="keep nothing in the practice database")
     add_db_option(p)
-    p.add_argument("--seconds", type=float, metavar="S",
-                   help="stop after S seconds (default: when the passes are done)")  # fmt: skip
+    p.add_argument(
+        "--seconds",
+        type=float,
+        metavar="S",
+        help="stop after S seconds (default: when the passes are done)",
+    )
     from .practice_show import add_show_options
 
     add_show_options(p)
@@ -200,8 +244,9 @@ def run_live(args: argparse.Namespace) -> int:
         print(f"practice: terminal readout only ({why})", file=sys.stderr, flush=True)
     else:
         shown = "in a window" if mode == "window" else f"off screen into {args.frames_dir}/"
-        print(f"practice: the drummers {shown} (teacher {args.teacher})", file=sys.stderr,
-              flush=True)  # fmt: skip
+        print(
+            f"practice: the drummers {shown} (teacher {args.teacher})", file=sys.stderr, flush=True
+        )
         show = Show(args, mode, settings)
         source = show.bus
     input_s = Calibration.load().input_ms / 1e3
@@ -234,11 +279,22 @@ def run_live(args: argparse.Namespace) -> int:
         readout = LiveReadout(notes["time_s"][judged], codes[judged], window_ms, level)
         ps = Pass(number, start_s, sc, base_bpm * sc, notes, pass_length_s(seg, sc), readout)
         if show is not None:
-            show.readout.send({"plan": {
-                "pass": number, "start_s": start_s, "scale": sc, "bpm": ps.bpm,
-                "bars": [seg.first_bar, seg.last_bar], "seg_start_s": seg.start_s,
-                "seg_end_s": seg.end_s, "window_ms": window_ms, "level_ms": level.window_ms,
-                "teacher": args.teacher}})  # fmt: skip
+            show.readout.send(
+                {
+                    "plan": {
+                        "pass": number,
+                        "start_s": start_s,
+                        "scale": sc,
+                        "bpm": ps.bpm,
+                        "bars": [seg.first_bar, seg.last_bar],
+                        "seg_start_s": seg.start_s,
+                        "seg_end_s": seg.end_s,
+                        "window_ms": window_ms,
+                        "level_ms": level.window_ms,
+                        "teacher": args.teacher,
+                    }
+                }
+            )
         if args.json:
             emit({"pass": number, "start_s": start_s, "bpm": round(ps.bpm, 3), "scale": sc,
                   "bars": [seg.first_bar, seg.last_bar], "length_s": ps.length_s,
@@ -247,8 +303,11 @@ def run_live(args: argparse.Namespace) -> int:
                   "clicks_s": times.tolist()})  # fmt: skip
         else:
             wait = start_s - clock.now()
-            print(f"pass {number}: bars {seg.first_bar}-{seg.last_bar} at {ps.bpm:.1f} bpm, "
-                  f"{notes.size} notes; starts in {wait:.1f} s", flush=True)  # fmt: skip
+            print(
+                f"pass {number}: bars {seg.first_bar}-{seg.last_bar} at {ps.bpm:.1f} bpm, "
+                f"{notes.size} notes; starts in {wait:.1f} s",
+                flush=True,
+            )
         return ps
 
     def bar_s(sc: float) -> float:
@@ -274,11 +333,14 @@ def run_live(args: argparse.Namespace) -> int:
             early = matching.played_s[matching.extra] <= due_s
             matching = dataclasses.replace(matching, extra=matching.extra[early])
         result = summary(matching, level)
-        result.update(reference=str(args.reference), pass_number=p.number,
-                      bpm=round(p.bpm, 3), bars=[seg.first_bar, seg.last_bar],
-                      partial=due_s is not None,
-                      take=str(numbered(args.take, p.number)) if args.take else
-                      f"live pass {p.number}")  # fmt: skip
+        result.update(
+            reference=str(args.reference),
+            pass_number=p.number,
+            bpm=round(p.bpm, 3),
+            bars=[seg.first_bar, seg.last_bar],
+            partial=due_s is not None,
+            take=str(numbered(args.take, p.number)) if args.take else f"live pass {p.number}",
+        )
         p.result = result
         finished.append(p)
         _keep(args, p, result, hits)
@@ -317,9 +379,14 @@ def run_live(args: argparse.Namespace) -> int:
             if show is not None and not show.tick(now):
                 stopped = "window closed"
                 break
-            bounds = pass_bounds([p.start_s for p in planned], [p.length_s for p in planned],
-                                 first_note, last_note, [p.scale for p in planned],
-                                 window_s)  # fmt: skip
+            bounds = pass_bounds(
+                [p.start_s for p in planned],
+                [p.length_s for p in planned],
+                first_note,
+                last_note,
+                [p.scale for p in planned],
+                window_s,
+            )
             # Taken before the read: every hit stamped before ``cut`` is in the source's queue
             # by then, so this read has it; a pass ends only on a ``cut`` past its close (see
             # SETTLE_S), never on a clock read after a stall that let a hit in behind the read.
@@ -329,13 +396,25 @@ def run_live(args: argparse.Namespace) -> int:
                     continue
                 heard.append(event.to_record())
                 t = event.time_s + input_s
-                owner = next((p for p, (lo, hi) in zip(planned, bounds, strict=True)
-                              if lo <= t < hi and p.result is None), None)  # fmt: skip
+                owner = next(
+                    (
+                        p
+                        for p, (lo, hi) in zip(planned, bounds, strict=True)
+                        if lo <= t < hi and p.result is None
+                    ),
+                    None,
+                )
                 if owner is None:
                     stray += 1
                     if args.json:  # no hit goes unreported: outside every open pass's span
-                        emit({"stray": {"time_s": round(t - planned[0].start_s, 6),
-                                        "note": event.note}})  # fmt: skip
+                        emit(
+                            {
+                                "stray": {
+                                    "time_s": round(t - planned[0].start_s, 6),
+                                    "note": event.note,
+                                }
+                            }
+                        )
                     continue
                 rec = list(event.to_record())
                 rec[0] = t - owner.start_s
@@ -345,15 +424,33 @@ def run_live(args: argparse.Namespace) -> int:
                     continue  # not judged (--pieces): kept for the wrong-piece step only
                 line = owner.readout.process(rec[0], code)
                 if show is not None:
-                    show.readout.send({"hit": {
-                        "pass": owner.number, "time_s": line.time_s, "piece": PIECES[line.piece],
-                        "offset_ms": line.offset_ms, "on_time": line.on_time,
-                        "streak": line.streak, "accuracy_pct": line.accuracy_pct}})  # fmt: skip
+                    show.readout.send(
+                        {
+                            "hit": {
+                                "pass": owner.number,
+                                "time_s": line.time_s,
+                                "piece": PIECES[line.piece],
+                                "offset_ms": line.offset_ms,
+                                "on_time": line.on_time,
+                                "streak": line.streak,
+                                "accuracy_pct": line.accuracy_pct,
+                            }
+                        }
+                    )
                 if args.json:
-                    emit({"hit": {"pass": owner.number, "time_s": round(line.time_s, 6),
-                                  "piece": PIECES[line.piece], "offset_ms": line.offset_ms,
-                                  "on_time": line.on_time, "streak": line.streak,
-                                  "accuracy_pct": round(line.accuracy_pct, 3)}})  # fmt: skip
+                    emit(
+                        {
+                            "hit": {
+                                "pass": owner.number,
+                                "time_s": round(line.time_s, 6),
+                                "piece": PIECES[line.piece],
+                                "offset_ms": line.offset_ms,
+                                "on_time": line.on_time,
+                                "streak": line.streak,
+                                "accuracy_pct": round(line.accuracy_pct, 3),
+                            }
+                        }
+                    )
                 else:
                     print(f"  {line.text()}", flush=True)
             for p, (_, hi) in zip(list(planned), bounds, strict=True):
@@ -366,8 +463,9 @@ def run_live(args: argparse.Namespace) -> int:
                         sc = nxt / base_bpm
                         start = clock.now() + 0.3 + bar_s(sc)
                         planned.append(plan(p.number + 1, start, sc, 1))
-            if len(finished) == len(planned) and (ramp is None or len(planned) >= passes_max
-                                                  or planned[-1].result is not None):  # fmt: skip
+            if len(finished) == len(planned) and (
+                ramp is None or len(planned) >= passes_max or planned[-1].result is not None
+            ):
                 break
         if show is not None and not stopped:  # the last pass's summary stays on screen
             hold = SUMMARY_HOLD_S if show.mode == "headless" else math.inf
@@ -375,8 +473,11 @@ def run_live(args: argparse.Namespace) -> int:
             if args.seconds is not None:
                 until = min(until, started + args.seconds)
             if until == math.inf:
-                print("practice: done; the summary stays in the window until you close it (Q)",
-                      file=sys.stderr, flush=True)  # fmt: skip
+                print(
+                    "practice: done; the summary stays in the window until you close it (Q)",
+                    file=sys.stderr,
+                    flush=True,
+                )
             while clock.now() < until and show.tick(clock.now()):
                 time.sleep(0.05)
     except KeyboardInterrupt:
@@ -390,12 +491,17 @@ def run_live(args: argparse.Namespace) -> int:
     stats = source.decode_stats()
     if stats is not None and stats.unknown_notes:  # a keyboard's keys outside the drum map
         listed = ", ".join(f"note {k} x{v}" for k, v in sorted(stats.unknown_notes.items()))
-        print(f"practice: hits the map {note_map.name} does not know (not judged): {listed}",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"practice: hits the map {note_map.name} does not know (not judged): {listed}",
+            file=sys.stderr,
+        )
     doubled = 0 if stats is None else stats.duplicates_removed
     if doubled:  # the decoder's "double events": the same note and velocity on one stamp
-        print(f"practice: {doubled} hits dropped as doubled (the same note and velocity at the "
-              f"same driver time as the one before; not judged)", file=sys.stderr)  # fmt: skip
+        print(
+            f"practice: {doubled} hits dropped as doubled (the same note and velocity at the "
+            f"same driver time as the one before; not judged)",
+            file=sys.stderr,
+        )
     end = clock.now()
     for p in planned:  # a pass cut short: judged on the notes due before the stop
         if p.result is None and p.start_s < end and p.hits:
@@ -413,8 +519,15 @@ def run_live(args: argparse.Namespace) -> int:
         if not args.json:
             print(f"report: {where}")
     if args.json:
-        emit({"done": True, "passes": len(finished), "stray_hits": stray,
-              "doubled_hits": doubled, "stopped": stopped or None})  # fmt: skip
+        emit(
+            {
+                "done": True,
+                "passes": len(finished),
+                "stray_hits": stray,
+                "doubled_hits": doubled,
+                "stopped": stopped or None,
+            }
+        )
     else:
         why = f" ({stopped})" if stopped else ""
         print(f"practice: {len(finished)} passes{why}; {stray} hits outside any pass")

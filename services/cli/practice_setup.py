@@ -14,23 +14,38 @@ from typing import Any
 
 def add_judge_options(p: argparse.ArgumentParser) -> None:
     """``--window-ms``, ``--pieces``, ``--level``: how a take is judged (score and live)."""
-    p.add_argument("--window-ms", type=float, default=100.0,
-                   help="a note matches a hit within ± this many ms (default 100)")  # fmt: skip
-    p.add_argument("--pieces", metavar="P,P",
-                   help="judge only these pieces, e.g. snare,hihat (default: all)")  # fmt: skip
-    p.add_argument("--level", choices=("easy", "hard"), default="easy",
-                   help="on time within ±40 ms (easy) or ±20 ms (hard) (default easy)")  # fmt: skip
+    p.add_argument(
+        "--window-ms",
+        type=float,
+        default=100.0,
+        help="a note matches a hit within ± this many ms (default 100)",
+    )
+    p.add_argument(
+        "--pieces", metavar="P,P", help="judge only these pieces, e.g. snare,hihat (default: all)"
+    )
+    p.add_argument(
+        "--level",
+        choices=("easy", "hard"),
+        default="easy",
+        help="on time within ±40 ms (easy) or ±20 ms (hard) (default easy)",
+    )
 
 
 def add_pass_options(p: argparse.ArgumentParser) -> None:
     """``--tempo``, ``--bpm``, ``--bars``: the pass judged (score) or played (live)."""
     speed = p.add_mutually_exclusive_group()
-    speed.add_argument("--tempo", type=float, metavar="SCALE",
-                       help="play the reference at this speed, e.g. 0.8 (default 1)")  # fmt: skip
-    speed.add_argument("--bpm", type=float,
-                       help="play the reference at this tempo (default: its own)")  # fmt: skip
-    p.add_argument("--bars", metavar="BAR:BAR",
-                   help="loop bars A to B of the reference, from 1 (default: all)")  # fmt: skip
+    speed.add_argument(
+        "--tempo",
+        type=float,
+        metavar="SCALE",
+        help="play the reference at this speed, e.g. 0.8 (default 1)",
+    )
+    speed.add_argument(
+        "--bpm", type=float, help="play the reference at this tempo (default: its own)"
+    )
+    p.add_argument(
+        "--bars", metavar="BAR:BAR", help="loop bars A to B of the reference, from 1 (default: all)"
+    )
 
 
 def pass_setup(args: argparse.Namespace, reference: Any) -> tuple[Any, float]:
@@ -56,10 +71,14 @@ def pass_setup(args: argparse.Namespace, reference: Any) -> tuple[Any, float]:
 
 
 def add_db_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--db", type=Path, metavar="FILE",
-                   help="practice database (default: $LIVEDRUMMER_HOME/practice.sqlite when "
-                   "LIVEDRUMMER_HOME is set, else $XDG_DATA_HOME/livedrummer/practice.sqlite, "
-                   "~/.local/share by default)")  # fmt: skip
+    p.add_argument(
+        "--db",
+        type=Path,
+        metavar="FILE",
+        help="practice database (default: $LIVEDRUMMER_HOME/practice.sqlite when "
+        "LIVEDRUMMER_HOME is set, else $XDG_DATA_HOME/livedrummer/practice.sqlite, "
+        "~/.local/share by default)",
+    )
 
 
 def judge_settings(args: argparse.Namespace) -> tuple[float, frozenset[int] | None, Any]:

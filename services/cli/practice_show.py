@@ -53,33 +53,51 @@ SHOW_DELAY_MS = 30.0
 
 def add_show_options(p: argparse.ArgumentParser) -> None:
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--no-window", action="store_true",
-                       help="no drummers: the terminal readout only (scripts); the default "
-                       "without a screen")  # fmt: skip
+    where.add_argument(
+        "--no-window",
+        action="store_true",
+        help="no drummers: the terminal readout only (scripts); the default without a screen",
+    )
     where.add_argument(
         "--headless",
         action="store_true",
         help="draw the drummers off screen into --frames-dir (and --video)",
     )
-    p.add_argument("--teacher", default="ghost", metavar="MODE",
-                   help="the reference's drummer: ghost (translucent, in the player's drummer, "
-                   "where the sticks should be now), ahead[:SECONDS] (an inset beside it, "
-                   "SECONDS ahead; default 0.5) or off (default ghost)")  # fmt: skip
+    p.add_argument(
+        "--teacher",
+        default="ghost",
+        metavar="MODE",
+        help="the reference's drummer: ghost (translucent, in the player's drummer, "
+        "where the sticks should be now), ahead[:SECONDS] (an inset beside it, "
+        "SECONDS ahead; default 0.5) or off (default ghost)",
+    )
     add_kit_option(p)
     add_avatar_option(p)
     add_look_option(p)
-    p.add_argument("--frames-dir", type=Path, default=Path("out/practice"), metavar="DIR",
-                   help="--headless: frames.jsonl (and --png frames) here "
-                   "(default out/practice)")  # fmt: skip
+    p.add_argument(
+        "--frames-dir",
+        type=Path,
+        default=Path("out/practice"),
+        metavar="DIR",
+        help="--headless: frames.jsonl (and --png frames) here (default out/practice)",
+    )
     p.add_argument("--png", action="store_true", help="--headless: also write every frame as PNG")
-    p.add_argument("--video", type=Path, metavar="FILE",
-                   help="--headless: record the drummers and the readout as MP4 "
-                   "(default: none)")  # fmt: skip
-    p.add_argument("--size", help="frame size WIDTHxHEIGHT (default 1280x720 in a window, "
-                                  "640x360 headless)")  # fmt: skip
+    p.add_argument(
+        "--video",
+        type=Path,
+        metavar="FILE",
+        help="--headless: record the drummers and the readout as MP4 (default: none)",
+    )
+    p.add_argument(
+        "--size", help="frame size WIDTHxHEIGHT (default 1280x720 in a window, 640x360 headless)"
+    )
     p.add_argument("--fps", type=float, default=30.0, help="display frames per second")
-    p.add_argument("--port-base", type=int, default=5750,
-                   help="TCP ports PORT..PORT+3 on loopback (default 5750)")  # fmt: skip
+    p.add_argument(
+        "--port-base",
+        type=int,
+        default=5750,
+        help="TCP ports PORT..PORT+3 on loopback (default 5750)",
+    )
 
 
 def show_mode(args: argparse.Namespace) -> str:
@@ -173,8 +191,9 @@ def specs(args: argparse.Namespace, mode: str, readout: str, settings: Path) -> 
     ]
 
 
-def add_drum_track(settings: ShowSettings, args: argparse.Namespace, hits: Any,
-                   clicks: list[tuple[Any, Any]]) -> str:  # fmt: skip
+def add_drum_track(
+    settings: ShowSettings, args: argparse.Namespace, hits: Any, clicks: list[tuple[Any, Any]]
+) -> str:
     """Mux the drum track into ``args.video`` (see the module docstring), with the kit, map
     and D the rig's processes were given (``settings``); a line saying so."""
     import numpy as np
@@ -189,15 +208,25 @@ def add_drum_track(settings: ShowSettings, args: argparse.Namespace, hits: Any,
     times = np.concatenate([t for t, _ in clicks] or [np.zeros(0)])
     accents = np.concatenate([a for _, a in clicks] or [np.zeros(0, bool)])
     delay_s = settings.delay.delay_s
-    track = practice_track(hits, times, accents, timing, delay_s=delay_s,
-                           kit=load_kit(settings.kit), note_map=load_note_map(settings.note_map),
-                           click_sound=args.click_sound, click_level=args.click_level)  # fmt: skip
+    track = practice_track(
+        hits,
+        times,
+        accents,
+        timing,
+        delay_s=delay_s,
+        kit=load_kit(settings.kit),
+        note_map=load_note_map(settings.note_map),
+        click_sound=args.click_sound,
+        click_level=args.click_level,
+    )
     mux_audio(args.video, track)
     duration = timing.frames / timing.fps
     shown = hits["time_s"].astype(np.float64) + delay_s - timing.show0_s
     heard = int(np.count_nonzero((shown >= 0.0) & (shown < duration)))
-    return (f"practice: wrote {args.video} ({duration:.1f} s, {heard} hits and the click in "
-            f"its drum track)")  # fmt: skip
+    return (
+        f"practice: wrote {args.video} ({duration:.1f} s, {heard} hits and the click in "
+        f"its drum track)"
+    )
 
 
 class Show:

@@ -19,16 +19,27 @@ def register(sub: Subparsers) -> None:
     from ..relay.service import DEFAULT_CONTROL, DEFAULT_PUB
 
     p = add_command(sub, "relay", run)
-    p.add_argument("--upstream", required=True, metavar="ENDPOINT",
-                   help="the pose endpoint of the synth (or of another relay) to forward, "
-                   "e.g. tcp://10.0.0.5:5720")  # fmt: skip
-    p.add_argument("--upstream-control", metavar="ENDPOINT",
-                   help="its control endpoint: the relay's READY then carries the synth's pose "
-                   "format and avatar (default: not asked)")  # fmt: skip
-    p.add_argument("--pub", default=DEFAULT_PUB,
-                   help=f"where displays subscribe (default {DEFAULT_PUB})")  # fmt: skip
-    p.add_argument("--control", default=DEFAULT_CONTROL,
-                   help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})")  # fmt: skip
+    p.add_argument(
+        "--upstream",
+        required=True,
+        metavar="ENDPOINT",
+        help="the pose endpoint of the synth (or of another relay) to forward, "
+        "e.g. tcp://10.0.0.5:5720",
+    )
+    p.add_argument(
+        "--upstream-control",
+        metavar="ENDPOINT",
+        help="its control endpoint: the relay's READY then carries the synth's pose "
+        "format and avatar (default: not asked)",
+    )
+    p.add_argument(
+        "--pub", default=DEFAULT_PUB, help=f"where displays subscribe (default {DEFAULT_PUB})"
+    )
+    p.add_argument(
+        "--control",
+        default=DEFAULT_CONTROL,
+        help=f"HELLO/READY endpoint (default {DEFAULT_CONTROL})",
+    )
     add_curve_options(p, server=True, client=True)
 
 
@@ -40,13 +51,20 @@ def run(args: argparse.Namespace) -> int:
     from ..process.service import serve
     from ..relay.service import RelayConfig, RelayService
 
-    config = RelayConfig(upstream=args.upstream, upstream_control=args.upstream_control,
-                         pub=args.pub, control=args.control,
-                         security=security_from_args(args))  # fmt: skip
+    config = RelayConfig(
+        upstream=args.upstream,
+        upstream_control=args.upstream_control,
+        pub=args.pub,
+        control=args.control,
+        security=security_from_args(args),
+    )
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     service = RelayService(config, MonotonicClock(), ctx)
     code = serve(service, lambda endpoints: endpoints["pub"])
     s = service.summary()
-    print(f"relay: {s['messages']} messages ({s['bytes']:,} bytes) forwarded, "
-          f"{s['subscriptions']} subscriptions", file=sys.stderr)  # fmt: skip
+    print(
+        f"relay: {s['messages']} messages ({s['bytes']:,} bytes) forwarded, "
+        f"{s['subscriptions']} subscriptions",
+        file=sys.stderr,
+    )
     return code

@@ -60,55 +60,102 @@ class RenderOptionError(LivedrummerError):
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "render", run)
     p.add_argument("file", nargs="?", help="Standard MIDI File (default: the demo groove)")
-    p.add_argument("-o", "--output", type=Path,
-                   help="video file (default: FILE's name, .mp4)")  # fmt: skip
-    add_renamed(p, "--frames", p.add_argument(
-        "--frames-dir", type=Path, metavar="DIR",
-        help="write PNG frames to DIR instead of a video (default: a video)"))  # fmt: skip
+    p.add_argument("-o", "--output", type=Path, help="video file (default: FILE's name, .mp4)")
+    add_renamed(
+        p,
+        "--frames",
+        p.add_argument(
+            "--frames-dir",
+            type=Path,
+            metavar="DIR",
+            help="write PNG frames to DIR instead of a video (default: a video)",
+        ),
+    )
     p.add_argument("--size", default="1280x720", help="WIDTHxHEIGHT, even")
     p.add_argument("--fps", type=int, default=30, help="frames per second")
     p.add_argument("--camera", default="stage", choices=CAMERA_NAMES, help="viewpoint")
     add_kit_option(p)
-    p.add_argument("--map", help="note map name or .toml path (default auto: the bundled map "
-                   "that knows the most of the file's notes; roland-td for the demo)")  # fmt: skip
+    p.add_argument(
+        "--map",
+        help="note map name or .toml path (default auto: the bundled map "
+        "that knows the most of the file's notes; roland-td for the demo)",
+    )
     add_channel_option(p)
     p.add_argument("--tail", type=float, default=1.0, help="seconds after the last event")
-    p.add_argument("--start", metavar="POS",
-                   help="render from POS: seconds (12.5) or a bar's downbeat (bar5) "
-                   "(default: the beginning)")  # fmt: skip
-    p.add_argument("--end", metavar="POS",
-                   help="render up to POS: seconds (40) or the end of a bar (bar8) "
-                   "(default: the last event plus --tail)")  # fmt: skip
-    p.add_argument("--aa", default="fxaa", metavar="fxaa|N",
-                   help="anti-aliasing: fxaa (one cheap pass; default), 0 (none) or multisample "
-                   "N = 2, 4, 8 (about 2.7x the frame time on a CPU)")  # fmt: skip
+    p.add_argument(
+        "--start",
+        metavar="POS",
+        help="render from POS: seconds (12.5) or a bar's downbeat (bar5) (default: the beginning)",
+    )
+    p.add_argument(
+        "--end",
+        metavar="POS",
+        help="render up to POS: seconds (40) or the end of a bar (bar8) "
+        "(default: the last event plus --tail)",
+    )
+    p.add_argument(
+        "--aa",
+        default="fxaa",
+        metavar="fxaa|N",
+        help="anti-aliasing: fxaa (one cheap pass; default), 0 (none) or multisample "
+        "N = 2, 4, 8 (about 2.7x the frame time on a CPU)",
+    )
     p.add_argument("--crf", type=int, default=20, help="H.264 quality, lower is better")
     p.add_argument("--x264-preset", default="veryfast", help="x264 speed")
-    p.add_argument("--overlay", default="", metavar="LIST",
-                   help="bottom strips: score, joints or score,joints (default: none)")  # fmt: skip
-    p.add_argument("--cues", type=Path, metavar="FILE",
-                   help="cue list (TOML): presets, parameters, camera and blackout at times or "
-                   "bars (default: none)")  # fmt: skip
-    p.add_argument("--soundfont", type=Path, metavar="SF2",
-                   help="drum sounds from this General MIDI SoundFont via FluidSynth "
-                   "(default: the built-in kit)")  # fmt: skip
-    p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
-                   help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
-                   "default: the built-in kit)")  # fmt: skip
-    p.add_argument("--jobs", default="auto", metavar="N|auto",
-                   help="worker processes drawing the frames, each its own OpenGL context "
-                   "(default auto: one a core; 1: this process alone)")  # fmt: skip
+    p.add_argument(
+        "--overlay",
+        default="",
+        metavar="LIST",
+        help="bottom strips: score, joints or score,joints (default: none)",
+    )
+    p.add_argument(
+        "--cues",
+        type=Path,
+        metavar="FILE",
+        help="cue list (TOML): presets, parameters, camera and blackout at times or "
+        "bars (default: none)",
+    )
+    p.add_argument(
+        "--soundfont",
+        type=Path,
+        metavar="SF2",
+        help="drum sounds from this General MIDI SoundFont via FluidSynth "
+        "(default: the built-in kit)",
+    )
+    p.add_argument(
+        "--sfz",
+        type=Path,
+        metavar="SFZ",
+        dest="soundfont",
+        help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+        "default: the built-in kit)",
+    )
+    p.add_argument(
+        "--jobs",
+        default="auto",
+        metavar="N|auto",
+        help="worker processes drawing the frames, each its own OpenGL context "
+        "(default auto: one a core; 1: this process alone)",
+    )
     add_motion_options(p)
     add_avatar_option(p)
-    p.add_argument("--stage", type=Path, metavar="TOML",
-                   help="render every drummer of a stage file on one stage instead of FILE "
-                   "(default: none)")  # fmt: skip
+    p.add_argument(
+        "--stage",
+        type=Path,
+        metavar="TOML",
+        help="render every drummer of a stage file on one stage instead of FILE (default: none)",
+    )
     add_background_option(p)
     add_look_option(p)
 
 
-def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, note_map: NoteMap,
-               avatar: Avatar | None = None) -> BodyScene:  # fmt: skip
+def body_scene(
+    args: argparse.Namespace,
+    performance: Performance,
+    kit: Kit,
+    note_map: NoteMap,
+    avatar: Avatar | None = None,
+) -> BodyScene:
     """The performance animated on ``kit`` with the motion options of ``args``, by a body with
     ``avatar``'s proportions (the built-in character's without one)."""
     from livedrummer.body.expression import load_expression
@@ -118,13 +165,24 @@ def body_scene(args: argparse.Namespace, performance: Performance, kit: Kit, not
 
     expression = load_expression(args.preset) if args.preset else None
     sticking = sticking_of(args, performance, kit)
-    done = perform(performance, rig_for(kit, avatar), note_map, expression,
-                   StrokeParams(model=args.strokes), sticking=sticking)  # fmt: skip
+    done = perform(
+        performance,
+        rig_for(kit, avatar),
+        note_map,
+        expression,
+        StrokeParams(model=args.strokes),
+        sticking=sticking,
+    )
     return BodyScene(kit, done)
 
 
-def cued(args: argparse.Namespace, performance: Performance, note_map: NoteMap,
-         body: BodyScene, lights: Any = None) -> tuple[BodyScene, Any]:  # fmt: skip
+def cued(
+    args: argparse.Namespace,
+    performance: Performance,
+    note_map: NoteMap,
+    body: BodyScene,
+    lights: Any = None,
+) -> tuple[BodyScene, Any]:
     """``--cues``: the body with the cue list's style changes and the frames' stage (camera,
     blackout and lights by time, from ``lights``), a CuedStage; bars are counted on the
     file's grid."""
@@ -142,13 +200,24 @@ def cued(args: argparse.Namespace, performance: Performance, note_map: NoteMap,
     p = body.performed
     rig = p.animation.rig
     styled = tuple(
-        (at, perform(performance, rig, note_map, expression,
-                     StrokeParams(model=args.strokes), sticking=p.sticking))
+        (
+            at,
+            perform(
+                performance,
+                rig,
+                note_map,
+                expression,
+                StrokeParams(model=args.strokes),
+                sticking=p.sticking,
+            ),
+        )
         for at, expression in style_changes(timed, base)[1:]
-    )  # fmt: skip
+    )
     scene = CuedBodyScene(body.kit, p, styled)
-    print(f"livedrummer: {args.cues}: {len(timed)} timed cues ({len(styled)} change the style)",
-          file=sys.stderr)  # fmt: skip
+    print(
+        f"livedrummer: {args.cues}: {len(timed)} timed cues ({len(styled)} change the style)",
+        file=sys.stderr,
+    )
     return scene, CuedStage(Stage(body.kit, args.camera, lights=lights), timed)
 
 
@@ -261,8 +330,9 @@ def run(args: argparse.Namespace) -> int:
     out = args.output
     if out is None and args.frames_dir is None:
         out = Path(source.stem + (".mov" if background.transparent else ".mp4"))
-    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset,
-                             alpha=background.transparent)  # fmt: skip
+    settings = VideoSettings(
+        size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset, alpha=background.transparent
+    )
     if out is not None:
         check_video_target(out, settings)
     performance, note_map = read_performance(args, source, "auto" if args.file else DEMO_MAP)
@@ -271,8 +341,9 @@ def run(args: argparse.Namespace) -> int:
     span = None
     if start_pos is not None or end_pos is not None:
         try:
-            span = span_seconds(start_pos, end_pos, performance.grid,
-                                performance.duration_s + args.tail)  # fmt: skip
+            span = span_seconds(
+                start_pos, end_pos, performance.grid, performance.duration_s + args.tail
+            )
         except ValueError as exc:
             raise RenderOptionError(f"{source}: --start/--end: {exc}") from None
     body = body_scene(args, performance, kit, note_map, avatar)
@@ -281,12 +352,26 @@ def run(args: argparse.Namespace) -> int:
         body, staging = cued(args, performance, note_map, body, lights)
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
     report = export(
-        performance, body, out=out, frames_dir=args.frames_dir, settings=settings,
-        camera=args.camera, tail_s=args.tail, samples=samples, fxaa=fxaa, progress=bar,
-        overlays=overlays, soundfont=args.soundfont, avatar=avatar, background=background,
-        span=span, staging=None if staging is None else staging.at, lights=lights,
-        lighting=None if staging is None else staging.lights_at, jobs=jobs,
-    )  # fmt: skip
+        performance,
+        body,
+        out=out,
+        frames_dir=args.frames_dir,
+        settings=settings,
+        camera=args.camera,
+        tail_s=args.tail,
+        samples=samples,
+        fxaa=fxaa,
+        progress=bar,
+        overlays=overlays,
+        soundfont=args.soundfont,
+        avatar=avatar,
+        background=background,
+        span=span,
+        staging=None if staging is None else staging.at,
+        lights=lights,
+        lighting=None if staging is None else staging.lights_at,
+        jobs=jobs,
+    )
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
     print(
         f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
@@ -324,8 +409,9 @@ def run_stage(args: argparse.Namespace) -> int:
     out = args.output
     if out is None and args.frames_dir is None:
         out = Path(args.stage.stem + (".mov" if background.transparent else ".mp4"))
-    settings = VideoSettings(size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset,
-                             alpha=background.transparent)  # fmt: skip
+    settings = VideoSettings(
+        size=size, fps=args.fps, crf=args.crf, preset=args.x264_preset, alpha=background.transparent
+    )
     if out is not None:
         check_video_target(out, settings)
     # the first performer's kit's [lights] under the stage file's
@@ -334,8 +420,9 @@ def run_stage(args: argparse.Namespace) -> int:
     for part in stage_parts(stage, args):
         p = part.performer
         kit = load_kit(p.kit)
-        own = argparse.Namespace(**{**vars(args), "preset": p.preset or args.preset,
-                                    "avatar": p.avatar or args.avatar})  # fmt: skip
+        own = argparse.Namespace(
+            **{**vars(args), "preset": p.preset or args.preset, "avatar": p.avatar or args.avatar}
+        )
         kit, avatar = fitted(own, kit, avatar_of(own))
         body = body_scene(own, part.performance, kit, part.note_map, avatar)
         drummers.append(StageDrummer(body, part.performance, part.placement, avatar))
@@ -347,14 +434,25 @@ def run_stage(args: argparse.Namespace) -> int:
         except ValueError as exc:
             raise RenderOptionError(f"{args.stage}: --start/--end: {exc}") from None
     bar = ProgressBar("render", sys.stderr.isatty(), args.fps)
-    report = export_stage(drummers, out=out, frames_dir=args.frames_dir, settings=settings,
-                          camera=args.camera, tail_s=args.tail, progress=bar,
-                          background=background, span=span,
-                          lights=lights, jobs=jobs)  # fmt: skip
+    report = export_stage(
+        drummers,
+        out=out,
+        frames_dir=args.frames_dir,
+        settings=settings,
+        camera=args.camera,
+        tail_s=args.tail,
+        progress=bar,
+        background=background,
+        span=span,
+        lights=lights,
+        jobs=jobs,
+    )
     where = ", ".join(str(p) for p in (out, args.frames_dir) if p is not None)
-    print(f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
-          f"{f' (from {span[0]:.2f} s to {span[1]:.2f} s)' if span else ''}, "
-          f"{len(drummers)} drummers ({stage.formation.shape}), {size[0]}x{size[1]} @ "
-          f"{args.fps} fps, camera {args.camera}, look {lights.name}; "
-          f"{report.realtime:.2f}x real time")  # fmt: skip
+    print(
+        f"wrote {where}: {report.frames} frames, {report.duration_s:.2f} s"
+        f"{f' (from {span[0]:.2f} s to {span[1]:.2f} s)' if span else ''}, "
+        f"{len(drummers)} drummers ({stage.formation.shape}), {size[0]}x{size[1]} @ "
+        f"{args.fps} fps, camera {args.camera}, look {lights.name}; "
+        f"{report.realtime:.2f}x real time"
+    )
     return 0

@@ -10,18 +10,29 @@ from .parsing import Subparsers, add_command, add_renamed
 
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "sessions", _usage)
-    add_renamed(p, "--dir", p.add_argument(
-        "--sessions-dir", type=Path, metavar="DIR",
-        help="journal folder, as for input (default $LIVEDRUMMER_HOME/sessions)"))  # fmt: skip
+    add_renamed(
+        p,
+        "--dir",
+        p.add_argument(
+            "--sessions-dir",
+            type=Path,
+            metavar="DIR",
+            help="journal folder, as for input (default $LIVEDRUMMER_HOME/sessions)",
+        ),
+    )
     actions = p.add_subparsers(dest="action", metavar="ACTION")
     ls = actions.add_parser("list", help="one line per session")
     ls.set_defaults(func=run_list)
     ex = actions.add_parser("export", help="write a session as a Standard MIDI File")
     ex.add_argument("session", help="session id, unique id prefix, or journal path")
     ex.add_argument("-o", "--output", type=Path, required=True, help="output .mid file")
-    ex.add_argument("--tempo", type=float, metavar="BPM",
-                    help="one file tempo in bpm (default: the tempo map the live beat tracker "
-                    "detects in the playing; 120 when it finds no beat)")  # fmt: skip
+    ex.add_argument(
+        "--tempo",
+        type=float,
+        metavar="BPM",
+        help="one file tempo in bpm (default: the tempo map the live beat tracker "
+        "detects in the playing; 120 when it finds no beat)",
+    )
     ex.set_defaults(func=run_export)
 
 
@@ -54,8 +65,7 @@ def run_export(args: argparse.Namespace) -> int:
 
     path = find_session(args.session, args.sessions_dir)
     detect = args.tempo is None
-    journal = export_session(path, args.output, bpm=120.0 if detect else args.tempo,
-                             detect=detect)  # fmt: skip
+    journal = export_session(path, args.output, bpm=120.0 if detect else args.tempo, detect=detect)
     print(f"{args.output}: {journal.onsets.size} onsets, {journal.controls.size} controls")
     if journal.stop_reason:
         print(f"  note: {journal.stop_reason}; {journal.discarded_bytes} bytes skipped")

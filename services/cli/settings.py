@@ -35,10 +35,14 @@ SETTINGS_FILE = "settings.json"
 def add_settings_option(p: argparse.ArgumentParser) -> None:
     """``--settings FILE``; call it after every other option, so that the defaults of those it
     replaces are known (a flag left at its default is not "given")."""
-    p.add_argument("--settings", type=Path, metavar="FILE",
-                   help="the show's settings as a launcher (up) resolved them, JSON: map, kit, "
-                   "avatar, delay, lookahead and sound come from FILE, not from flags "
-                   "(default: from this command's flags)")  # fmt: skip
+    p.add_argument(
+        "--settings",
+        type=Path,
+        metavar="FILE",
+        help="the show's settings as a launcher (up) resolved them, JSON: map, kit, "
+        "avatar, delay, lookahead and sound come from FILE, not from flags "
+        "(default: from this command's flags)",
+    )
     defaults = {a.dest: a.default for a in p._actions if a.dest in FLAGS}
     p.set_defaults(settings_defaults=defaults)
 
@@ -62,8 +66,10 @@ def settings_of(
     if path is not None:
         given = given_beside(args, skip)
         if given:
-            raise ConfigError(f"--settings {path}: {', '.join(given)} given beside it; the "
-                              "file holds them (give one or the other)")  # fmt: skip
+            raise ConfigError(
+                f"--settings {path}: {', '.join(given)} given beside it; the "
+                "file holds them (give one or the other)"
+            )
         return ShowSettings.load(path)
     delay = Delay()
     if hasattr(args, "delay_ms"):

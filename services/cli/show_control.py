@@ -11,17 +11,25 @@ from typing import Any
 
 def add_osc_options(p: argparse.ArgumentParser, what: str) -> None:
     """``--osc PORT`` and ``--osc-allow ADDR,...`` (see :mod:`services.show.osc`)."""
-    p.add_argument("--osc", type=int, metavar="PORT",
-                   help=f"OSC show control on this UDP port ({what}; no authentication: "
-                   "loopback only unless --osc-allow) (default: none)")  # fmt: skip
+    p.add_argument(
+        "--osc",
+        type=int,
+        metavar="PORT",
+        help=f"OSC show control on this UDP port ({what}; no authentication: "
+        "loopback only unless --osc-allow) (default: none)",
+    )
     p.add_argument(
         "--osc-allow",
         metavar="ADDR,...",
         help="also take OSC from these sender addresses (default: loopback only)",
     )
-    p.add_argument("--cues", type=Path, metavar="FILE",
-                   help="cue list (TOML): OSC /livedrummer/cue NAME fires a cue, and live "
-                   "its bar cues fire as the beat tracker counts bars (default: none)")  # fmt: skip
+    p.add_argument(
+        "--cues",
+        type=Path,
+        metavar="FILE",
+        help="cue list (TOML): OSC /livedrummer/cue NAME fires a cue, and live "
+        "its bar cues fire as the beat tracker counts bars (default: none)",
+    )
 
 
 def cues_of(args: argparse.Namespace) -> dict[str, Any]:

@@ -39,8 +39,10 @@ def run_stage_live(args: argparse.Namespace) -> int:
     subs = [s.strip() for s in args.sub.split(",") if s.strip()]
     if len(subs) != len(live):
         names = ", ".join(p.id if p.copy == 0 else f"{p.id}.{p.copy}" for _, p, _ in live)
-        raise ConfigError(f"--sub: {len(subs)} endpoints for {len(live)} live performers of "
-                          f"{args.stage} ({names}): give one each, in that order")  # fmt: skip
+        raise ConfigError(
+            f"--sub: {len(subs)} endpoints for {len(live)} live performers of "
+            f"{args.stage} ({names}): give one each, in that order"
+        )
     if not 0 < args.fps <= 1000:
         raise ConfigError(f"--fps: expected 0 < fps <= 1000 (got {args.fps})")
     if args.max_frames is not None and args.max_frames < 1:
@@ -52,11 +54,17 @@ def run_stage_live(args: argparse.Namespace) -> int:
         from ..display.window import WindowOptions
 
         if args.video is not None or args.frames_dir is not None:
-            raise ConfigError("display --live --stage: --video and --frames-dir record off "
-                              "screen: add --headless")  # fmt: skip
-        window = WindowOptions(size=parse_size(args.size), fullscreen=args.fullscreen,
-                               monitor=args.monitor, camera=args.camera, samples=0,
-                               vsync=False)  # fmt: skip
+            raise ConfigError(
+                "display --live --stage: --video and --frames-dir record off screen: add --headless"
+            )
+        window = WindowOptions(
+            size=parse_size(args.size),
+            fullscreen=args.fullscreen,
+            monitor=args.monitor,
+            camera=args.camera,
+            samples=0,
+            vsync=False,
+        )
     if args.settings is not None:
         played = _played_as_given(args, len(live))
     else:
@@ -67,14 +75,22 @@ def run_stage_live(args: argparse.Namespace) -> int:
     ]
     calibration = Calibration.load()
     config = StageConfig(
-        fps=args.fps, size=parse_size(args.size), camera=args.camera, frames=args.max_frames,
-        seconds=args.seconds, out=args.frames_dir, png=not args.no_png, video=args.video,
-        window=window, render=not args.no_render,
+        fps=args.fps,
+        size=parse_size(args.size),
+        camera=args.camera,
+        frames=args.max_frames,
+        seconds=args.seconds,
+        out=args.frames_dir,
+        png=not args.no_png,
+        video=args.video,
+        window=window,
+        render=not args.no_render,
         display_offset_s=calibration.display_ms / 1000.0,
-        security=security_from_args(args), control=args.control,
+        security=security_from_args(args),
+        control=args.control,
         # the first live performer's kit's [lights] under the stage file's, under --look
         lights=lights_of(args, played[0][0], stage),
-    )  # fmt: skip
+    )
     import zmq
 
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
@@ -83,9 +99,11 @@ def run_stage_live(args: argparse.Namespace) -> int:
     code = serve(display, lambda endpoints: ",".join(p.sub for p in performers))
     s = display.summary()
     where = f" into {args.frames_dir}" if args.frames_dir else ""
-    each = "; ".join(f"{name}: {v['pose_samples']} pose samples, {v['missing']} lost, "
-                     f"{v['bad']} bad, {v['restarts']} restarts"
-                     for name, v in s["performers"].items())  # fmt: skip
+    each = "; ".join(
+        f"{name}: {v['pose_samples']} pose samples, {v['missing']} lost, "
+        f"{v['bad']} bad, {v['restarts']} restarts"
+        for name, v in s["performers"].items()
+    )
     print(f"display: {s['frames']} stage frames{where}; {each}", file=sys.stderr)
     return code
 
@@ -102,8 +120,10 @@ def _played_as_given(args: argparse.Namespace, count: int) -> list[tuple[Kit, Av
 
     files = [f.strip() for f in str(args.settings).split(",") if f.strip()]
     if len(files) != count:
-        raise ConfigError(f"--settings: {len(files)} files for {count} live performers of "
-                          f"{args.stage}: give one each, in --sub's order")  # fmt: skip
+        raise ConfigError(
+            f"--settings: {len(files)} files for {count} live performers of "
+            f"{args.stage}: give one each, in --sub's order"
+        )
     done: dict[str, tuple[Kit, Avatar | None]] = {}
     for f in files:
         if f not in done:
@@ -124,8 +144,10 @@ def _played_from_stage(live: list[Any]) -> list[tuple[Kit, Avatar | None]]:
         avatars = {p.id: load_avatar(p.avatar) for _, p, _ in live if p.avatar is not None}
     kits = {p.kit: load_kit(p.kit) for _, p, _ in live}
     fits = {p.id: fit_avatar(kits[p.kit], avatars[p.id]) for _, p, _ in live if p.id in avatars}
-    return [(fits[p.id].kit, fits[p.id].avatar) if p.id in fits else (kits[p.kit], None)
-            for _, p, _ in live]  # fmt: skip
+    return [
+        (fits[p.id].kit, fits[p.id].avatar) if p.id in fits else (kits[p.kit], None)
+        for _, p, _ in live
+    ]
 
 
 def _clock(args: argparse.Namespace, windowed: bool, audio_ms: float) -> FrameClock:
@@ -141,6 +163,7 @@ def _clock(args: argparse.Namespace, windowed: bool, audio_ms: float) -> FrameCl
         except DisplayError as exc:
             if args.clock == "audio":
                 raise
-            logging.getLogger("livedrummer.display").warning("%s: frames on the monotonic clock",
-                                                             exc)  # fmt: skip
+            logging.getLogger("livedrummer.display").warning(
+                "%s: frames on the monotonic clock", exc
+            )
     return MonotonicFrameClock(audio_ms / 1000.0)

@@ -52,8 +52,9 @@ def check_room(stage: Stage) -> None:
     players = stage.players()
     labels = [p.id if p.copy == 0 else f"{p.id}#{p.copy + 1}" for p, _s, _v in players]
     try:
-        check_footprints([s for _p, s, _v in players], [prints[p.kit] for p, _s, _v in players],
-                         labels)  # fmt: skip
+        check_footprints(
+            [s for _p, s, _v in players], [prints[p.kit] for p, _s, _v in players], labels
+        )
     except ValueError as exc:
         shape = stage.formation.shape
         raise StageError(f"{stage.source}: [formation] {shape}: {exc}") from None
@@ -70,8 +71,10 @@ def stage_parts(stage: Stage, args: argparse.Namespace) -> list[Part]:
     read: dict[str, tuple[Performance, NoteMap]] = {}
     for performer, placement, variation in stage.players():
         if performer.file is None:
-            raise LivedrummerError(f"{stage.source}: performer {performer.id!r} has no file "
-                                   f"(its source {performer.source!r} is played live)")  # fmt: skip
+            raise LivedrummerError(
+                f"{stage.source}: performer {performer.id!r} has no file "
+                f"(its source {performer.source!r} is played live)"
+            )
         if performer.id not in read:
             opts = argparse.Namespace(map=performer.map, channel=performer.channel)
             read[performer.id] = read_performance(opts, Path(performer.file))
@@ -79,8 +82,7 @@ def stage_parts(stage: Stage, args: argparse.Namespace) -> list[Part]:
         if variation is not None:
             grid = performance.grid
             edges = bar_edges(grid.beat_s[grid.beat_in_bar == 0], performance.duration_s)
-            onsets, controls = vary_rows(performance.onsets, performance.controls, edges,
-                                         variation)  # fmt: skip
+            onsets, controls = vary_rows(performance.onsets, performance.controls, edges, variation)
             performance = dataclasses.replace(performance, onsets=onsets, controls=controls)
         parts.append(Part(performer, placement, performance, note_map))
     return parts

@@ -21,22 +21,28 @@ SILENCE_DBFS = -70.0
 
 def add_audio_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
-        "--audio-profile", metavar="P", default=None,
+        "--audio-profile",
+        metavar="P",
+        default=None,
         help="audio profile name or .toml path (from livedrummer audio learn); default the "
         "generic General MIDI profile",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--channels", metavar="MAP", default=None,
+        "--channels",
+        metavar="MAP",
+        default=None,
         help="one microphone per drum: 1=kick,2=snare,3=hihat,... (channels from 1; drums: "
         "kick snare hihat hihat_open tom_high tom_mid tom_low crash ride); default: a mix",
-    )  # fmt: skip
+    )
     p.add_argument(
-        "--recogniser", choices=("auto", "templates", "model"), default="auto",
+        "--recogniser",
+        choices=("auto", "templates", "model"),
+        default="auto",
         help="how a mix's hits are classified: the learned model trained on many kits "
         "(livedrummer acoustic train; its worst unheard kit beats the templates' worst, see "
         "docs/acoustic.md), or the audio profile's templates; auto (default): the templates "
         "when --audio-profile names a learned kit, else the model",
-    )  # fmt: skip
+    )
 
 
 def mix_model(args: argparse.Namespace):  # type: ignore[no-untyped-def]
@@ -77,8 +83,11 @@ def run(args: argparse.Namespace) -> int:
         raise LivedrummerError(f"{args.file}: silent (peak {level}): no hits to transcribe")
     if rec.clipped:
         share = 100.0 * rec.clipped / rec.samples.size
-        print(f"livedrummer: warning: {args.file}: {rec.clipped:,} samples clipped "
-              f"({share:.2f} %): loud hits read as full strength", file=sys.stderr)  # fmt: skip
+        print(
+            f"livedrummer: warning: {args.file}: {rec.clipped:,} samples clipped "
+            f"({share:.2f} %): loud hits read as full strength",
+            file=sys.stderr,
+        )
     model = None
     if mapping is not None:
         wanted = max(mapping) + 1
@@ -101,6 +110,8 @@ def run(args: argparse.Namespace) -> int:
     how = f"profile {profile.name}"
     if mapping is None and model is not None:
         how = f"model {model.name}"
-    print(f"{args.output}: {len(hits)} hits in {rec.duration_s:.1f} s ({mode}, {how}): "
-          f"{detail or 'none'}")  # fmt: skip
+    print(
+        f"{args.output}: {len(hits)} hits in {rec.duration_s:.1f} s ({mode}, {how}): "
+        f"{detail or 'none'}"
+    )
     return 0

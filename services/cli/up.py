@@ -74,24 +74,34 @@ OSC_SYNTH, OSC_DISPLAY = 12, 13  # their loopback OSC ports (UDP), from --port-b
 def register(sub: Subparsers) -> None:
     p = add_command(sub, "up", run, "run the live pipeline: input, synth and display")
     src = p.add_mutually_exclusive_group()  # or the [source] of the rig profile
-    src.add_argument("--midi", metavar="PORT",
-                     help="MIDI port of the kit (default: the rig profile's source)")  # fmt: skip
-    src.add_argument("--serial", metavar="DEV",
-                     help="serial trigger board (default: the rig profile's source)")  # fmt: skip
+    src.add_argument(
+        "--midi", metavar="PORT", help="MIDI port of the kit (default: the rig profile's source)"
+    )
+    src.add_argument(
+        "--serial", metavar="DEV", help="serial trigger board (default: the rig profile's source)"
+    )
     src.add_argument("--demo", action="store_true", help="play the bundled groove as if live")
-    src.add_argument("--keys", action="store_true",
-                     help="no kit: the window's drum keys (Z X C V T Y N J K U P E, Shift loud, "
-                     "Ctrl soft) play into a virtual MIDI input, livedrummer-keys, that a "
-                     "DAW can also play into")  # fmt: skip
-    src.add_argument("--audio", metavar="DEVICE",
-                     help="audio input of an acoustic kit's microphones (default: the rig "
-                          "profile's source)")  # fmt: skip
+    src.add_argument(
+        "--keys",
+        action="store_true",
+        help="no kit: the window's drum keys (Z X C V T Y N J K U P E, Shift loud, "
+        "Ctrl soft) play into a virtual MIDI input, livedrummer-keys, that a "
+        "DAW can also play into",
+    )
+    src.add_argument(
+        "--audio",
+        metavar="DEVICE",
+        help="audio input of an acoustic kit's microphones (default: the rig profile's source)",
+    )
     from .transcribe import add_audio_options
 
     add_audio_options(p)
-    src.add_argument("--stage", type=Path, metavar="FILE",
-                     help="a live stage: every performer of FILE with a source "
-                     "(default: one kit)")  # fmt: skip
+    src.add_argument(
+        "--stage",
+        type=Path,
+        metavar="FILE",
+        help="a live stage: every performer of FILE with a source (default: one kit)",
+    )
     add_kit_option(p)
     add_avatar_option(p)
     add_background_option(p, transparent=False)
@@ -99,55 +109,117 @@ def register(sub: Subparsers) -> None:
     p.add_argument("--map", help="note map (default roland-td)")
     p.add_argument("--baud", type=int, default=31_250, help="serial baud rate (default 31250)")
     add_api_option(p)
-    p.add_argument("--lookahead-ms", type=float, default=30.0, metavar="L",
-                   help="limb decisions wait L ms for later notes")  # fmt: skip
-    p.add_argument("--delay-ms", type=float, default=30.0, metavar="D",
-                   help="show the drummer D ms behind the sound, D >= L")  # fmt: skip
-    p.add_argument("--seconds", type=float, metavar="S",
-                   help="stop everything after S seconds (default: when stopped)")  # fmt: skip
+    p.add_argument(
+        "--lookahead-ms",
+        type=float,
+        default=30.0,
+        metavar="L",
+        help="limb decisions wait L ms for later notes",
+    )
+    p.add_argument(
+        "--delay-ms",
+        type=float,
+        default=30.0,
+        metavar="D",
+        help="show the drummer D ms behind the sound, D >= L",
+    )
+    p.add_argument(
+        "--seconds",
+        type=float,
+        metavar="S",
+        help="stop everything after S seconds (default: when stopped)",
+    )
     p.add_argument("--headless", action="store_true", help="render off screen even with a screen")
-    add_renamed(p, "--out", p.add_argument(
-        "--frames-dir", type=Path, default=Path("out/live"), metavar="DIR",
-        help="headless frames folder"))  # fmt: skip
+    add_renamed(
+        p,
+        "--out",
+        p.add_argument(
+            "--frames-dir",
+            type=Path,
+            default=Path("out/live"),
+            metavar="DIR",
+            help="headless frames folder",
+        ),
+    )
     p.add_argument("--fps", type=float, default=30.0, help="display frames per second")
-    p.add_argument("--port-base", type=int, default=5710,
-                   help="TCP ports PORT..PORT+11 on --bind, and UDP PORT+12 and +13 on "
-                   "loopback with --osc or --control (default 5710)")  # fmt: skip
-    p.add_argument("--bind", default="127.0.0.1", metavar="ADDR",
-                   help="address the input and synth serve on (default 127.0.0.1)")  # fmt: skip
-    p.add_argument("--png", action="store_true",
-                   help="headless: also write every frame as a PNG into --frames-dir (about 9 GB "
-                   "an hour at 640x360; default: frames.jsonl only)")  # fmt: skip
+    p.add_argument(
+        "--port-base",
+        type=int,
+        default=5710,
+        help="TCP ports PORT..PORT+11 on --bind, and UDP PORT+12 and +13 on "
+        "loopback with --osc or --control (default 5710)",
+    )
+    p.add_argument(
+        "--bind",
+        default="127.0.0.1",
+        metavar="ADDR",
+        help="address the input and synth serve on (default 127.0.0.1)",
+    )
+    p.add_argument(
+        "--png",
+        action="store_true",
+        help="headless: also write every frame as a PNG into --frames-dir (about 9 GB "
+        "an hour at 640x360; default: frames.jsonl only)",
+    )
     p.add_argument("--no-png", action="store_true", help=argparse.SUPPRESS)  # the old default
     p.add_argument("--no-journal", action="store_true", help="do not journal the session")
-    p.add_argument("--video", type=Path, metavar="FILE",
-                   help="headless: record the show and its drum track as MP4 "
-                   "(default: none)")  # fmt: skip
-    p.add_argument("--soundfont", type=Path, metavar="SF2",
-                   help="--video and --sound: drum sounds from this General MIDI SoundFont "
-                   "(default: the built-in kit)")  # fmt: skip
-    p.add_argument("--sfz", type=Path, metavar="SFZ", dest="soundfont",
-                   help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
-                   "default: the built-in kit)")  # fmt: skip
-    p.add_argument("--sound", action="store_true",
-                   help="the display sounds each onset at onset + D (the built-in kit, "
-                   "--soundfont or --sfz)")  # fmt: skip
-    p.add_argument("--audio-device", metavar="NAME",
-                   help="--sound: the output, a device name or part of it "
-                   "(default: the system's default output)")  # fmt: skip
-    p.add_argument("--size", help="frame size WIDTHxHEIGHT (default 1280x720 in a window, "
-                                  "640x360 headless)")  # fmt: skip
+    p.add_argument(
+        "--video",
+        type=Path,
+        metavar="FILE",
+        help="headless: record the show and its drum track as MP4 (default: none)",
+    )
+    p.add_argument(
+        "--soundfont",
+        type=Path,
+        metavar="SF2",
+        help="--video and --sound: drum sounds from this General MIDI SoundFont "
+        "(default: the built-in kit)",
+    )
+    p.add_argument(
+        "--sfz",
+        type=Path,
+        metavar="SFZ",
+        dest="soundfont",
+        help="drum sounds from this SFZ sampled kit (instead of --soundfont; "
+        "default: the built-in kit)",
+    )
+    p.add_argument(
+        "--sound",
+        action="store_true",
+        help="the display sounds each onset at onset + D (the built-in kit, --soundfont or --sfz)",
+    )
+    p.add_argument(
+        "--audio-device",
+        metavar="NAME",
+        help="--sound: the output, a device name or part of it "
+        "(default: the system's default output)",
+    )
+    p.add_argument(
+        "--size", help="frame size WIDTHxHEIGHT (default 1280x720 in a window, 640x360 headless)"
+    )
     p.add_argument("--fullscreen", action="store_true", help="window: full screen (projectors)")
     p.add_argument("--camera", default="stage", help="display camera (default stage)")
-    p.add_argument("--overlay", default="", metavar="LIST",
-                   help="SMED's strips over the drummer: score, joints or both; keys O and G in "
-                   "the window (default: none)")  # fmt: skip
-    p.add_argument("--rig", type=Path, metavar="FILE",
-                   help="rig profile whose values are the defaults of these options "
-                        "(default $LIVEDRUMMER_HOME/rig.toml when it exists)")  # fmt: skip
-    p.add_argument("--wait", action="store_true",
-                   help="wait for a --midi port or --serial device that is not there yet "
-                        "(default: one line naming what exists, exit 2)")  # fmt: skip
+    p.add_argument(
+        "--overlay",
+        default="",
+        metavar="LIST",
+        help="SMED's strips over the drummer: score, joints or both; keys O and G in "
+        "the window (default: none)",
+    )
+    p.add_argument(
+        "--rig",
+        type=Path,
+        metavar="FILE",
+        help="rig profile whose values are the defaults of these options "
+        "(default $LIVEDRUMMER_HOME/rig.toml when it exists)",
+    )
+    p.add_argument(
+        "--wait",
+        action="store_true",
+        help="wait for a --midi port or --serial device that is not there yet "
+        "(default: one line naming what exists, exit 2)",
+    )
     p.add_argument("--monitor", type=int, default=0, help="window: monitor for --fullscreen")
     add_style_options(p)
     add_osc_options(
@@ -155,9 +227,13 @@ def register(sub: Subparsers) -> None:
         "every /livedrummer address, forwarded to the synth and the display "
         "on UDP ports PORT_BASE+12 and +13",
     )
-    p.add_argument("--control", type=Path, metavar="FILE",
-                   help="MIDI controller map (livedrummer control learn) applied from "
-                   "--control-midi (default: none)")  # fmt: skip
+    p.add_argument(
+        "--control",
+        type=Path,
+        metavar="FILE",
+        help="MIDI controller map (livedrummer control learn) applied from "
+        "--control-midi (default: none)",
+    )
     p.add_argument(
         "--control-midi",
         metavar="PORT",
@@ -173,8 +249,10 @@ def specs(args: argparse.Namespace, settings: Path, sessions: Path | None = None
     from ..process.supervisor import ServiceSpec
 
     base = args.port_base
-    ep = {name: f"tcp://{args.bind}:{base + k}" for name, k in
-          (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))}  # fmt: skip
+    ep = {
+        name: f"tcp://{args.bind}:{base + k}"
+        for name, k in (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))
+    }
     # Clients reach the servers through loopback unless they serve on one given address.
     near = {name: e.replace("tcp://0.0.0.0:", "tcp://127.0.0.1:") for name, e in ep.items()}
     curve = curve_argv(args)
@@ -255,8 +333,10 @@ def apply_profile(args: argparse.Namespace, defaults: dict[str, object]) -> Path
         used = path
     if not (args.midi or args.serial or args.demo or args.audio or args.keys):
         where = f" (none in {used})" if used is not None else ""
-        raise ConfigError(f"up: give --midi PORT, --serial DEV or --demo (or --audio DEVICE), or "
-                          f"a [source] in rig.toml{where}")  # fmt: skip
+        raise ConfigError(
+            f"up: give --midi PORT, --serial DEV or --demo (or --audio DEVICE), or "
+            f"a [source] in rig.toml{where}"
+        )
     return used
 
 
@@ -313,21 +393,26 @@ def run(args: argparse.Namespace) -> int:
 
             from ..show.osc import DISPLAY_ADDRESSES, SYNTH_ADDRESSES, OscRouter
 
-            routes = {"synth": (SYNTH_ADDRESSES, args.port_base + OSC_SYNTH),
-                      "display": (DISPLAY_ADDRESSES, args.port_base + OSC_DISPLAY)}  # fmt: skip
+            routes = {
+                "synth": (SYNTH_ADDRESSES, args.port_base + OSC_SYNTH),
+                "display": (DISPLAY_ADDRESSES, args.port_base + OSC_DISPLAY),
+            }
             # a controller alone gets a loopback port of its own (0: the system picks one)
             port = args.osc if args.osc is not None else 0
             router = OscRouter(port, routes, logging.getLogger("livedrummer.up"), allow)
-            print(f"up: OSC on udp port {router.port} "
-                  f"({'loopback and ' + ', '.join(allow) if allow else 'loopback only'})",
-                  flush=True)  # fmt: skip
+            print(
+                f"up: OSC on udp port {router.port} "
+                f"({'loopback and ' + ', '.join(allow) if allow else 'loopback only'})",
+                flush=True,
+            )
             router.start()
         if mapping is not None and router is not None:
             from ..show.controller import ControllerBridge
 
             bridge = ControllerBridge(args.control_midi, mapping, router.port, args.api).start()
-            print(f"up: controller {args.control_midi} steers the show ({args.control})",
-                  flush=True)  # fmt: skip
+            print(
+                f"up: controller {args.control_midi} steers the show ({args.control})", flush=True
+            )
         given = write_settings(settings, Path(tmp))
         try:
             code = supervise(args, Supervisor(specs(args, given, sessions)))
@@ -358,18 +443,30 @@ def add_drum_track(settings: ShowSettings, video: Path, sessions: Path, started:
     timing = Timing.load(video)
     delay_s = settings.delay.delay_s
     kit_file = None if settings.sound.kit_file is None else Path(settings.sound.kit_file)
-    journals = [load_journal(path) for path in sorted(sessions.glob(f"*{SUFFIX}"))
-                if path.stat().st_mtime >= started - 1.0]  # fmt: skip
+    journals = [
+        load_journal(path)
+        for path in sorted(sessions.glob(f"*{SUFFIX}"))
+        if path.stat().st_mtime >= started - 1.0
+    ]
     onsets = np.concatenate([j.onsets for j in journals] or [np.zeros(0, ONSET_DTYPE)])
     controls = np.concatenate([j.controls for j in journals] or [np.zeros(0, CONTROL_DTYPE)])
-    track = recording_track(onsets, controls, timing, delay_s=delay_s,
-                            kit=load_kit(settings.kit), note_map=load_note_map(settings.note_map),
-                            soundfont=kit_file)  # fmt: skip
+    track = recording_track(
+        onsets,
+        controls,
+        timing,
+        delay_s=delay_s,
+        kit=load_kit(settings.kit),
+        note_map=load_note_map(settings.note_map),
+        soundfont=kit_file,
+    )
     mux_audio(video, track)
     duration = timing.frames / timing.fps
     # the rig keeps playing while the display draws a set-length recording: count the hits
     # the video holds, not every one journaled
     sounded = onsets["time_s"].astype(np.float64) + delay_s - timing.show0_s
     heard = int(np.count_nonzero((sounded >= 0.0) & (sounded < duration)))
-    print(f"up: wrote {video.resolve()} ({duration:.1f} s, {timing.frames} frames, "
-          f"{heard} hits in its drum track)", flush=True)  # fmt: skip
+    print(
+        f"up: wrote {video.resolve()} ({duration:.1f} s, {timing.frames} frames, "
+        f"{heard} hits in its drum track)",
+        flush=True,
+    )

@@ -56,8 +56,11 @@ def curve_argv(args: argparse.Namespace) -> dict[str, list[str]]:
             )
     allow = ["--allow", str(args.allow.resolve())] if args.allow is not None else []
     serve = ["--curve-secret", secret, *allow, *insecure]
-    return {"input": serve, "synth": [*serve, "--server-key", secret],
-            "display": ["--curve-secret", secret, "--server-key", secret]}  # fmt: skip
+    return {
+        "input": serve,
+        "synth": [*serve, "--server-key", secret],
+        "display": ["--curve-secret", secret, "--server-key", secret],
+    }
 
 
 def frame_size(args: argparse.Namespace) -> str:

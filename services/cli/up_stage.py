@@ -86,14 +86,31 @@ def stage_specs(
             near["in_pub"] = _endpoints(args, k - performer.copy)[1]["in_pub"]
         else:
             performer_settings(performer, stage_file, delay).save(given)
-            specs.append(_input(args, stage_file, k, performer, ep, curve["input"], stage.copies,
-                                given))  # fmt: skip
-        specs.append(ServiceSpec(f"synth-{name}", [
-            *me, "synth", "--sub", near["in_pub"], "--pub", ep["syn_pub"],
-            "--control", ep["syn_ctl"], "--settings", str(given),
-            "--performer", str(k), *_vary(stage.variation(k)),
-            *(["--preset", performer.preset] if performer.preset else []),
-            *curve["synth"]]))  # fmt: skip
+            specs.append(
+                _input(args, stage_file, k, performer, ep, curve["input"], stage.copies, given)
+            )
+        specs.append(
+            ServiceSpec(
+                f"synth-{name}",
+                [
+                    *me,
+                    "synth",
+                    "--sub",
+                    near["in_pub"],
+                    "--pub",
+                    ep["syn_pub"],
+                    "--control",
+                    ep["syn_ctl"],
+                    "--settings",
+                    str(given),
+                    "--performer",
+                    str(k),
+                    *_vary(stage.variation(k)),
+                    *(["--preset", performer.preset] if performer.preset else []),
+                    *curve["synth"],
+                ],
+            )
+        )
         subs.append(near["syn_pub"])
         settings.append(str(given))
     display = [*me, "display", "--live", "--stage", str(stage_file.resolve()),
@@ -116,8 +133,10 @@ def stage_specs(
 def _endpoints(args: argparse.Namespace, k: int) -> tuple[dict[str, str], dict[str, str]]:
     """Drummer ``k``'s endpoints: as bound, and as a local service connects to them."""
     base = args.port_base + PORTS_PER_PERFORMER * k
-    ep = {name: f"tcp://{args.bind}:{base + d}" for name, d in
-          (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))}  # fmt: skip
+    ep = {
+        name: f"tcp://{args.bind}:{base + d}"
+        for name, d in (("in_pub", 0), ("in_ctl", 1), ("syn_pub", 10), ("syn_ctl", 11))
+    }
     near = {name: e.replace("tcp://0.0.0.0:", "tcp://127.0.0.1:") for name, e in ep.items()}
     return ep, near
 
@@ -126,8 +145,14 @@ def _vary(variation: Variation | None) -> list[str]:
     """``synth --vary`` options for an ensemble copy (the synth caps the shift at D - L)."""
     if variation is None:
         return []
-    return ["--vary", str(variation.seed), "--vary-ms", f"{variation.warp_s * 1000:g}",
-            "--vary-amplitude", f"{variation.amplitude:g}"]  # fmt: skip
+    return [
+        "--vary",
+        str(variation.seed),
+        "--vary-ms",
+        f"{variation.warp_s * 1000:g}",
+        "--vary-amplitude",
+        f"{variation.amplitude:g}",
+    ]
 
 
 def performer_settings(performer: Performer, stage_file: Path, delay: Delay) -> ShowSettings:
@@ -149,14 +174,24 @@ def performer_settings(performer: Performer, stage_file: Path, delay: Delay) -> 
             quiet = argparse.Namespace(map=AUTO, channel=performer.channel)
             note_map = read_performance(quiet, source.value, quiet=True)[1].name
     load_note_map(note_map)  # a bad map is one line before anything starts
-    return ShowSettings(note_map=spec_path(note_map) or note_map,
-                        kit=spec_path(performer.kit) or performer.kit,
-                        avatar=AvatarChoice(spec_path(performer.avatar)), delay=delay)  # fmt: skip
+    return ShowSettings(
+        note_map=spec_path(note_map) or note_map,
+        kit=spec_path(performer.kit) or performer.kit,
+        avatar=AvatarChoice(spec_path(performer.avatar)),
+        delay=delay,
+    )
 
 
-def _input(args: argparse.Namespace, stage_file: Path, k: int, performer: Performer,
-           ep: dict[str, str], curve: list[str], copies: int,
-           settings: Path) -> ServiceSpec:  # fmt: skip
+def _input(
+    args: argparse.Namespace,
+    stage_file: Path,
+    k: int,
+    performer: Performer,
+    ep: dict[str, str],
+    curve: list[str],
+    copies: int,
+    settings: Path,
+) -> ServiceSpec:
     """Performer ``k``'s input daemon, waiting for its ``copies`` synths to subscribe."""
     from livedrummer.stage.source import parse_source
 
@@ -167,10 +202,26 @@ def _input(args: argparse.Namespace, stage_file: Path, k: int, performer: Perfor
     src += ["--api", args.api] if source.opens_midi else []
     src += ["--wait"] if args.wait and source.kind in ("midi", "serial") else []
     journal = ["--no-journal"] if args.no_journal else []
-    return ServiceSpec(f"input-{performer.id}", [
-        *program_argv(), "input", *src, "--settings", str(settings), "--performer", str(k),
-        "--pub", ep["in_pub"], "--control", ep["in_ctl"], "--wait-subscribers", str(copies),
-        *journal, *curve])  # fmt: skip
+    return ServiceSpec(
+        f"input-{performer.id}",
+        [
+            *program_argv(),
+            "input",
+            *src,
+            "--settings",
+            str(settings),
+            "--performer",
+            str(k),
+            "--pub",
+            ep["in_pub"],
+            "--control",
+            ep["in_ctl"],
+            "--wait-subscribers",
+            str(copies),
+            *journal,
+            *curve,
+        ],
+    )
 
 
 def run_stage(args: argparse.Namespace) -> int:
@@ -196,8 +247,9 @@ def _run(args: argparse.Namespace, specs: list[ServiceSpec]) -> int:
     from ..process.supervisor import Supervisor
     from .up_launch import supervise
 
-    last = max(int(s.argv[s.argv.index("--performer") + 1]) for s in specs
-               if "--performer" in s.argv)  # fmt: skip
+    last = max(
+        int(s.argv[s.argv.index("--performer") + 1]) for s in specs if "--performer" in s.argv
+    )
     if args.port_base + PORTS_PER_PERFORMER * last + 11 > 65535:
         raise ConfigError(f"--port-base {args.port_base}: performer {last}'s ports pass 65535")
     if args.video is not None:

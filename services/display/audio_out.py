@@ -103,10 +103,14 @@ class TrackRenderer:
         return out
 
     def _apply(self, request: Request, dac: float) -> None:
-        target = round((request.position_s + (dac - request.at)) * self.sr) if request.rolling \
-            else None  # fmt: skip
-        if target is not None and self.pos is not None and \
-                abs(target - self.pos) <= JUMP_S * self.sr:  # fmt: skip
+        target = (
+            round((request.position_s + (dac - request.at)) * self.sr) if request.rolling else None
+        )
+        if (
+            target is not None
+            and self.pos is not None
+            and abs(target - self.pos) <= JUMP_S * self.sr
+        ):
             return  # on course: play on, sample by sample
         if target is None and self.pos is None:
             return
@@ -164,8 +168,9 @@ class TrackPlayer:
         self.underruns = 0
         self.writes = 0
         self.written = 0  # samples written since the stream started
-        self._stream = sd.OutputStream(samplerate=sr, channels=2, dtype="float32",
-                                       device=device, latency=BUFFER_S)  # fmt: skip
+        self._stream = sd.OutputStream(
+            samplerate=sr, channels=2, dtype="float32", device=device, latency=BUFFER_S
+        )
         self._switch = sys.getswitchinterval()
         sys.setswitchinterval(SWITCH_S)  # the writer gets the interpreter back soon
         self._stream.start()
@@ -238,8 +243,9 @@ def window_track(
     if soundfont is not None:
         from livedrummer.audio.kitfile import render_kit_file
 
-        return render_kit_file(performance.onsets, duration, soundfont, sr, body.kit,
-                                body.performed.sound_chokes)  # fmt: skip
+        return render_kit_file(
+            performance.onsets, duration, soundfont, sr, body.kit, body.performed.sound_chokes
+        )
     return mix_onsets(performance.onsets, duration, body.kit, sr, body.performed.sound_chokes)
 
 
@@ -249,8 +255,11 @@ def open_player(track: np.ndarray, sr: int, device: str | None) -> TrackPlayer |
     try:
         import sounddevice as sd
     except OSError as exc:
-        log.warning("no sound: %s (install libportaudio2): the window plays silently on the "
-                    "monotonic clock", exc)  # fmt: skip
+        log.warning(
+            "no sound: %s (install libportaudio2): the window plays silently on the "
+            "monotonic clock",
+            exc,
+        )
         return None
     try:
         return TrackPlayer(track, sr, device)
@@ -258,8 +267,12 @@ def open_player(track: np.ndarray, sr: int, device: str | None) -> TrackPlayer |
         why = str(exc)
         if device is None and sd.default.device[1] < 0:
             why = "there is none"  # PortAudio's words: "Error querying device -1"
-        log.warning("no sound: cannot open the output %s (%s): the window plays silently on the "
-                    "monotonic clock", device or "(default)", why)  # fmt: skip
+        log.warning(
+            "no sound: cannot open the output %s (%s): the window plays silently on the "
+            "monotonic clock",
+            device or "(default)",
+            why,
+        )
         return None
 
 

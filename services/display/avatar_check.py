@@ -38,9 +38,11 @@ def avatar_mismatch(ours: Avatar | None, theirs: str) -> str | None:
     mine = "" if ours is None else ours.digest
     if mine == theirs:
         return None
-    return (f"display: this display draws {describe(mine, ours)} but the synth plays "
-            f"{describe(theirs)}: limbs are drawn with other proportions than they are played "
-            "with (give both the same --avatar)")  # fmt: skip
+    return (
+        f"display: this display draws {describe(mine, ours)} but the synth plays "
+        f"{describe(theirs)}: limbs are drawn with other proportions than they are played "
+        "with (give both the same --avatar)"
+    )
 
 
 def check_synth_avatar(

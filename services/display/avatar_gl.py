@@ -36,9 +36,18 @@ _SHADING = {"lit": 0, "toon": 1}
 def interleave(avatar: Avatar) -> np.ndarray:
     """The vertex buffer's contents, float32 (V, 16)."""
     m = avatar.mesh
-    return np.ascontiguousarray(np.column_stack([
-        m.positions, m.normals, m.uv, m.joints.astype(np.float32), m.weights,
-    ]), np.float32)  # fmt: skip
+    return np.ascontiguousarray(
+        np.column_stack(
+            [
+                m.positions,
+                m.normals,
+                m.uv,
+                m.joints.astype(np.float32),
+                m.weights,
+            ]
+        ),
+        np.float32,
+    )
 
 
 def shininess(material: Material) -> float:
@@ -81,8 +90,9 @@ class SkinnedDraw:
             self._face_span = (int(touched.min()), int(touched.max()) + 1)
             self._offsets = np.zeros((mesh.vertex_count, 3), np.float32)
             self._offset_vbo = ctx.buffer(self._offsets.tobytes(), dynamic=True)
-        self._vao = ctx.vertex_array(program, self._content(program), index_buffer=self._ibo,
-                                     index_element_size=4)  # fmt: skip
+        self._vao = ctx.vertex_array(
+            program, self._content(program), index_buffer=self._ibo, index_element_size=4
+        )
         self._inv_bind = np.linalg.inv(mesh.bind.astype(np.float64))
         self._textures: list[Any] = []
         for mat in mesh.materials:
@@ -93,9 +103,10 @@ class SkinnedDraw:
                 tex.build_mipmaps()
                 tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
             self._textures.append(tex)
-        order = sorted(range(len(mesh.primitives)),
-                       key=lambda i: mesh.materials[mesh.primitives[i].material].alpha_mode
-                       == "BLEND")  # fmt: skip
+        order = sorted(
+            range(len(mesh.primitives)),
+            key=lambda i: mesh.materials[mesh.primitives[i].material].alpha_mode == "BLEND",
+        )
         self._order = [mesh.primitives[i] for i in order]
         self._feedback: tuple[Any, Any, Any] | None = None
         self._depth: Any = None
@@ -160,8 +171,12 @@ class SkinnedDraw:
             if mat.alpha_mode == "BLEND" and not blending:
                 blending = True
                 self.ctx.enable(moderngl.BLEND)
-                self.ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
-                                       moderngl.ZERO, moderngl.ONE)  # fmt: skip
+                self.ctx.blend_func = (
+                    moderngl.SRC_ALPHA,
+                    moderngl.ONE_MINUS_SRC_ALPHA,
+                    moderngl.ZERO,
+                    moderngl.ONE,
+                )
                 fbo.depth_mask = False
             prog["u_base_color"].value = tuple(float(c) for c in mat.base_color)
             prog["u_alpha_mode"].value = _ALPHA[mat.alpha_mode]

@@ -141,10 +141,23 @@ def export(
             frames_dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise DisplayError(f"cannot make frames folder {frames_dir}: {exc.strerror}") from None
-    painter = FramePainter(body, cam, settings.size, times, frames_dir, samples=samples,
-                           avatar=avatar, background=background, fxaa=fxaa, lights=lights,
-                           overlays=overlays, end_s=first_s + n / fps, video=out is not None,
-                           staging=staging, lighting=lighting)  # fmt: skip
+    painter = FramePainter(
+        body,
+        cam,
+        settings.size,
+        times,
+        frames_dir,
+        samples=samples,
+        avatar=avatar,
+        background=background,
+        fxaa=fxaa,
+        lights=lights,
+        overlays=overlays,
+        end_s=first_s + n / fps,
+        video=out is not None,
+        staging=staging,
+        lighting=lighting,
+    )
     # forked now, before the sound is mixed: the workers build their renderers meanwhile
     stream = frame_stream(painter, n, jobs)
     writer: VideoWriter | None = None
@@ -165,11 +178,20 @@ def export(
             if done and out is not None:
                 os.replace(writer.path, out)  # the target name only ever holds a whole render
             else:
-                log.warning("render stopped after %d of %d frames: they are in %s",
-                            writer.frames, n, writer.path)  # fmt: skip
+                log.warning(
+                    "render stopped after %d of %d frames: they are in %s",
+                    writer.frames,
+                    n,
+                    writer.path,
+                )
     wall_s = time.perf_counter() - start
-    log.info("render: %.2f s of CPU here, %.2f s in %d workers, %.2f s wall",
-             process_cpu_s() - cpu0, sum(stream.cpu_s), stream.workers, wall_s)  # fmt: skip
+    log.info(
+        "render: %.2f s of CPU here, %.2f s in %d workers, %.2f s wall",
+        process_cpu_s() - cpu0,
+        sum(stream.cpu_s),
+        stream.workers,
+        wall_s,
+    )
     return ExportReport(n, n / fps, wall_s)
 
 
@@ -179,8 +201,15 @@ def process_cpu_s() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def _open_writer(performance: Performance, body: BodyScene, out: Path, settings: VideoSettings,
-                 first_s: float, n: int, soundfont: Path | None) -> VideoWriter:  # fmt: skip
+def _open_writer(
+    performance: Performance,
+    body: BodyScene,
+    out: Path,
+    settings: VideoSettings,
+    first_s: float,
+    n: int,
+    soundfont: Path | None,
+) -> VideoWriter:
     """The part file's writer with the whole drum track already in (see :func:`export`)."""
     fps = settings.fps
     lead = round(first_s * settings.sample_rate)
@@ -188,11 +217,24 @@ def _open_writer(performance: Performance, body: BodyScene, out: Path, settings:
     track = spooled_track(lead + length)
     mixed_s = (lead + length) / settings.sample_rate
     if soundfont is not None:  # before the writer: a bad file leaves no empty video
-        audio = render_kit_file(performance.onsets, mixed_s, soundfont, settings.sample_rate,
-                                 body.kit, body.performed.sound_chokes, track)  # fmt: skip
+        audio = render_kit_file(
+            performance.onsets,
+            mixed_s,
+            soundfont,
+            settings.sample_rate,
+            body.kit,
+            body.performed.sound_chokes,
+            track,
+        )
     else:
-        audio = mix_onsets(performance.onsets, mixed_s, body.kit, settings.sample_rate,
-                           body.performed.sound_chokes, track)  # fmt: skip
+        audio = mix_onsets(
+            performance.onsets,
+            mixed_s,
+            body.kit,
+            settings.sample_rate,
+            body.performed.sound_chokes,
+            track,
+        )
     check_video_target(out, settings)
     writer = VideoWriter(partial_path(out), settings)
     writer.write_audio(audio[lead:])
@@ -206,12 +248,25 @@ class FramePainter:
     (:class:`~livedrummer.body.face.FaceTrack`) follow every frame in time order, so a frame
     looks the same whichever worker draws it."""
 
-    def __init__(self, body: BodyScene, camera: Camera, size: tuple[int, int], times: np.ndarray,
-                 frames_dir: Path | None, *, samples: int, avatar: Avatar | None,
-                 background: Background | None, fxaa: bool, lights: LightRig | None,
-                 overlays: frozenset[str], end_s: float, video: bool,
-                 staging: Callable[[float], tuple[Camera, float]] | None,
-                 lighting: Callable[[float], LightRig] | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        body: BodyScene,
+        camera: Camera,
+        size: tuple[int, int],
+        times: np.ndarray,
+        frames_dir: Path | None,
+        *,
+        samples: int,
+        avatar: Avatar | None,
+        background: Background | None,
+        fxaa: bool,
+        lights: LightRig | None,
+        overlays: frozenset[str],
+        end_s: float,
+        video: bool,
+        staging: Callable[[float], tuple[Camera, float]] | None,
+        lighting: Callable[[float], LightRig] | None = None,
+    ) -> None:
         self.lighting = lighting
         self.body, self.camera, self.size, self.times = body, camera, size, times
         self.frames_dir, self.samples, self.avatar = frames_dir, samples, avatar
@@ -227,10 +282,17 @@ class FramePainter:
         mine[wanted] = True
         ctx = headless_context()
         try:
-            renderer = Renderer(ctx, build_kit_mesh(self.body.kit), BODY_SKELETON, self.size,
-                                samples=self.samples, avatar=self.avatar,
-                                background=self.background, fxaa=self.fxaa,
-                                lights=self.lights)  # fmt: skip
+            renderer = Renderer(
+                ctx,
+                build_kit_mesh(self.body.kit),
+                BODY_SKELETON,
+                self.size,
+                samples=self.samples,
+                avatar=self.avatar,
+                background=self.background,
+                fxaa=self.fxaa,
+                lights=self.lights,
+            )
             gpu_yuv = i420_ok(self.size) and not self.alpha
             times = self.times
             strips = overlay_image(self.size, self.overlays, OverlayModels(self.body, self.end_s))

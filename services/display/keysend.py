@@ -67,9 +67,12 @@ class KeySender:
         if self._out is None and not self._connect():
             self.dropped += 1
             if not self._warned:
-                log.warning("keys: no MIDI input port %r to play into (is `input --virtual "
-                            "%s` running?); keys are dropped until it is there",
-                            self.port, self.port)  # fmt: skip
+                log.warning(
+                    "keys: no MIDI input port %r to play into (is `input --virtual "
+                    "%s` running?); keys are dropped until it is there",
+                    self.port,
+                    self.port,
+                )
                 self._warned = True
             return False
         self._out.send_message([0x90 | CHANNEL, note, velocity])

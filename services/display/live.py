@@ -226,8 +226,9 @@ class LiveStats:
     held: int = 0  # frames drawn with no pose at or after their show time - 1 frame
 
 
-def missed_ticks(schedule: list[tuple[float, float]], now: float, lead_s: float,
-                 period: float) -> list[tuple[float, float]]:  # fmt: skip
+def missed_ticks(
+    schedule: list[tuple[float, float]], now: float, lead_s: float, period: float
+) -> list[tuple[float, float]]:
     """(render_s, show_s) of the frames a loaded machine's loop had no time to tick since the
     last one in ``schedule``: an infinitely fast display would have drawn them, ``period``
     apart, each ``lead_s`` ahead of its render time as this frame is."""
@@ -238,8 +239,9 @@ def missed_ticks(schedule: list[tuple[float, float]], now: float, lead_s: float,
     return [(last + k * period, last + k * period + lead_s) for k in range(1, count + 1)]
 
 
-def draw_strips(surface: HeadlessSurface | WindowSurface, strips: LiveStrips,
-                show_s: float) -> None:  # fmt: skip
+def draw_strips(
+    surface: HeadlessSurface | WindowSurface, strips: LiveStrips, show_s: float
+) -> None:
     """Blend the strips the surface shows, at the frame's show time, over the frame drawn."""
     if surface.overlays:
         image = strips.image(surface.renderer.size, surface.overlays)
@@ -270,10 +272,12 @@ class LiveDisplay(Service):
         self.bad = self.stream.bad
         self._last_show = -math.inf  # show time of the last frame drawn
         self._spool: IO[bytes] | None = None  # pose messages of a deferred recording
-        self.late = BehindCounter("pose messages arrived after every frame they cover",
-                                  "measured on this machine: the synth's answer took longer "
-                                  "than the show delay (--delay-ms), so those frames drew the "
-                                  "drummer from the pose before")  # fmt: skip
+        self.late = BehindCounter(
+            "pose messages arrived after every frame they cover",
+            "measured on this machine: the synth's answer took longer "
+            "than the show delay (--delay-ms), so those frames drew the "
+            "drummer from the pose before",
+        )
         self.held = BehindCounter("frames drawn with a stale pose (the pose stream stalled)")
         self.show: DisplayShow | None = None
         self.strips = LiveStrips(kit)  # fed only where strips may be drawn (see run)
@@ -295,8 +299,14 @@ class LiveDisplay(Service):
         self.endpoints["sub"] = self.config.sub
         port = self.config.osc_port
         if port is not None or self.config.cues:
-            self.show = DisplayShow(self.kit, self.config.camera, port, self.config.osc_allow,
-                                    self.config.cues, self.config.lights)  # fmt: skip
+            self.show = DisplayShow(
+                self.kit,
+                self.config.camera,
+                port,
+                self.config.osc_allow,
+                self.config.cues,
+                self.config.lights,
+            )
         if self.show is not None and self.show.osc is not None:
             self.endpoints["osc"] = f"udp://127.0.0.1:{self.show.osc.port}"
 
@@ -308,8 +318,9 @@ class LiveDisplay(Service):
 
     def hello(self) -> Hello:
         avatar = "" if self.config.avatar is None else self.config.avatar.digest
-        return Hello(self.name, "frames", self.performer, dict(self.endpoints), self.format,
-                     avatar=avatar)  # fmt: skip
+        return Hello(
+            self.name, "frames", self.performer, dict(self.endpoints), self.format, avatar=avatar
+        )
 
     def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
         """Draw until ``stop``; ``on_ready`` is called once, after the first frame that drew
@@ -325,8 +336,9 @@ class LiveDisplay(Service):
                 )
                 surface = WindowSurface(self.kit, window, cfg.avatar)
             elif cfg.render:
-                surface = HeadlessSurface(self.kit, cfg.size, cfg.camera, cfg.avatar,
-                                          cfg.background, cfg.lights)  # fmt: skip
+                surface = HeadlessSurface(
+                    self.kit, cfg.size, cfg.camera, cfg.avatar, cfg.background, cfg.lights
+                )
             if surface is not None and self.show is not None:
                 surface.stage = self.show.stage
             if surface is not None and not isinstance(surface, WindowSurface):
@@ -334,8 +346,11 @@ class LiveDisplay(Service):
             self._strips_fed = surface is not None and (bool(cfg.overlays) or bool(cfg.window))
             # A set-length headless recording is drawn after the show from what arrived (see
             # the module docstring): every frame at full rate, and no drawing during the show.
-            deferred = (cfg.video is not None and isinstance(surface, HeadlessSurface)
-                        and cfg.seconds is not None)  # fmt: skip
+            deferred = (
+                cfg.video is not None
+                and isinstance(surface, HeadlessSurface)
+                and cfg.seconds is not None
+            )
             schedule: list[tuple[float, float]] = []  # (render_s, show_s) of each frame
             if deferred:
                 self._spool = tempfile.TemporaryFile()
@@ -400,8 +415,9 @@ class LiveDisplay(Service):
                         surface.draw(frame_from_pose(row, show, self.kit), now)
                 elif surface is not None and not deferred:
                     if isinstance(surface, WindowSurface):
-                        surface.state = "no poses: is the synth running?" if drawn else (
-                            "waiting for poses")  # fmt: skip
+                        surface.state = (
+                            "no poses: is the synth running?" if drawn else ("waiting for poses")
+                        )
                     surface.draw(None, now)
                 if surface is not None and not deferred:
                     draw_strips(surface, self.strips, show)
@@ -417,12 +433,17 @@ class LiveDisplay(Service):
                 if deferred and (got is not None or schedule):
                     schedule.extend(missed_ticks(schedule, now, show - now, period))
                     schedule.append((now, show))
-                if (isinstance(surface, HeadlessSurface) and cfg.out is not None and cfg.png
-                        and not deferred):  # fmt: skip
+                if (
+                    isinstance(surface, HeadlessSurface)
+                    and cfg.out is not None
+                    and cfg.png
+                    and not deferred
+                ):
                     from .png import write_png
 
-                    write_png(cfg.out / f"frame_{self.stats.frames:06d}.png",
-                              surface.renderer.read_rgb())  # fmt: skip
+                    write_png(
+                        cfg.out / f"frame_{self.stats.frames:06d}.png", surface.renderer.read_rgb()
+                    )
                 if surface is not None and not surface.present():
                     stop.set()  # the window was closed
                 record["done_s"] = self.clock.now()
@@ -451,10 +472,13 @@ class LiveDisplay(Service):
             if recorder is not None:
                 recorder.close()
                 if recorder.frames and recorder.repeated > 0.05 * recorder.frames:
-                    log.warning("display: the recording repeats %d of its %d frames (%.0f %%): "
-                                "this machine drew fewer frames than --fps asked",
-                                recorder.repeated, recorder.frames,
-                                100 * recorder.repeated / recorder.frames)  # fmt: skip
+                    log.warning(
+                        "display: the recording repeats %d of its %d frames (%.0f %%): "
+                        "this machine drew fewer frames than --fps asked",
+                        recorder.repeated,
+                        recorder.frames,
+                        100 * recorder.repeated / recorder.frames,
+                    )
             if cfg.extra is not None:
                 cfg.extra.close()
             if surface is not None:
@@ -462,8 +486,9 @@ class LiveDisplay(Service):
             self.shutdown()
         return 0
 
-    def _replay(self, surface: HeadlessSurface, schedule: list[tuple[float, float]]
-                ) -> LiveRecorder:  # fmt: skip
+    def _replay(
+        self, surface: HeadlessSurface, schedule: list[tuple[float, float]]
+    ) -> LiveRecorder:
         """Draw the recording of a show from its spool: each frame of ``schedule`` from the
         pose messages that had arrived by its render time, as the loop would have drawn it."""
         cfg = self.config
@@ -490,8 +515,12 @@ class LiveDisplay(Service):
         stage = None if self.show is None else replay_stage(self.kit, self.show)
         surface.stage = None if stage is None else stage.stage
         started = time.monotonic()
-        print(f"display: drawing the recording, {len(schedule)} frames at {cfg.fps:g} fps "
-              f"({cfg.size[0]}x{cfg.size[1]}) ...", file=sys.stderr, flush=True)  # fmt: skip
+        print(
+            f"display: drawing the recording, {len(schedule)} frames at {cfg.fps:g} fps "
+            f"({cfg.size[0]}x{cfg.size[1]}) ...",
+            file=sys.stderr,
+            flush=True,
+        )
         try:
             for render_s, show_s in schedule:
                 while nxt is not None and nxt[0] <= render_s:
@@ -512,8 +541,11 @@ class LiveDisplay(Service):
         except BaseException:
             recorder.close()
             raise
-        print(f"display: recording drawn in {time.monotonic() - started:.1f} s", file=sys.stderr,
-              flush=True)  # fmt: skip
+        print(
+            f"display: recording drawn in {time.monotonic() - started:.1f} s",
+            file=sys.stderr,
+            flush=True,
+        )
         return recorder
 
     def _drain(self) -> None:

@@ -84,11 +84,13 @@ class SoundStats:
 
     def line(self) -> str:
         lead = np.percentile(self.lead_ms, [50, 1]) if self.lead_ms else [np.nan, np.nan]
-        return (f"sound: {self.onsets} onsets, {self.cuts} cuts, {self.late} late, "
-                f"{self.underruns} underruns, "
-                f"{self.clipped} samples clipped, {self.bad} bad messages; onsets placed "
-                f"{lead[0]:.1f} ms (p50) / {lead[1]:.1f} ms (p1) ahead of the output, "
-                f"output latency {self.latency_ms:.2f} ms")  # fmt: skip
+        return (
+            f"sound: {self.onsets} onsets, {self.cuts} cuts, {self.late} late, "
+            f"{self.underruns} underruns, "
+            f"{self.clipped} samples clipped, {self.bad} bad messages; onsets placed "
+            f"{lead[0]:.1f} ms (p50) / {lead[1]:.1f} ms (p1) ahead of the output, "
+            f"output latency {self.latency_ms:.2f} ms"
+        )
 
 
 def _capacity(stream: Any) -> int:
@@ -114,12 +116,22 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
     try:
         import sounddevice as sd
 
-        stream = sd.OutputStream(samplerate=RATE, channels=2, dtype="float32",
-                                 device=config.device, latency=config.buffer_s)  # fmt: skip
+        stream = sd.OutputStream(
+            samplerate=RATE,
+            channels=2,
+            dtype="float32",
+            device=config.device,
+            latency=config.buffer_s,
+        )
         stream.start()
     except Exception as exc:  # PortAudioError, no library (OSError), no device (ValueError)
-        report.put(("error", f"no sound: cannot open the output {config.device or '(default)'}"
-                    f" ({exc}): the display runs silent"))  # fmt: skip
+        report.put(
+            (
+                "error",
+                f"no sound: cannot open the output {config.device or '(default)'}"
+                f" ({exc}): the display runs silent",
+            )
+        )
         return
     stats = SoundStats()
     mixer: LiveMixer | None = None
@@ -142,8 +154,9 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
             mixer = LiveMixer(kit, RATE)
         # subscribed once the kit is loaded (a SoundFont takes a while): what came meanwhile
         # would queue and be read late
-        rx.connect(ctx, config.sub, "sound sub", config.security,
-                   topics=[topic(k) for k in _SOUND_KINDS])  # fmt: skip
+        rx.connect(
+            ctx, config.sub, "sound sub", config.security, topics=[topic(k) for k in _SOUND_KINDS]
+        )
         cap = _capacity(stream)
         clock = StreamClock(RATE, output_latency_s(stream), period=output_period(stream))
         stats.latency_ms = clock.latency_s * 1000
@@ -177,8 +190,14 @@ def sound_loop(config: SoundConfig, stop: Any, report: Any) -> None:
 Pending = tuple[float, Any]  # (show time s, an onset row or a cut (piece, show time s))
 
 
-def _read(rx: StreamReceiver, cuts: Any, clock: Any, written: int, pending: list[Pending],
-          stats: SoundStats) -> None:  # fmt: skip
+def _read(
+    rx: StreamReceiver,
+    cuts: Any,
+    clock: Any,
+    written: int,
+    pending: list[Pending],
+    stats: SoundStats,
+) -> None:
     """What is waiting: its onsets, and its controls read into cuts, onto ``pending``
     (placed as late as the FIFO allows, :func:`_place`: the clock is freshest then)."""
     batch = rx.drain()
@@ -196,8 +215,9 @@ def _read(rx: StreamReceiver, cuts: Any, clock: Any, written: int, pending: list
             pending.append((show, row))
 
 
-def _place(mixer: Any, clock: Any, written: int, end: int, pending: list[Pending],
-           stats: SoundStats) -> None:  # fmt: skip
+def _place(
+    mixer: Any, clock: Any, written: int, end: int, pending: list[Pending], stats: SoundStats
+) -> None:
     """Give the mixer, in arrival order, what is heard before sample ``end`` (the end of the
     block about to be written), each on the sample the clock maps its show time to now; one
     whose sample was written already starts at ``written`` and is counted late."""
@@ -226,8 +246,12 @@ class LiveSound:
         spawn = mp.get_context("spawn")
         self._stop = spawn.Event()
         self._report: Any = spawn.Queue()
-        self._proc = spawn.Process(target=sound_loop, args=(config, self._stop, self._report),
-                                   name="livedrummer-sound", daemon=True)  # fmt: skip
+        self._proc = spawn.Process(
+            target=sound_loop,
+            args=(config, self._stop, self._report),
+            name="livedrummer-sound",
+            daemon=True,
+        )
         self.stats: SoundStats | None = None
         self.running = False
 

@@ -84,8 +84,9 @@ def payload(draw: DrawFrames) -> bytes:
     try:
         pickler.dump(draw)
     except (pickle.PicklingError, TypeError, AttributeError) as exc:
-        raise DisplayError(f"render workers: cannot send the scene to them ({exc}); "
-                           "use --jobs 1") from None  # fmt: skip
+        raise DisplayError(
+            f"render workers: cannot send the scene to them ({exc}); use --jobs 1"
+        ) from None
     return out.getvalue()
 
 
@@ -151,8 +152,14 @@ class FrameStream:
         return stream
 
     @classmethod
-    def fork(cls, draw: DrawFrames | bytes, frames: int, jobs: int, threads: int,
-             chunk: int = DEFAULT_CHUNK) -> FrameStream:  # fmt: skip
+    def fork(
+        cls,
+        draw: DrawFrames | bytes,
+        frames: int,
+        jobs: int,
+        threads: int,
+        chunk: int = DEFAULT_CHUNK,
+    ) -> FrameStream:
         """``jobs`` workers forked now (``threads`` llvmpipe threads each), drawing at once;
         ``draw`` or its :func:`payload`."""
         stream = cls(frames, chunk)
@@ -165,16 +172,24 @@ class FrameStream:
                 if not wanted.size:
                     break
                 mine, theirs = ctx.Pipe(duplex=False)
-                proc = ctx.Process(target=_work, args=(sent, wanted, theirs, threads),
-                                   name=f"render-{k}", daemon=True)  # fmt: skip
+                proc = ctx.Process(
+                    target=_work,
+                    args=(sent, wanted, theirs, threads),
+                    name=f"render-{k}",
+                    daemon=True,
+                )
                 proc.start()
                 theirs.close()
                 stream._procs.append(proc)
                 pipes.append(mine)
             for k, conn in enumerate(pipes):
                 q: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=chunk + 2)
-                reader = threading.Thread(target=_drain, args=(conn, q, stream._stop),
-                                          name=f"render-{k}-pipe", daemon=True)  # fmt: skip
+                reader = threading.Thread(
+                    target=_drain,
+                    args=(conn, q, stream._stop),
+                    name=f"render-{k}-pipe",
+                    daemon=True,
+                )
                 reader.start()
                 stream._queues.append(q)
                 stream._readers.append(reader)
@@ -246,8 +261,9 @@ def start_server() -> Any:
     return ctx
 
 
-def frame_stream(draw: DrawFrames, frames: int, jobs: int | None,
-                 chunk: int = DEFAULT_CHUNK) -> FrameStream:  # fmt: skip
+def frame_stream(
+    draw: DrawFrames, frames: int, jobs: int | None, chunk: int = DEFAULT_CHUNK
+) -> FrameStream:
     """``jobs`` workers (None: :func:`~livedrummer.render.frame_split.default_jobs` for this
     machine's cores) drawing ``frames`` frames; one worker draws here, in this process. With
     ``jobs`` None a scene that cannot be sent to workers (:func:`payload`) is drawn here, and

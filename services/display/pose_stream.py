@@ -55,8 +55,9 @@ class PoseStream:
     """See the module docstring. ``performer``: the one performer this stream is (None:
     whoever the synth says; a message of another is dropped as unexpected)."""
 
-    def __init__(self, kit: Kit, where: str, log: logging.Logger,
-                 performer: int | None = None) -> None:  # fmt: skip
+    def __init__(
+        self, kit: Kit, where: str, log: logging.Logger, performer: int | None = None
+    ) -> None:
         self.format = PoseFormat.from_dtype(pose_dtype(len(kit.pieces)))
         self.rx = StreamReceiver(where, log, POSE_STREAM_KINDS, self.format, performer)
         self.track = PoseTrack()
@@ -66,8 +67,13 @@ class PoseStream:
     def bad(self) -> BadMessages:
         return self.rx.bad
 
-    def connect(self, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str, what: str,
-                security: Security | None = None) -> None:  # fmt: skip
+    def connect(
+        self,
+        ctx: zmq.Context[zmq.Socket[bytes]],
+        endpoint: str,
+        what: str,
+        security: Security | None = None,
+    ) -> None:
         self.rx.connect(ctx, endpoint, what, security)
 
     def drain(self, budget: int = DRAIN_BUDGET) -> PoseBatch:

@@ -70,9 +70,16 @@ MARGIN = 8
 class PracticeView:
     """See the module docstring."""
 
-    def __init__(self, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str, kit: Kit,
-                 mode: TeacherMode = "off", teacher: BodyScene | None = None,
-                 ahead_s: float = 0.0, avatar: Avatar | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        ctx: zmq.Context[zmq.Socket[bytes]],
+        endpoint: str,
+        kit: Kit,
+        mode: TeacherMode = "off",
+        teacher: BodyScene | None = None,
+        ahead_s: float = 0.0,
+        avatar: Avatar | None = None,
+    ) -> None:
         if mode != "off" and teacher is None:
             raise ValueError(f"teacher {mode}: needs the reference's body scene")
         self.kit, self.mode, self.teacher, self.avatar = kit, mode, teacher, avatar
@@ -147,9 +154,16 @@ class PracticeView:
             mesh = build_kit_mesh(self.kit)
             ghost = self.mode == "ghost"
             self._renderer = Renderer(
-                main.ctx, mesh, BODY_SKELETON, size, samples=0, avatar=self.avatar,
-                shadows=False, background=Background(kind="transparent") if ghost else None,
-                kit_occludes_only=ghost)  # fmt: skip
+                main.ctx,
+                mesh,
+                BODY_SKELETON,
+                size,
+                samples=0,
+                avatar=self.avatar,
+                shadows=False,
+                background=Background(kind="transparent") if ghost else None,
+                kit_occludes_only=ghost,
+            )
         r = self._renderer
         r.lights = main.lights  # the teacher stands under the player's lights
         r.draw(self.teacher.frame_at(ref), view)

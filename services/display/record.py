@@ -104,8 +104,13 @@ class LiveRecorder:
             return None
         timing = Timing(self._show0, self.settings.fps, self.frames)
         timing_path(self.path).write_text(json.dumps(timing.__dict__) + "\n")
-        log.info("recorded %d frames to %s (%d repeated, %d skipped)", self.frames, self.path,
-                 self.repeated, self.skipped)  # fmt: skip
+        log.info(
+            "recorded %d frames to %s (%d repeated, %d skipped)",
+            self.frames,
+            self.path,
+            self.repeated,
+            self.skipped,
+        )
         return timing
 
 

@@ -70,8 +70,13 @@ def _frame_bytes(frame: SceneFrame | None) -> bytes:
     if frame is None:
         return b""
     rot = frame.rotations_q
-    parts = [frame.joints_m, frame.sticks_m, frame.channels, np.float64(frame.time_s),
-             np.zeros(0, np.float32) if rot is None else rot]  # fmt: skip
+    parts = [
+        frame.joints_m,
+        frame.sticks_m,
+        frame.channels,
+        np.float64(frame.time_s),
+        np.zeros(0, np.float32) if rot is None else rot,
+    ]
     return b"|".join(np.ascontiguousarray(p).tobytes() for p in parts) + bytes([rot is None])
 
 
@@ -111,8 +116,9 @@ class Renderer:
         self.floor_cell_others = np.zeros((0, 2), np.float32)
         self.gpu = Gpu(ctx)
         self.scene = ScenePass(self.gpu, kit_mesh, skeleton, avatar)
-        self.shadow = ShadowPass(self.gpu, self.scene.kit, enabled=shadows,
-                                 cache_static=cache_static_shadow)  # fmt: skip
+        self.shadow = ShadowPass(
+            self.gpu, self.scene.kit, enabled=shadows, cache_static=cache_static_shadow
+        )
         self.post = PostPass(ctx, size, offscreen=offscreen, samples=samples, fxaa=fxaa)
         self.backdrop = BackdropPass(ctx)
         self.overlay = OverlayPass(ctx)
@@ -126,8 +132,13 @@ class Renderer:
         #: the next read-back or present filters it afresh, as for the frame drawn last.
         self._held: tuple[bytes, bytes] | None = None
         body = self.scene.body
-        if (static_layer and self.post.fbo is not None and samples == 0
-                and not kit_occludes_only and not body.has_blend):  # fmt: skip
+        if (
+            static_layer
+            and self.post.fbo is not None
+            and samples == 0
+            and not kit_occludes_only
+            and not body.has_blend
+        ):
             self.layer = LayerPass(self.gpu, self.scene.kit, size)
 
     # what the users of the renderer (and its tests) read of its parts
@@ -176,8 +187,9 @@ class Renderer:
         self._inst = self.scene.upload(frame)
         self.shadow.upload(self._inst)
 
-    def draw(self, frame: SceneFrame | None, camera: Camera, target: Any = None,
-             clear: bool = True) -> None:  # fmt: skip
+    def draw(
+        self, frame: SceneFrame | None, camera: Camera, target: Any = None, clear: bool = True
+    ) -> None:
         """Draw ``frame`` (None: the kit at rest and no drummer) seen from ``camera``;
         ``clear=False`` draws over what ``target`` holds, depth-tested (a stage's drummers)."""
         import moderngl
@@ -203,8 +215,19 @@ class Renderer:
             self.gpu.set_uniforms(view.uniforms)
             if self.shadow.enabled:
                 self.shadow.draw(view.light_vp, self.scene.kit, self.scene.body)
-            layer.draw(fbo, view, key, frame, self._inst, self.scene.body, self.shadow,
-                       self.background, self.backdrop, self.size, self.post)  # fmt: skip
+            layer.draw(
+                fbo,
+                view,
+                key,
+                frame,
+                self._inst,
+                self.scene.body,
+                self.shadow,
+                self.background,
+                self.backdrop,
+                self.size,
+                self.post,
+            )
             return
         self.post.reuse = None
         self._held = None
@@ -228,17 +251,20 @@ class Renderer:
         """What the static layer's pixels depend on: the view's uniforms (camera, lights), the
         floor's cell, the background and the size."""
         bg = self.background
-        parts = [repr(sorted((k, v) for k, v in view.uniforms.items())).encode(),
-                 np.asarray(self.floor_cell_others, np.float32).tobytes(),
-                 repr((bg.kind, bg.rgb, bg.path, id(bg.image), self.size)).encode()]  # fmt: skip
+        parts = [
+            repr(sorted((k, v) for k, v in view.uniforms.items())).encode(),
+            np.asarray(self.floor_cell_others, np.float32).tobytes(),
+            repr((bg.kind, bg.rgb, bg.path, id(bg.image), self.size)).encode(),
+        ]
         return b"|".join(parts)
 
     def pool_centre(self) -> np.ndarray:
         """The centre (x, y) of the floor's pool of key light, in this kit's frame."""
         return np.asarray(self.scene.centre()[:2], float)
 
-    def draw_overlay(self, image: np.ndarray, rect: tuple[int, int, int, int],
-                     target: Any = None) -> None:  # fmt: skip
+    def draw_overlay(
+        self, image: np.ndarray, rect: tuple[int, int, int, int], target: Any = None
+    ) -> None:
         """Blend ``image`` ((h, w, 4) uint8, straight alpha, top row first) over the frame
         drawn last, at ``rect`` = (x, y, w, h) in pixels from the frame's top-left corner.
 

@@ -67,15 +67,22 @@ log = logging.getLogger("livedrummer.display")
 class DisplayShow:
     """The stage and what steers it (see the module docstring); ``port`` None: no OSC."""
 
-    def __init__(self, kit: Kit, camera: str, port: int | None, allow: tuple[str, ...] = (),
-                 cues: dict[str, Cue] | None = None,
-                 lights: LightRig | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        kit: Kit,
+        camera: str,
+        port: int | None,
+        allow: tuple[str, ...] = (),
+        cues: dict[str, Cue] | None = None,
+        lights: LightRig | None = None,
+    ) -> None:
         self.stage = Stage(kit, camera, lights=lights)
         self.camera = camera  # the first one, for a replay
         self.lights = self.stage.lights  # the first ones, for a replay
         self.cues = cues or {}
-        self.osc = None if port is None else OscEndpoint(port, DISPLAY_ADDRESSES, "display",
-                                                         log, allow)  # fmt: skip
+        self.osc = (
+            None if port is None else OscEndpoint(port, DISPLAY_ADDRESSES, "display", log, allow)
+        )
         self.frames = 0
         self.history: list[tuple[float, Cue]] = []  # (render time, change), as applied
         # stage cues waiting for their show time: (show time, cue, arrived after a frame
@@ -93,10 +100,13 @@ class DisplayShow:
             self._timed.append((at_s, with_lights_of(stage_cue_of(row), self.cues), late))
             if late:
                 self.late_cues += 1
-                log.warning("display: a stage cue (bar %d) arrived %.0f ms after its show time: "
-                            "it took this machine longer than the show delay (--delay-ms), "
-                            "so the cue is applied in the next frame",
-                            int(row["bar"]), 1000 * (self._shown_s - at_s))  # fmt: skip
+                log.warning(
+                    "display: a stage cue (bar %d) arrived %.0f ms after its show time: "
+                    "it took this machine longer than the show delay (--delay-ms), "
+                    "so the cue is applied in the next frame",
+                    int(row["bar"]),
+                    1000 * (self._shown_s - at_s),
+                )
         self._timed.sort(key=lambda tc: tc[0])
         self.stage_cues += rows.size
 
@@ -113,8 +123,13 @@ class DisplayShow:
             at_s, cue, late = self._timed.pop(0)
             self.fire(cue, now_s - (show_s - at_s))
             fired.append((cue.name, at_s, late))
-            log.info("display: %s: %s at show %.3f s (frame %d)", cue.name, describe(cue),
-                     at_s, self.frames)  # fmt: skip
+            log.info(
+                "display: %s: %s at show %.3f s (frame %d)",
+                cue.name,
+                describe(cue),
+                at_s,
+                self.frames,
+            )
         if show_s is not None:
             self._shown_s = show_s
         self.frames += 1
@@ -131,10 +146,18 @@ class DisplayShow:
         if self.osc is None:
             return
         if cmd.address == STATE:
-            self.osc.reply(cmd.sender, STATE, state_pairs({
-                "camera": stage.camera, "blackout": int(stage.blackout),
-                "look": stage.lights.name, "frames": self.frames,
-            }))  # fmt: skip
+            self.osc.reply(
+                cmd.sender,
+                STATE,
+                state_pairs(
+                    {
+                        "camera": stage.camera,
+                        "blackout": int(stage.blackout),
+                        "look": stage.lights.name,
+                        "frames": self.frames,
+                    }
+                ),
+            )
             return
         if cmd.address == LOOK or cmd.address.startswith(LIGHT):
             self._light_command(self.osc, cmd, now_s)
@@ -211,8 +234,10 @@ def light_cue(address: str, args: tuple[Arg, ...], rig: LightRig) -> Cue:
             raise ValueError(f"expected {n} value{'s' * (n > 1)} and an optional fade in seconds")
         values, rest = args[:n], args[n:]
         if param == "direction":
-            changes = [(light, "azimuth", _number(values[0], "azimuth")),
-                       (light, "elevation", _number(values[1], "elevation"))]  # fmt: skip
+            changes = [
+                (light, "azimuth", _number(values[0], "azimuth")),
+                (light, "elevation", _number(values[1], "elevation")),
+            ]
         elif param == "color" and n == 3:
             changes = [(light, c, _number(v, c)) for c, v in zip("rgb", values, strict=True)]
         elif param == "color":
@@ -240,8 +265,10 @@ def describe(cue: Cue) -> str:
     if cue.lights is not None:
         what = [f"look {cue.lights.look}"] if cue.lights.look else []
         what += [f"{light} {param} {value}" for light, param, value in cue.lights.changes]
-        parts.append(f"lights {', '.join(what) or 'as they are'}"
-                     + (f" over {cue.fade_s:g} s" if cue.fade_s else ""))  # fmt: skip
+        parts.append(
+            f"lights {', '.join(what) or 'as they are'}"
+            + (f" over {cue.fade_s:g} s" if cue.fade_s else "")
+        )
     return ", ".join(parts) or "nothing"
 
 

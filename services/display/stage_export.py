@@ -98,27 +98,46 @@ class StagePainter:
     it, the others draw over it depth-tested, which is the depth merge done by the GPU; each
     drummer's floor is cut to its cell (:func:`livedrummer.stage.layout.cell_neighbours`)."""
 
-    def __init__(self, ctx: Any, drummers: Sequence[Spot], size: tuple[int, int], camera: str,
-                 target: Any = None, background: Background | None = None,
-                 lights: LightRig | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        ctx: Any,
+        drummers: Sequence[Spot],
+        size: tuple[int, int],
+        camera: str,
+        target: Any = None,
+        background: Background | None = None,
+        lights: LightRig | None = None,
+    ) -> None:
         self.ctx = ctx
         self.size = size
         w, h = size
-        world = group_camera_for([d.kit for d in drummers], [d.placement for d in drummers],
-                                 camera, w / h)  # fmt: skip
+        world = group_camera_for(
+            [d.kit for d in drummers], [d.placement for d in drummers], camera, w / h
+        )
         self.camera = world
         if target is None:
-            target = ctx.framebuffer(color_attachments=[ctx.renderbuffer((w, h), 4)],
-                                     depth_attachment=ctx.depth_renderbuffer((w, h)))  # fmt: skip
+            target = ctx.framebuffer(
+                color_attachments=[ctx.renderbuffer((w, h), 4)],
+                depth_attachment=ctx.depth_renderbuffer((w, h)),
+            )
         self.target = target
         self.passes: list[tuple[Renderer, Camera]] = []
         for d in drummers:
-            renderer = Renderer(ctx, build_kit_mesh(d.kit), BODY_SKELETON, size, samples=0,
-                                offscreen=False, avatar=d.avatar,
-                                background=background, lights=lights)  # fmt: skip
+            renderer = Renderer(
+                ctx,
+                build_kit_mesh(d.kit),
+                BODY_SKELETON,
+                size,
+                samples=0,
+                offscreen=False,
+                avatar=d.avatar,
+                background=background,
+                lights=lights,
+            )
             self.passes.append((renderer, local_camera(world, d.placement)))
-        cells = cell_neighbours([d.placement for d in drummers],
-                                [r.pool_centre() for r, _c in self.passes])  # fmt: skip
+        cells = cell_neighbours(
+            [d.placement for d in drummers], [r.pool_centre() for r, _c in self.passes]
+        )
         for (renderer, _cam), others in zip(self.passes, cells, strict=True):
             renderer.floor_cell_others = others
 
@@ -137,12 +156,14 @@ def group_camera(drummers: Sequence[StageDrummer], name: str, aspect: float) -> 
     """The camera ``name`` of the first drummer's kit, moved to centre the group and fill the
     frame (:func:`livedrummer.stage.layout.fit_group_camera`: every drummer's kit box, floor to
     head height, seen whole)."""
-    return group_camera_for([d.body.kit for d in drummers], [d.placement for d in drummers],
-                            name, aspect)  # fmt: skip
+    return group_camera_for(
+        [d.body.kit for d in drummers], [d.placement for d in drummers], name, aspect
+    )
 
 
-def group_camera_for(kits: Kit | Sequence[Kit], placements: Sequence[Placement], name: str,
-                     aspect: float) -> Camera:  # fmt: skip
+def group_camera_for(
+    kits: Kit | Sequence[Kit], placements: Sequence[Placement], name: str, aspect: float
+) -> Camera:
     """:func:`group_camera` from the kits (one for all, or one per spot) and the spots alone
     (the live stage display)."""
     every = [kits] * len(placements) if isinstance(kits, Kit) else list(kits)
@@ -174,8 +195,9 @@ def _track(drummers: Sequence[StageDrummer], seconds: float, sr: int) -> np.ndar
     total = spooled_track(n)
     for d in drummers:
         own = spooled_track(n)
-        mix_onsets(d.performance.onsets, seconds, d.body.kit, sr,
-                   d.body.performed.sound_chokes, own)  # fmt: skip
+        mix_onsets(
+            d.performance.onsets, seconds, d.body.kit, sr, d.body.performed.sound_chokes, own
+        )
         total += own
     fit_headroom(total)
     return total
@@ -216,8 +238,16 @@ def export_stage(
         frames_dir.mkdir(parents=True, exist_ok=True)
     if out is not None:
         check_video_target(out, settings)
-    painter = StageFrames(drummers, settings.size, camera, times, frames_dir,
-                          background=background, lights=lights, video=out is not None)  # fmt: skip
+    painter = StageFrames(
+        drummers,
+        settings.size,
+        camera,
+        times,
+        frames_dir,
+        background=background,
+        lights=lights,
+        video=out is not None,
+    )
     stream = frame_stream(painter, n, jobs)  # forked before the mix: see export()
     writer: VideoWriter | None = None
     done = False
@@ -225,8 +255,7 @@ def export_stage(
         if out is not None:
             lead = round(first_s * settings.sample_rate)
             length_n = round(n / fps * settings.sample_rate)
-            audio = _track(drummers, (lead + length_n) / settings.sample_rate,
-                           settings.sample_rate)  # fmt: skip
+            audio = _track(drummers, (lead + length_n) / settings.sample_rate, settings.sample_rate)
             writer = VideoWriter(partial_path(out), settings)
             writer.write_audio(audio[lead:])
         for i, rgba in enumerate(stream):
@@ -242,8 +271,13 @@ def export_stage(
             if done and out is not None:
                 os.replace(writer.path, out)
     wall_s = time.perf_counter() - start
-    log.info("render: %.2f s of CPU here, %.2f s in %d workers, %.2f s wall",
-             process_cpu_s() - cpu0, sum(stream.cpu_s), stream.workers, wall_s)  # fmt: skip
+    log.info(
+        "render: %.2f s of CPU here, %.2f s in %d workers, %.2f s wall",
+        process_cpu_s() - cpu0,
+        sum(stream.cpu_s),
+        stream.workers,
+        wall_s,
+    )
     return ExportReport(n, n / fps, wall_s)
 
 
@@ -253,9 +287,18 @@ class StageFrames:
     asked for are only uploaded, as :class:`~.export.FramePainter` does, so every drummer's
     face follows every frame."""
 
-    def __init__(self, drummers: Sequence[StageDrummer], size: tuple[int, int], camera: str,
-                 times: np.ndarray, frames_dir: Path | None, *, background: Background | None,
-                 lights: LightRig | None, video: bool) -> None:  # fmt: skip
+    def __init__(
+        self,
+        drummers: Sequence[StageDrummer],
+        size: tuple[int, int],
+        camera: str,
+        times: np.ndarray,
+        frames_dir: Path | None,
+        *,
+        background: Background | None,
+        lights: LightRig | None,
+        video: bool,
+    ) -> None:
         self.drummers, self.size, self.camera, self.times = drummers, size, camera, times
         self.frames_dir, self.background, self.lights = frames_dir, background, lights
         self.video = video
@@ -268,8 +311,14 @@ class StageFrames:
         mine[wanted] = True
         ctx = headless_context()
         try:
-            painter = StagePainter(ctx, self.drummers, self.size, self.camera,
-                                   background=self.background, lights=self.lights)  # fmt: skip
+            painter = StagePainter(
+                ctx,
+                self.drummers,
+                self.size,
+                self.camera,
+                background=self.background,
+                lights=self.lights,
+            )
             frames = [d.body.frames(self.times[: mine.size]) for d in self.drummers]
             for i in range(mine.size):
                 now = [next(f) for f in frames]
@@ -282,8 +331,9 @@ class StageFrames:
                 rgba = painter.read_rgba()  # bottom row first, as GL reads
                 if self.frames_dir is not None:
                     top_down = rgba[::-1] if self.alpha else rgba[::-1, :, :3]
-                    write_png(self.frames_dir / f"frame_{i:06d}.png",
-                              np.ascontiguousarray(top_down))  # fmt: skip
+                    write_png(
+                        self.frames_dir / f"frame_{i:06d}.png", np.ascontiguousarray(top_down)
+                    )
                 yield rgba if self.video else None
         finally:
             ctx.release()

@@ -161,8 +161,13 @@ class StageDisplay(Service):
 
     name = "display"
 
-    def __init__(self, performers: list[StagePerformer], config: StageConfig, clock: FrameClock,
-                 ctx: zmq.Context[zmq.Socket[bytes]]) -> None:  # fmt: skip
+    def __init__(
+        self,
+        performers: list[StagePerformer],
+        config: StageConfig,
+        clock: FrameClock,
+        ctx: zmq.Context[zmq.Socket[bytes]],
+    ) -> None:
         super().__init__(clock, ctx, security=config.security, control=config.control, log=log)
         if not performers:
             raise ValueError("a stage display needs at least one performer")
@@ -195,8 +200,14 @@ class StageDisplay(Service):
             performers = [s.who for s in self.streams]
             if cfg.window is not None:
                 window = _Window(cfg.window)
-                painter = StagePainter(window.ctx, performers, window.size, cfg.camera,
-                                       target=window.ctx.screen, lights=cfg.lights)  # fmt: skip
+                painter = StagePainter(
+                    window.ctx,
+                    performers,
+                    window.size,
+                    cfg.camera,
+                    target=window.ctx.screen,
+                    lights=cfg.lights,
+                )
             elif cfg.render:
                 from .context import headless_context
 

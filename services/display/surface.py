@@ -63,17 +63,30 @@ from .window import (
 class HeadlessSurface:
     """An off-screen renderer on an EGL context; read frames back from :attr:`renderer`."""
 
-    def __init__(self, kit: Kit, size: tuple[int, int], camera: str,
-                 avatar: Avatar | None = None, background: Background | None = None,
-                 lights: LightRig | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        kit: Kit,
+        size: tuple[int, int],
+        camera: str,
+        avatar: Avatar | None = None,
+        background: Background | None = None,
+        lights: LightRig | None = None,
+    ) -> None:
         from livedrummer.render.camera import pick_camera
 
         from .context import headless_context
 
         self._ctx = headless_context()
-        self.renderer = Renderer(self._ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0,
-                                 avatar=avatar, background=background,
-                                 lights=lights)  # fmt: skip
+        self.renderer = Renderer(
+            self._ctx,
+            build_kit_mesh(kit),
+            BODY_SKELETON,
+            size,
+            samples=0,
+            avatar=avatar,
+            background=background,
+            lights=lights,
+        )
         self._camera = pick_camera(kit, camera)
         self.stage: Stage | None = None  # show control: camera and blackout (showctl)
         self.overlays: frozenset[str] = frozenset()  # the strips drawn (score, joints)
@@ -145,9 +158,17 @@ class WindowSurface:
         the options ask for anti-aliasing), and so the static layer (see the module
         docstring)."""
         options = self._options
-        return Renderer(self._ctx, build_kit_mesh(self._kit), BODY_SKELETON, size, samples=0,
-                        fxaa=options.samples > 0, avatar=self._avatar,
-                        background=options.background, lights=options.lights)  # fmt: skip
+        return Renderer(
+            self._ctx,
+            build_kit_mesh(self._kit),
+            BODY_SKELETON,
+            size,
+            samples=0,
+            fxaa=options.samples > 0,
+            avatar=self._avatar,
+            background=options.background,
+            lights=options.lights,
+        )
 
     def draw(self, frame: SceneFrame | None, now_s: float) -> None:
         self._now = now_s

@@ -76,8 +76,13 @@ def codec_for(suffix: str, settings: VideoSettings) -> Codec:
     """The encoders for a file of type ``suffix`` (see the module docstring)."""
     if suffix == ".webm":
         fmt = "yuva420p" if settings.alpha else "yuv420p"
-        vp9 = {"crf": str(settings.crf + 11), "b": "0", "deadline": "realtime",
-               "cpu-used": "8", "row-mt": "1"}  # fmt: skip
+        vp9 = {
+            "crf": str(settings.crf + 11),
+            "b": "0",
+            "deadline": "realtime",
+            "cpu-used": "8",
+            "row-mt": "1",
+        }
         return Codec("libvpx-vp9", fmt, vp9, "libopus")
     if settings.alpha:  # .mov
         return Codec("prores_ks", "yuva444p10le", {"profile": "4", "vendor": "apl0"}, "aac")

@@ -71,8 +71,9 @@ class ViewControl:
         glfw.set_cursor_pos_callback(window, on_cursor)
         glfw.set_scroll_callback(window, on_scroll)
 
-    def key(self, name: str, move: CameraMove, cameras: dict[str, Camera], now: float
-            ) -> tuple[CameraMove, str | None]:  # fmt: skip
+    def key(
+        self, name: str, move: CameraMove, cameras: dict[str, Camera], now: float
+    ) -> tuple[CameraMove, str | None]:
         """The move after key ``name`` and the camera's new label (None: not a view key)."""
         digit = name.removeprefix("shift+")
         if not (digit.isdigit() and 1 <= int(digit) <= len(CAMERA_NAMES)):

@@ -98,8 +98,9 @@ def toggle_fullscreen(glfw: Any, window: Any, options: WindowOptions) -> None:
         return
     monitor = monitors[options.monitor] if 0 <= options.monitor < len(monitors) else monitors[0]
     mode = glfw.get_video_mode(monitor)
-    glfw.set_window_monitor(window, monitor, 0, 0, mode.size.width, mode.size.height,
-                            mode.refresh_rate)  # fmt: skip
+    glfw.set_window_monitor(
+        window, monitor, 0, 0, mode.size.width, mode.size.height, mode.refresh_rate
+    )
 
 
 class Readout:
@@ -201,8 +202,18 @@ def show(
     with open_window(options) as (glfw, window, ctx):
         player = sound() if sound is not None else None
         try:
-            _loop(glfw, window, ctx, performance, body, options,
-                  player.now if player is not None else clock, avatar, player, midi)  # fmt: skip
+            _loop(
+                glfw,
+                window,
+                ctx,
+                performance,
+                body,
+                options,
+                player.now if player is not None else clock,
+                avatar,
+                player,
+                midi,
+            )
         finally:
             if player is not None:
                 player.close()
@@ -262,8 +273,16 @@ def _loop(
     move = CameraMove(cameras[options.camera], cameras[options.camera], 0.0, 0.0)
     mesh = build_kit_mesh(kit)
     size = glfw.get_framebuffer_size(window)
-    renderer = Renderer(ctx, mesh, BODY_SKELETON, size, offscreen=False, avatar=avatar,
-                        background=options.background, lights=options.lights)  # fmt: skip
+    renderer = Renderer(
+        ctx,
+        mesh,
+        BODY_SKELETON,
+        size,
+        offscreen=False,
+        avatar=avatar,
+        background=options.background,
+        lights=options.lights,
+    )
     models = OverlayModels(body, transport.duration_s)
     shown = frozenset(options.overlays)
     strips = overlay_image(size, shown, models)
@@ -335,8 +354,7 @@ def _loop(
             player.follow(t, now, transport.playing and muted is None)
             if transport.playing:
                 step = ahead.seconds * transport.speed
-                t = min(max(t - step if transport.reverse else t + step, 0.0),
-                        transport.duration_s)  # fmt: skip
+                t = min(max(t - step if transport.reverse else t + step, 0.0), transport.duration_s)
         fb = glfw.get_framebuffer_size(window)
         if fb != renderer.size and fb[0] > 0 and fb[1] > 0:
             renderer.size = fb

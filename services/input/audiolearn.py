@@ -68,10 +68,15 @@ def learn_kit(
     def callback(data: np.ndarray, _frames: int, _time: Any, _status: Any) -> None:
         blocks.put(data.copy())
 
-    with sd.InputStream(device=index, channels=n_channels, samplerate=SAMPLE_RATE,
-                        blocksize=BLOCK, dtype="float32", callback=callback):  # fmt: skip
-        return learn_blocks(blocks, drums, name, hits, own, timeout_s, say, settings,
-                            other_strokes)  # fmt: skip
+    with sd.InputStream(
+        device=index,
+        channels=n_channels,
+        samplerate=SAMPLE_RATE,
+        blocksize=BLOCK,
+        dtype="float32",
+        callback=callback,
+    ):
+        return learn_blocks(blocks, drums, name, hits, own, timeout_s, say, settings, other_strokes)
 
 
 def learn_blocks(
@@ -124,8 +129,10 @@ def learn_blocks(
             found = listen(cls)
             kept = real_hits(np.array(found).reshape(len(found), N_BANDS))
             if len(kept) < MIN_STROKE_HITS:
-                say(f"  {stroke}: heard {len(kept)} of {hits} hits in {timeout_s:g} s: "
-                    f"skipped (the profile has no {stroke} template)")  # fmt: skip
+                say(
+                    f"  {stroke}: heard {len(kept)} of {hits} hits in {timeout_s:g} s: "
+                    f"skipped (the profile has no {stroke} template)"
+                )
                 continue
             others.setdefault(cls, []).append(kept)
             say(f"  {stroke}: {len(found)} hits")

@@ -130,8 +130,9 @@ class AudioSource(Source):
 
         index = find_device(self.device)
         try:
-            sd.check_input_settings(index, channels=self.n_channels, samplerate=SAMPLE_RATE,
-                                    dtype="float32")  # fmt: skip
+            sd.check_input_settings(
+                index, channels=self.n_channels, samplerate=SAMPLE_RATE, dtype="float32"
+            )
         except sd.PortAudioError as exc:
             info = sd.query_devices(index)
             raise MidiInputError(
@@ -151,9 +152,14 @@ class AudioSource(Source):
         self._queue = queue.Queue(QUEUE_BLOCKS)
         try:
             stream = sd.InputStream(
-                device=index, channels=self.n_channels, samplerate=SAMPLE_RATE,
-                blocksize=BLOCK, dtype="float32", latency="low", callback=self._callback,
-            )  # fmt: skip
+                device=index,
+                channels=self.n_channels,
+                samplerate=SAMPLE_RATE,
+                blocksize=BLOCK,
+                dtype="float32",
+                latency="low",
+                callback=self._callback,
+            )
             stream.start()
         except sd.PortAudioError as exc:
             raise MidiInputError(f"audio device {self.device!r}: cannot open ({exc})") from None
@@ -221,8 +227,9 @@ class AudioSource(Source):
         peak = float(np.max(np.abs(data))) if data.size else 0.0
         clipped = int(np.count_nonzero(np.abs(data) >= CLIP_LEVEL))
         if clipped:
-            self.problems.report("clipping", f"{self.name}: input at full scale; turn it down",
-                                 clipped)  # fmt: skip
+            self.problems.report(
+                "clipping", f"{self.name}: input at full scale; turn it down", clipped
+            )
         if peak < 10 ** (SILENCE_DBFS / 20):
             self._quiet_s += len(data) / SAMPLE_RATE
             if self._quiet_s >= SILENCE_S:
@@ -247,5 +254,4 @@ class AudioSource(Source):
             try:
                 self._trace_path.write_text(json.dumps({"hits": self._trace_rows}))
             except OSError as exc:
-                log.error("%s: cannot write the trace: %s", self._trace_path,
-                          exc.strerror or exc)  # fmt: skip
+                log.error("%s: cannot write the trace: %s", self._trace_path, exc.strerror or exc)

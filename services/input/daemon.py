@@ -125,8 +125,14 @@ class InputDaemon(Service):
         clock: Clock,
         ctx: zmq.Context[zmq.Socket[bytes]],
     ) -> None:
-        super().__init__(clock, ctx, performer=config.performer, security=config.security,
-                         control=config.control, log=log)  # fmt: skip
+        super().__init__(
+            clock,
+            ctx,
+            performer=config.performer,
+            security=config.security,
+            control=config.control,
+            log=log,
+        )
         self.clock: Clock = clock
         self.source = source
         self.config = config
@@ -155,8 +161,9 @@ class InputDaemon(Service):
             try:
                 folder.mkdir(parents=True, exist_ok=True)
             except OSError as exc:
-                raise JournalError(f"{folder}: cannot create journal: "
-                                   f"{exc.strerror or exc}") from None  # fmt: skip
+                raise JournalError(
+                    f"{folder}: cannot create journal: {exc.strerror or exc}"
+                ) from None
             if not os.access(folder, os.W_OK):
                 raise JournalError(f"{folder}: cannot create journal: folder not writable")
             self._session = new_session_id(cfg.performer)
@@ -170,9 +177,13 @@ class InputDaemon(Service):
             "protocol_endpoints": {k: v for k, v in self.endpoints.items() if k != "journal"},
             **cfg.meta,
         }
-        self.journal = JournalWriter.create(meta, self.clock, cfg.sessions_dir,
-                                            session_id=self._session,
-                                            fsync_interval_s=cfg.fsync_interval_s)  # fmt: skip
+        self.journal = JournalWriter.create(
+            meta,
+            self.clock,
+            cfg.sessions_dir,
+            session_id=self._session,
+            fsync_interval_s=cfg.fsync_interval_s,
+        )
 
     def hello(self) -> Hello:
         return Hello(self.name, "source", self.config.performer, dict(self.endpoints))
@@ -203,14 +214,19 @@ class InputDaemon(Service):
                         waiting_since = now if waiting_since is None else waiting_since
                         if now >= next_status:
                             if now > waiting_since:  # the first failure was logged just now
-                                log.warning("%s: still waiting (%.0f s): %s", src.name,
-                                            now - waiting_since, exc)  # fmt: skip
+                                log.warning(
+                                    "%s: still waiting (%.0f s): %s",
+                                    src.name,
+                                    now - waiting_since,
+                                    exc,
+                                )
                             next_status = now + STATUS_S
                         stop.wait(cfg.reconnect_s)
                         continue
                     if waiting_since is not None:
-                        log.warning("%s: connected after %.1f s", src.name,
-                                    self.clock.now() - waiting_since)  # fmt: skip
+                        log.warning(
+                            "%s: connected after %.1f s", src.name, self.clock.now() - waiting_since
+                        )
                         waiting_since = None
                     log.info("%s: connected", src.name)
                     if self.journal is None and self._session is not None:

@@ -330,8 +330,7 @@ def journal_to_midi(
     else:  # a tempo event on each beat: its length to the next
         for k, length in enumerate(np.diff(grid)):
             tempo = min(max(round(length * 1e6), 1), 0xFFFFFF)
-            events.append((k * ticks_per_beat, -1, -1,
-                           mido.MetaMessage("set_tempo", tempo=tempo)))  # fmt: skip
+            events.append((k * ticks_per_beat, -1, -1, mido.MetaMessage("set_tempo", tempo=tempo)))
         events.sort(key=lambda e: e[:3])
     now = 0
     for t, _, _, msg in events:

@@ -183,8 +183,9 @@ class MidiPortSource(MidiSource):
             raise MidiInputError(f"{self.name}: {exc}") from exc
         self._in = m
         self.port_name = self.spec
-        log.warning("%s: virtual input port %r open on %s", self.name, self.spec,
-                    self.api_used.upper())  # fmt: skip
+        log.warning(
+            "%s: virtual input port %r open on %s", self.name, self.spec, self.api_used.upper()
+        )
         self.stamper.reset()
         self._next_probe = float("inf")  # our own port: it cannot disappear
         self.is_open = True
@@ -224,8 +225,9 @@ class MidiPortSource(MidiSource):
         self._in = m
         self.port_name = port_name
         if self.api_used != system:
-            log.warning("%s: port %r on %s (--api %s)", self.name, self.port_name,
-                        system.upper(), self.api)  # fmt: skip
+            log.warning(
+                "%s: port %r on %s (--api %s)", self.name, self.port_name, system.upper(), self.api
+            )
         self.api_used = system
         self.stamper.reset()
         self._next_probe = self.clock.now() + PROBE_S

@@ -154,9 +154,12 @@ class RemoteSource(Source):
         first = not self.sync.ready
         self.sync.add(SyncSample(sent, msg.send_time_s, received))
         if first:
-            log.info("%s: remote clock %+.3f ms from ours (first exchange, round trip %.2f ms)",
-                     self.name, 1000 * self.sync.offset_at(received),
-                     1000 * (received - sent))  # fmt: skip
+            log.info(
+                "%s: remote clock %+.3f ms from ours (first exchange, round trip %.2f ms)",
+                self.name,
+                1000 * self.sync.offset_at(received),
+                1000 * (received - sent),
+            )
 
     def timing(self) -> dict[str, float] | None:
         """Offset, its uncertainty, drift and the playout delay (None before an exchange)."""
@@ -173,14 +176,19 @@ class RemoteSource(Source):
 
     def _report_delay(self) -> None:
         delay = self.buffer.delay_s
-        if delay is None or (self._reported is not None
-                             and abs(delay - self._reported) < REPORT_STEP_S):  # fmt: skip
+        if delay is None or (
+            self._reported is not None and abs(delay - self._reported) < REPORT_STEP_S
+        ):
             return
         self._reported = delay
-        log.warning("%s: playing the remote drummer %.1f ms behind their clock (network and "
-                    "jitter buffer; clock offset %+.3f ms +/- %.3f)", self.name, 1000 * delay,
-                    1000 * self.sync.offset_at(self.clock.now()),
-                    1000 * self.sync.uncertainty_s)  # fmt: skip
+        log.warning(
+            "%s: playing the remote drummer %.1f ms behind their clock (network and "
+            "jitter buffer; clock offset %+.3f ms +/- %.3f)",
+            self.name,
+            1000 * delay,
+            1000 * self.sync.offset_at(self.clock.now()),
+            1000 * self.sync.uncertainty_s,
+        )
 
     # ------------------------------------------------------------ reading
 
@@ -228,8 +236,9 @@ class RemoteSource(Source):
         if batch.bad:
             self.problems.counts["bad remote message"] += batch.bad
         if batch.duplicates:
-            self.problems.report("duplicate remote message",
-                                 f"{self.name}: {batch.duplicates} dropped")  # fmt: skip
+            self.problems.report(
+                "duplicate remote message", f"{self.name}: {batch.duplicates} dropped"
+            )
         for taken in batch.taken:
             msg, seq = taken.msg, taken.seq
             if self.sync.ready:
@@ -243,16 +252,30 @@ class RemoteSource(Source):
                 for row in msg.rows:
                     o = Onset.from_record(row)
                     out.append(
-                        Onset(self._timed(o.time_s, now), o.note, o.velocity, o.channel,
-                              o.instrument, o.zone, o.hihat, o.openness, o.source)
-                    )  # fmt: skip
+                        Onset(
+                            self._timed(o.time_s, now),
+                            o.note,
+                            o.velocity,
+                            o.channel,
+                            o.instrument,
+                            o.zone,
+                            o.hihat,
+                            o.openness,
+                            o.source,
+                        )
+                    )
             elif msg.kind is Kind.CONTROL:
                 for row in msg.rows:
                     out.append(
-                        Control(self._timed(float(row["time_s"]), now),
-                                ControlKind(int(row["kind"])), int(row["channel"]),
-                                int(row["number"]), int(row["value"]), int(row["source"]))
-                    )  # fmt: skip
+                        Control(
+                            self._timed(float(row["time_s"]), now),
+                            ControlKind(int(row["kind"])),
+                            int(row["channel"]),
+                            int(row["number"]),
+                            int(row["value"]),
+                            int(row["source"]),
+                        )
+                    )
         return out
 
     def close(self) -> None:

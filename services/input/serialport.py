@@ -78,8 +78,9 @@ class SerialSource(MidiSource):
     def check(self) -> None:
         if not os.path.exists(self.device):
             found = ", ".join(serial_devices()) or "none"
-            raise MidiInputError(f"{self.name}: no such device (serial devices here: {found}; "
-                                 "--wait waits for it)")  # fmt: skip
+            raise MidiInputError(
+                f"{self.name}: no such device (serial devices here: {found}; --wait waits for it)"
+            )
 
     def open(self) -> None:
         try:

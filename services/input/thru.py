@@ -29,8 +29,9 @@ log = logging.getLogger("livedrummer.input")
 class MidiThru:
     """See the module docstring."""
 
-    def __init__(self, spec: str, api: str = "auto", remap: Remap | None = None,
-                 what: str = "thru") -> None:  # fmt: skip
+    def __init__(
+        self, spec: str, api: str = "auto", remap: Remap | None = None, what: str = "thru"
+    ) -> None:
         self.spec = spec
         self.what = what
         self.remap = remap
@@ -63,9 +64,14 @@ class MidiThru:
                 problems.append(f"{name}: {exc}")
                 continue
             self._out = out
-            log.warning("%s: sending to %s port %r on %s%s", what, "the" if index >= 0 else
-                        "a virtual", self.port_name, name.upper(),
-                        " (re-mapped)" if remap is not None else "")  # fmt: skip
+            log.warning(
+                "%s: sending to %s port %r on %s%s",
+                what,
+                "the" if index >= 0 else "a virtual",
+                self.port_name,
+                name.upper(),
+                " (re-mapped)" if remap is not None else "",
+            )
             return
         raise MidiInputError(f"--{what} {spec}: {'; '.join(problems) or 'no MIDI system'}")
 

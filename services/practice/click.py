@@ -61,8 +61,9 @@ class ClickPlayer:
 
         self.waves = (click_wave(sound, False, level), click_wave(sound, True, level))
         self._clicks: tuple[np.ndarray, np.ndarray] = (np.zeros(0), np.zeros(0, dtype=bool))
-        self.stream = sd.OutputStream(samplerate=RATE, channels=1, dtype="float32",
-                                      callback=self._fill)  # fmt: skip
+        self.stream = sd.OutputStream(
+            samplerate=RATE, channels=1, dtype="float32", callback=self._fill
+        )
         self._offset = time.monotonic() - float(self.stream.time)
         self.stream.start()
 

@@ -47,14 +47,16 @@ def practice_track(
     shared clock) in ``kit``'s sounds and the clicks at ``clicks_s`` (shared clock; ``accents``
     the bars' first beats), each at its time + ``delay_s`` on the video's time."""
     controls = np.zeros(0, CONTROL_DTYPE)
-    track = recording_track(hits, controls, timing, delay_s=delay_s, kit=kit,
-                            note_map=note_map, sample_rate=RATE)  # fmt: skip
+    track = recording_track(
+        hits, controls, timing, delay_s=delay_s, kit=kit, note_map=note_map, sample_rate=RATE
+    )
     if click_level <= 0.0:
         return track
     waves = [click_wave(click_sound, accent, click_level) for accent in (False, True)]
     n = track.shape[0]
-    for c, accent in zip(np.asarray(clicks_s, np.float64).tolist(),
-                         np.asarray(accents, bool).tolist(), strict=True):  # fmt: skip
+    for c, accent in zip(
+        np.asarray(clicks_s, np.float64).tolist(), np.asarray(accents, bool).tolist(), strict=True
+    ):
         wave = waves[int(accent)]
         first = round((c + delay_s - timing.show0_s) * RATE)
         a, b = max(0, first), min(n, first + wave.size)

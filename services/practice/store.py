@@ -27,8 +27,17 @@ from livedrummer.errors import LivedrummerError
 from livedrummer.resources import user_home
 
 SCHEMA_VERSION = 1
-_COLUMNS = ("reference_notes", "hits", "missed", "extra", "wrong_piece", "accuracy_pct", "score",
-            "mean_offset_ms", "sd_offset_ms")  # fmt: skip
+_COLUMNS = (
+    "reference_notes",
+    "hits",
+    "missed",
+    "extra",
+    "wrong_piece",
+    "accuracy_pct",
+    "score",
+    "mean_offset_ms",
+    "sd_offset_ms",
+)
 _REALS = frozenset({"accuracy_pct", "score", "mean_offset_ms", "sd_offset_ms"})
 
 

@@ -30,8 +30,11 @@ def request_realtime(priority: int, what: str) -> bool:
     try:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
     except (PermissionError, OSError) as exc:
-        log.warning("%s: no real-time scheduling (%s); running at normal priority", what,
-                    exc.strerror or exc)  # fmt: skip
+        log.warning(
+            "%s: no real-time scheduling (%s); running at normal priority",
+            what,
+            exc.strerror or exc,
+        )
         return False
     log.info("%s: SCHED_FIFO priority %d", what, priority)
     return True

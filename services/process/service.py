@@ -143,8 +143,9 @@ class Service:
 
     def ready_message(self) -> Message:
         """The READY a HELLO on the control socket is answered with."""
-        return Message(Kind.READY, self.hello(), self.performer, 0, self.clock.now(),
-                       Stream.CONTROL)  # fmt: skip
+        return Message(
+            Kind.READY, self.hello(), self.performer, 0, self.clock.now(), Stream.CONTROL
+        )
 
     def shutdown(self) -> None:
         """Stop the control thread, release, stop the authenticator, log totals (once)."""

@@ -231,8 +231,9 @@ class Supervisor:
         pidfd = _pidfd(proc.pid)
         if pidfd is not None:
             self._selector.register(pidfd, selectors.EVENT_READ, (EXITED, spec.name))
-        self._running[spec.name] = _Running(spec, proc, read_fd, time.monotonic(), pidfd=pidfd,
-                                            died_at=died_at)  # fmt: skip
+        self._running[spec.name] = _Running(
+            spec, proc, read_fd, time.monotonic(), pidfd=pidfd, died_at=died_at
+        )
         log.info("started %s (pid %d)", spec.name, proc.pid)
 
     def _poll(self, timeout_s: float) -> None:
@@ -274,8 +275,12 @@ class Supervisor:
                 if r.died_at is not None:
                     took = time.monotonic() - r.died_at
                     self.recoveries[r.spec.name].append(took)
-                    log.warning("%s ready again %.3f s after it died (pid %d)", r.spec.name,
-                                took, r.proc.pid)  # fmt: skip
+                    log.warning(
+                        "%s ready again %.3f s after it died (pid %d)",
+                        r.spec.name,
+                        took,
+                        r.proc.pid,
+                    )
 
     def _close_notify(self, r: _Running) -> None:
         if r.notify_fd is not None:
@@ -308,6 +313,7 @@ class Supervisor:
             delay = self._backoff[name].next_delay(died - r.started_at)
             self.restarts[name] += 1
             self._died_at[name] = died
-            log.warning("%s exited with %s; restart #%d in %.1f s", name, code,
-                        self.restarts[name], delay)  # fmt: skip
+            log.warning(
+                "%s exited with %s; restart #%d in %.1f s", name, code, self.restarts[name], delay
+            )
             self._pending[name] = died + delay

@@ -88,8 +88,13 @@ class RelayService(Service):
     def open(self) -> None:
         cfg = self.config
         if cfg.upstream_control is not None:
-            self.upstream = request_ready(self.ctx, cfg.upstream_control, Hello(self.name, "poses"),
-                                          READY_TIMEOUT_S, cfg.security)  # fmt: skip
+            self.upstream = request_ready(
+                self.ctx,
+                cfg.upstream_control,
+                Hello(self.name, "poses"),
+                READY_TIMEOUT_S,
+                cfg.security,
+            )
             self.performer = self.upstream.performer
         self._xsub = socket(self.ctx, zmq.XSUB)
         self._xpub = socket(self.ctx, zmq.XPUB)
@@ -145,5 +150,9 @@ class RelayService(Service):
 
     def summary(self) -> dict[str, int]:
         s = self.stats
-        return {"messages": s.messages, "bytes": s.bytes, "subscriptions": s.subscriptions,
-                "unsubscriptions": s.unsubscriptions}  # fmt: skip
+        return {
+            "messages": s.messages,
+            "bytes": s.bytes,
+            "subscriptions": s.subscriptions,
+            "unsubscriptions": s.unsubscriptions,
+        }

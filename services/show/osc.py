@@ -65,8 +65,14 @@ CUE = PREFIX + "cue"
 SYNTH_ADDRESSES = (PREFIX + "preset", PREFIX + "param/", CUE)
 LOOK = PREFIX + "look"
 LIGHT = PREFIX + "light/"
-DISPLAY_ADDRESSES = (PREFIX + "camera", PREFIX + "camera/cut", PREFIX + "blackout", CUE, LOOK,
-                     LIGHT)  # fmt: skip
+DISPLAY_ADDRESSES = (
+    PREFIX + "camera",
+    PREFIX + "camera/cut",
+    PREFIX + "blackout",
+    CUE,
+    LOOK,
+    LIGHT,
+)
 LOOPBACK = ("127.0.0.1", "::1")
 MAX_DATAGRAM = 65_536
 
@@ -140,8 +146,9 @@ def _bind_udp(port: int, allow: Sequence[str], what: str) -> socket.socket:
     return sock
 
 
-def receive(sock: socket.socket, allow: frozenset[str], bad: BadMessages
-            ) -> list[tuple[str, tuple[Arg, ...], Address]] | None:  # fmt: skip
+def receive(
+    sock: socket.socket, allow: frozenset[str], bad: BadMessages
+) -> list[tuple[str, tuple[Arg, ...], Address]] | None:
     """One datagram from ``sock``: its messages with their sender, after the sender and
     packet checks (a failed one is counted in ``bad`` and gives []); None when there is
     nothing to read (a non-blocking socket, or a timeout) or the socket is closed. The one
@@ -189,8 +196,14 @@ class OscEndpoint:
     :meth:`stop`. No thread of its own: a thread would wait for the GIL while the loop
     draws, and the loop reads its other sockets as often anyway."""
 
-    def __init__(self, port: int, serves_: Sequence[str], name: str, log: logging.Logger,
-                 allow: Sequence[str] = ()) -> None:  # fmt: skip
+    def __init__(
+        self,
+        port: int,
+        serves_: Sequence[str],
+        name: str,
+        log: logging.Logger,
+        allow: Sequence[str] = (),
+    ) -> None:
         self.serves = tuple(serves_)
         self.allow = frozenset((*LOOPBACK, *allow))
         self.bad = BadMessages(f"{name} OSC port", log)
@@ -238,9 +251,14 @@ class OscRouter:
     """``up``'s public OSC port (see the module docstring): forwards each message to the
     service that serves it and answers ``/livedrummer/state`` from all of them."""
 
-    def __init__(self, port: int, routes: Mapping[str, tuple[Sequence[str], int]],
-                 log: logging.Logger, allow: Sequence[str] = (),
-                 wait_s: float = 0.5) -> None:  # fmt: skip
+    def __init__(
+        self,
+        port: int,
+        routes: Mapping[str, tuple[Sequence[str], int]],
+        log: logging.Logger,
+        allow: Sequence[str] = (),
+        wait_s: float = 0.5,
+    ) -> None:
         self.routes = routes  # service -> (addresses, its loopback OSC port)
         self.allow = frozenset((*LOOPBACK, *allow))
         self.bad = BadMessages("up OSC port", log)

@@ -142,8 +142,15 @@ class CurveWorker:
     """See the module docstring. ``with CurveWorker(...) as curves:`` starts the child and
     stops it; pass it to :class:`~livedrummer.live.synth.LiveSynth` as ``curves``."""
 
-    def __init__(self, rig: Rig, blend_s: float, strokes: StrokeParams | None = None, *,
-                 timeout_s: float = 10.0, nice: int = 0) -> None:  # fmt: skip
+    def __init__(
+        self,
+        rig: Rig,
+        blend_s: float,
+        strokes: StrokeParams | None = None,
+        *,
+        timeout_s: float = 10.0,
+        nice: int = 0,
+    ) -> None:
         self.rig = rig
         self.blend_s = blend_s
         self.strokes = strokes
@@ -161,9 +168,12 @@ class CurveWorker:
         """Start the child and wait until it is ready (its imports take about a second)."""
         mine, theirs = socket.socketpair()
         fd = theirs.fileno()
-        proc = subprocess.Popen([sys.executable, "-m", __name__, str(fd), str(self.nice)],
-                                pass_fds=(fd,), stdin=subprocess.DEVNULL,
-                                stdout=subprocess.DEVNULL)  # fmt: skip
+        proc = subprocess.Popen(
+            [sys.executable, "-m", __name__, str(fd), str(self.nice)],
+            pass_fds=(fd,),
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+        )
         theirs.close()
         self._proc, self._conn = proc, Connection(mine.detach())
         try:
@@ -195,8 +205,9 @@ class CurveWorker:
     def __enter__(self) -> CurveWorker:
         return self.start()
 
-    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None,
-                 tb: TracebackType | None) -> None:  # fmt: skip
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
         self.close()
 
     @property
@@ -239,11 +250,23 @@ class CurveWorker:
     ) -> None:
         """:meth:`CurveSet.rebuild <livedrummer.live.curves.CurveSet.rebuild>` in the child;
         ``answer`` is not called: the GIL is free while the child works."""
-        msg = dumps(("rebuild", {
-            "sticking": sticking, "beats": beats, "openness": openness, "key": key,
-            "contacts_s": contacts_s, "chokes": chokes, "start_s": start_s,
-            "horizon_s": horizon_s, "expression": expression, "change": change,
-        }))  # fmt: skip
+        msg = dumps(
+            (
+                "rebuild",
+                {
+                    "sticking": sticking,
+                    "beats": beats,
+                    "openness": openness,
+                    "key": key,
+                    "contacts_s": contacts_s,
+                    "chokes": chokes,
+                    "start_s": start_s,
+                    "horizon_s": horizon_s,
+                    "expression": expression,
+                    "change": change,
+                },
+            )
+        )
         self._call(msg, replay=False)
         self._last_rebuild = msg
         self.animations += 1
@@ -304,8 +327,12 @@ class CurveWorker:
             proc.kill()
         self.close()
         self.restarts += 1
-        log.warning("synth: the curve worker stopped answering (%s); restarted (%d so far), "
-                    "the cross-fade under way is lost", why, self.restarts)  # fmt: skip
+        log.warning(
+            "synth: the curve worker stopped answering (%s); restarted (%d so far), "
+            "the cross-fade under way is lost",
+            why,
+            self.restarts,
+        )
         self.start()
 
 

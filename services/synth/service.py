@@ -169,8 +169,14 @@ class SynthService(Service):
         clock: Clock,
         ctx: zmq.Context[zmq.Socket[bytes]],
     ) -> None:
-        super().__init__(clock, ctx, performer=config.performer, security=config.security,
-                         control=config.control, log=log)  # fmt: skip
+        super().__init__(
+            clock,
+            ctx,
+            performer=config.performer,
+            security=config.security,
+            control=config.control,
+            log=log,
+        )
         self.clock: Clock = clock
         self.synth = synth
         self.config = config
@@ -215,8 +221,14 @@ class SynthService(Service):
             self.endpoints["osc"] = f"udp://{host}:{self.osc.port}"
 
     def hello(self) -> Hello:
-        return Hello(self.name, "poses", self.config.performer, dict(self.endpoints), self.format,
-                     avatar=self.config.avatar)  # fmt: skip
+        return Hello(
+            self.name,
+            "poses",
+            self.config.performer,
+            dict(self.endpoints),
+            self.format,
+            avatar=self.config.avatar,
+        )
 
     def run(self, stop: threading.Event, on_ready: OnReady | None = None) -> int:
         """Serve until ``stop``; ``on_ready`` is called once the first poses are published
@@ -344,8 +356,7 @@ class SynthService(Service):
         (the lock let go while the curves are rebuilt and sampled: hits are answered then)."""
         self._fire_bar_cues(now)
         # between its steps (the lock let go) a re-animation waits while a hit is answered
-        self._publish(self.synth.poses_until(now, answer=self._lock.wait_answered,
-                                             lock=self._lock))  # fmt: skip
+        self._publish(self.synth.poses_until(now, answer=self._lock.wait_answered, lock=self._lock))
         self._say(self.late.poll(now))
         merged = self.synth.window.merged
         self._say(self.merged.add(merged - self._merged_seen, now))
@@ -363,12 +374,23 @@ class SynthService(Service):
             if cue.styles:  # eased in from the bar's start on
                 self.synth.set_expression(cue.apply(self.synth.style.target), start_s)
                 self.preset = cue.preset or self.preset
-            log.info("synth: bar %d: cue %s (bar start %.3f s, show %.3f s)", cue.bar or 0,
-                     cue.name, start_s, start_s + delay_s)  # fmt: skip
+            log.info(
+                "synth: bar %d: cue %s (bar start %.3f s, show %.3f s)",
+                cue.bar or 0,
+                cue.name,
+                start_s,
+                start_s + delay_s,
+            )
         rows = stage_cue_rows([(t + delay_s, cue.bar or 0, cue) for t, cue in fired])
         if rows.size:
-            msg = Message(Kind.STAGE_CUE, rows, self.config.performer, self._seq,
-                          self.clock.now(), Stream.POSES)  # fmt: skip
+            msg = Message(
+                Kind.STAGE_CUE,
+                rows,
+                self.config.performer,
+                self._seq,
+                self.clock.now(),
+                Stream.POSES,
+            )
             self._pub.send_multipart(encode(msg), copy=False)
             self._seq += 1
             self.stats.stage_cues += rows.size
@@ -377,8 +399,9 @@ class SynthService(Service):
         if batch.show_s.size == 0:
             return
         body = Pose(float(batch.show_s[0]), batch.rows)
-        msg = Message(Kind.POSE, body, self.config.performer, self._seq, self.clock.now(),
-                      Stream.POSES)  # fmt: skip
+        msg = Message(
+            Kind.POSE, body, self.config.performer, self._seq, self.clock.now(), Stream.POSES
+        )
         self._pub.send_multipart(encode(msg, self.format), copy=False)
         self._seq += 1
         self.stats.pose_messages += 1
@@ -390,8 +413,7 @@ class SynthService(Service):
         draw a score."""
         shown = rows.copy()
         shown["time_s"] += self.synth.params.delay_s
-        msg = Message(kind, shown, self.config.performer, self._seq, self.clock.now(),
-                      Stream.POSES)  # fmt: skip
+        msg = Message(kind, shown, self.config.performer, self._seq, self.clock.now(), Stream.POSES)
         self._pub.send_multipart(encode(msg), copy=False)
         self._seq += 1
         if kind is Kind.SHOWN_ONSET:

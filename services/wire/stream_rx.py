@@ -145,10 +145,17 @@ class StreamReceiver:
     ``clock`` times the loss lines only. Nothing is opened until :meth:`connect`.
     """
 
-    def __init__(self, where: str, log: logging.Logger, kinds: Iterable[Kind],
-                 pose_format: PoseFormat | None = None, performer: int | None = None,
-                 sequenced: bool = True, max_payload: int = MAX_PAYLOAD,
-                 clock: Callable[[], float] = time.monotonic) -> None:  # fmt: skip
+    def __init__(
+        self,
+        where: str,
+        log: logging.Logger,
+        kinds: Iterable[Kind],
+        pose_format: PoseFormat | None = None,
+        performer: int | None = None,
+        sequenced: bool = True,
+        max_payload: int = MAX_PAYLOAD,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         self.where = where
         self.intake = StreamIntake(kinds, pose_format, performer, sequenced, max_payload)
         self.bad = BadMessages(where, log)
@@ -160,9 +167,15 @@ class StreamReceiver:
         """The intake's :class:`~livedrummer.protocol.SequenceTracker` (per-stream counts)."""
         return self.intake.tracker
 
-    def connect(self, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str, what: str,
-                security: Security | None = None, topics: Iterable[bytes] | None = None,
-                hwm: int = DEFAULT_HWM) -> None:  # fmt: skip
+    def connect(
+        self,
+        ctx: zmq.Context[zmq.Socket[bytes]],
+        endpoint: str,
+        what: str,
+        security: Security | None = None,
+        topics: Iterable[bytes] | None = None,
+        hwm: int = DEFAULT_HWM,
+    ) -> None:
         """Open the SUB socket, subscribe (every livedrummer message, or ``topics``) and
         connect; a bad endpoint or key raises the named error of :func:`services.wire.net.connect`
         with the socket closed."""
@@ -219,8 +232,9 @@ class StreamReceiver:
     @property
     def counts(self) -> Counts:
         seq = self.intake.seq
-        return Counts(seq.received, seq.missing, seq.duplicates, seq.restarts,
-                      self.intake.bad_total)  # fmt: skip
+        return Counts(
+            seq.received, seq.missing, seq.duplicates, seq.restarts, self.intake.bad_total
+        )
 
     def close(self) -> None:
         """Close the socket; log the bad-message totals and any loss line still unsaid."""

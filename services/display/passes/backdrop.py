@@ -28,8 +28,10 @@ class BackdropPass:
 
         ctx = self._ctx
         if self._made is None:
-            prog = ctx.program(vertex_shader=shader_source("fullscreen.vert"),
-                               fragment_shader=shader_source("overlay.frag"))  # fmt: skip
+            prog = ctx.program(
+                vertex_shader=shader_source("fullscreen.vert"),
+                fragment_shader=shader_source("overlay.frag"),
+            )
             prog["u_image"].value = 0
             h, w = image.shape[:2]
             rgba = np.dstack([image, np.full((h, w), 255, np.uint8)])

@@ -48,8 +48,13 @@ _BALL = ("4f 4f 4f/i", "in_centre_radius", "in_color", "in_material")
 class BodyDraw:
     """One skeleton's drummer and sticks (see the module docstring)."""
 
-    def __init__(self, gpu: Gpu, skeleton: Skeleton | None, kit_crash_like: np.ndarray,
-                 avatar: Avatar | Literal["mannequin"] | None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        gpu: Gpu,
+        skeleton: Skeleton | None,
+        kit_crash_like: np.ndarray,
+        avatar: Avatar | Literal["mannequin"] | None,
+    ) -> None:
         self.skeleton = skeleton
         sk = skeleton
         material = np.array([0.0, 14.0, MATERIAL_PLAIN, 0.0], np.float32)
@@ -78,10 +83,14 @@ class BodyDraw:
         seg_buf = ctx.buffer(reserve=seg.nbytes, dynamic=True)
         ball_buf = ctx.buffer(reserve=max(ball.nbytes, 4), dynamic=True)
         self._bufs = (seg_buf, ball_buf)
-        self._lit = (gpu.vao("segment", "limb", seg_buf, *_SEGMENT),
-                     gpu.vao("ball", "sphere", ball_buf, *_BALL))  # fmt: skip
-        self._depth = (gpu.vao("depth_segment", "limb", seg_buf, *_SEGMENT),
-                       gpu.vao("depth_ball", "sphere", ball_buf, *_BALL))  # fmt: skip
+        self._lit = (
+            gpu.vao("segment", "limb", seg_buf, *_SEGMENT),
+            gpu.vao("ball", "sphere", ball_buf, *_BALL),
+        )
+        self._depth = (
+            gpu.vao("depth_segment", "limb", seg_buf, *_SEGMENT),
+            gpu.vao("depth_ball", "sphere", ball_buf, *_BALL),
+        )
         self._depth_skin = gpu.programs["depth_skin"]
         self.skinned: SkinnedDraw | None = None
         if skeleton is not None and skeleton.size == N_JOINTS and avatar != "mannequin":
@@ -97,8 +106,12 @@ class BodyDraw:
         self._capsule_reach: BodyReach | None = None
         if sk is not None:
             self._capsule_reach = BodyReach.from_capsules(
-                sk.parent, self._bones, sk.segment_radius_m[self._bones], self._balls,
-                sk.joint_radius_m[self._balls])  # fmt: skip
+                sk.parent,
+                self._bones,
+                sk.segment_radius_m[self._bones],
+                self._balls,
+                sk.joint_radius_m[self._balls],
+            )
         self._skin_boxes: SkinBoxes | None = None
         if self.skinned is not None:
             mesh = self.skinned.avatar.mesh
@@ -147,9 +160,11 @@ class BodyDraw:
         if has_body and self.skinned is not None and frame.rotations_q is not None:
             self._pose = (frame.rotations_q, frame.joints_m)
             if self._face is not None:
-                self.skinned.set_face(self._face.weights(frame.time_s,
-                                                         frame.channels[:, CH_HIGHLIGHT],
-                                                         frame.rotations_q[J["head"]]))  # fmt: skip
+                self.skinned.set_face(
+                    self._face.weights(
+                        frame.time_s, frame.channels[:, CH_HIGHLIGHT], frame.rotations_q[J["head"]]
+                    )
+                )
             has_body = False  # the avatar, not the capsules; the sticks stay
         seg_count = len(self._seg) if has_body else 2
         if has_body and self.skeleton is not None:

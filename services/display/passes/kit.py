@@ -61,8 +61,12 @@ class KitDraw:
         import moderngl
 
         ctx.enable(moderngl.BLEND)
-        ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
-                          moderngl.ONE, moderngl.ONE_MINUS_SRC_ALPHA)  # fmt: skip
+        ctx.blend_func = (
+            moderngl.SRC_ALPHA,
+            moderngl.ONE_MINUS_SRC_ALPHA,
+            moderngl.ONE,
+            moderngl.ONE_MINUS_SRC_ALPHA,
+        )
         for name, vao, _buf, idx in self._lit:
             if name == "floor":
                 for rect in [None] if scissors is None else scissors:

@@ -71,16 +71,18 @@ class LayerPass:
         km: KitMesh = kit.kit_mesh
         self._kit_mesh = km
         self._rest = km.instances(empty_channels(km.pieces))
-        lo_hi = {n: (m.vertices[:, :3].min(0), m.vertices[:, :3].max(0))
-                 for n, m in gpu.meshes.items()}  # fmt: skip
+        lo_hi = {
+            n: (m.vertices[:, :3].min(0), m.vertices[:, :3].max(0)) for n, m in gpu.meshes.items()
+        }
         unit_lo = np.array([lo_hi[str(n)][0] for n in km.mesh]).reshape(-1, 3)
         unit_hi = np.array([lo_hi[str(n)][1] for n in km.mesh]).reshape(-1, 3)
         self._unit_corners = box_corners(unit_lo, unit_hi)  # (N, 8, 3) in each piece's frame
         self._casts = km.mesh != "floor"
         w, h = size
         self._colour = ctx.texture((w, h), 4)
-        self._fbo = ctx.framebuffer(color_attachments=[self._colour],
-                                    depth_attachment=ctx.depth_renderbuffer((w, h)))  # fmt: skip
+        self._fbo = ctx.framebuffer(
+            color_attachments=[self._colour], depth_attachment=ctx.depth_renderbuffer((w, h))
+        )
         self._map = ctx.depth_texture((SHADOW_SIZE, SHADOW_SIZE))
         self._map.compare_func = "<="
         self._map.filter = (moderngl.LINEAR, moderngl.LINEAR)
@@ -119,9 +121,20 @@ class LayerPass:
         seen, self._seen = self._seen, key
         return key == self._key or key == seen
 
-    def draw(self, fbo: Any, view: FrameView, key: bytes, frame: SceneFrame | None,
-             inst: np.ndarray, body: BodyDraw, shadow: ShadowPass, background: Background,
-             backdrop: BackdropPass, size: tuple[int, int], post: PostPass) -> None:  # fmt: skip
+    def draw(
+        self,
+        fbo: Any,
+        view: FrameView,
+        key: bytes,
+        frame: SceneFrame | None,
+        inst: np.ndarray,
+        body: BodyDraw,
+        shadow: ShadowPass,
+        background: Background,
+        backdrop: BackdropPass,
+        size: tuple[int, int],
+        post: PostPass,
+    ) -> None:
         """The frame into ``fbo`` (the renderer's own target): the layer (rebuilt when ``key``
         changed), the rectangles that differ from it, the drummer. The kit's buffers hold this
         frame's instances ``inst`` and the shadow pass has drawn this frame's map."""
@@ -141,9 +154,13 @@ class LayerPass:
         fbo.use()
         ctx.viewport = (0, 0, *size)
         shadow.bind()
-        grown = np.array([(x - FXAA_REACH_PX, y - FXAA_REACH_PX, x + w + FXAA_REACH_PX,
-                           y + h + FXAA_REACH_PX) for x, y, w, h in self.last_rects],
-                         np.int64).reshape(-1, 4)  # fmt: skip
+        grown = np.array(
+            [
+                (x - FXAA_REACH_PX, y - FXAA_REACH_PX, x + w + FXAA_REACH_PX, y + h + FXAA_REACH_PX)
+                for x, y, w, h in self.last_rects
+            ],
+            np.int64,
+        ).reshape(-1, 4)
         grown = np.concatenate([grown, drummer + np.array([-1, -1, 1, 1]) * FXAA_REACH_PX])
         grown[:, [0, 2]] = grown[:, [0, 2]].clip(0, size[0])
         grown[:, [1, 3]] = grown[:, [1, 3]].clip(0, size[1])
@@ -169,8 +186,15 @@ class LayerPass:
             ctx.scissor = None
             self._kit.draw_floor(ctx, self.last_rects)
 
-    def _build(self, view: FrameView, shadows: bool, inst: np.ndarray, background: Background,
-               backdrop: BackdropPass, size: tuple[int, int]) -> None:  # fmt: skip
+    def _build(
+        self,
+        view: FrameView,
+        shadows: bool,
+        inst: np.ndarray,
+        background: Background,
+        backdrop: BackdropPass,
+        size: tuple[int, int],
+    ) -> None:
         """The kit at rest, shadowed by itself alone, into the layer."""
         ctx = self._gpu.ctx
         self._kit.upload(self._rest)
@@ -187,8 +211,7 @@ class LayerPass:
         self._kit.draw(ctx)
         self._kit.upload(inst)
 
-    def _clear(self, background: Background, backdrop: BackdropPass,
-               size: tuple[int, int]) -> None:  # fmt: skip
+    def _clear(self, background: Background, backdrop: BackdropPass, size: tuple[int, int]) -> None:
         """The bound framebuffer (within the scissor, if set) cleared to the background."""
         import moderngl
 
@@ -198,9 +221,15 @@ class LayerPass:
             backdrop.draw(background.image, size)
         ctx.enable(moderngl.DEPTH_TEST)
 
-    def _rects(self, view: FrameView, frame: SceneFrame | None, inst: np.ndarray,
-               body: BodyDraw, shadows: bool,
-               size: tuple[int, int]) -> tuple[list[Rect], np.ndarray]:  # fmt: skip
+    def _rects(
+        self,
+        view: FrameView,
+        frame: SceneFrame | None,
+        inst: np.ndarray,
+        body: BodyDraw,
+        shadows: bool,
+        size: tuple[int, int],
+    ) -> tuple[list[Rect], np.ndarray]:
         """Where this frame's kit can differ from the layer (see the module docstring), as
         tiles; and the drummer's pixel boxes (B, 4: x0, y0, x1, y1)."""
         moved = np.flatnonzero((inst != self._rest).any(axis=1))
@@ -220,12 +249,14 @@ class LayerPass:
         surface of the layer looks the map up (its depth read back, unprojected, seen from the
         key light)."""
         w, h = size
-        depth = np.frombuffer(self._fbo.read(components=1, attachment=-1, dtype="f4"),
-                              np.float32).reshape(h, w)  # fmt: skip
+        depth = np.frombuffer(
+            self._fbo.read(components=1, attachment=-1, dtype="f4"), np.float32
+        ).reshape(h, w)
         ys, xs = np.nonzero(depth < 1.0)
         z = depth[ys, xs].astype(np.float64) * 2 - 1
-        ndc = np.stack([(xs + 0.5) / w * 2 - 1, (ys + 0.5) / h * 2 - 1, z, np.ones(len(xs))],
-                       axis=1)  # fmt: skip
+        ndc = np.stack(
+            [(xs + 0.5) / w * 2 - 1, (ys + 0.5) / h * 2 - 1, z, np.ones(len(xs))], axis=1
+        )
         world = ndc @ np.linalg.inv(view.view_proj.astype(np.float64)).T
         world /= world[:, 3:4]
         light = world @ view.light_vp.astype(np.float64).T
@@ -240,8 +271,14 @@ class LayerPass:
         pairs = np.unique(tile * cells * cells + cell)
         self._pair_tile, self._pair_cell = pairs // (cells * cells), pairs % (cells * cells)
 
-    def _shadowed_tiles(self, moved: np.ndarray, inst: np.ndarray, body: BodyDraw,
-                        frame: SceneFrame | None, size: tuple[int, int]) -> np.ndarray:  # fmt: skip
+    def _shadowed_tiles(
+        self,
+        moved: np.ndarray,
+        inst: np.ndarray,
+        body: BodyDraw,
+        frame: SceneFrame | None,
+        size: tuple[int, int],
+    ) -> np.ndarray:
         """Pixel boxes (T, 4) of the tiles whose still surfaces look up shadow-map texels that
         this frame's moving casters cover (or the moved pieces covered at rest): the drummer,
         the sticks and the moved pieces in both poses drawn depth-only at the map's resolution
@@ -262,8 +299,12 @@ class LayerPass:
                 vao.render(instances=2 * len(rows))
         if frame is not None:
             body.draw_depth()
-        texels = np.frombuffer(self._moved_map.read(components=1, attachment=-1, dtype="f4"),
-                               np.float32).reshape(SHADOW_SIZE, SHADOW_SIZE) < 1.0  # fmt: skip
+        texels = (
+            np.frombuffer(
+                self._moved_map.read(components=1, attachment=-1, dtype="f4"), np.float32
+            ).reshape(SHADOW_SIZE, SHADOW_SIZE)
+            < 1.0
+        )
         if not texels.any():
             return np.zeros((0, 4), np.int64)
         grown = texels.copy()

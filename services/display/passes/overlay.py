@@ -33,8 +33,13 @@ class OverlayPass:
         self._vao: Any = None
         self._tex: Any = None
 
-    def draw(self, image: np.ndarray, rect: tuple[int, int, int, int], fbo: Any,
-             frame_size: tuple[int, int]) -> None:  # fmt: skip
+    def draw(
+        self,
+        image: np.ndarray,
+        rect: tuple[int, int, int, int],
+        fbo: Any,
+        frame_size: tuple[int, int],
+    ) -> None:
         """Blend ``image`` ((h, w, 4) uint8) at ``rect`` = (x, y, w, h) into ``fbo``, a frame of
         ``frame_size`` (see :func:`overlay_drawn`)."""
         import moderngl
@@ -44,8 +49,10 @@ class OverlayPass:
         ctx = self._ctx
         x, y, w, h = rect
         if self._vao is None:
-            prog = ctx.program(vertex_shader=shader_source("fullscreen.vert"),
-                               fragment_shader=shader_source("overlay.frag"))  # fmt: skip
+            prog = ctx.program(
+                vertex_shader=shader_source("fullscreen.vert"),
+                fragment_shader=shader_source("overlay.frag"),
+            )
             prog["u_image"].value = 0
             self._vao = ctx.vertex_array(prog, [])
         if self._tex is None or self._tex.size != (w, h):
@@ -61,8 +68,12 @@ class OverlayPass:
         self._vao.program["u_rect"].value = (float(x), float(bottom), float(w), float(h))
         ctx.disable(moderngl.DEPTH_TEST)
         ctx.enable(moderngl.BLEND)
-        ctx.blend_func = (moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA,
-                          moderngl.ZERO, moderngl.ONE)  # fmt: skip
+        ctx.blend_func = (
+            moderngl.SRC_ALPHA,
+            moderngl.ONE_MINUS_SRC_ALPHA,
+            moderngl.ZERO,
+            moderngl.ONE,
+        )
         self._tex.use(location=0)
         self._vao.render(moderngl.TRIANGLES, vertices=3)
         ctx.disable(moderngl.BLEND)

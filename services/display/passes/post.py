@@ -20,8 +20,9 @@ from livedrummer.render.shaders import shader_source
 class PostPass:
     """Targets and resolve of one renderer (see the module docstring)."""
 
-    def __init__(self, ctx: Any, size: tuple[int, int], *, offscreen: bool, samples: int,
-                 fxaa: bool) -> None:  # fmt: skip
+    def __init__(
+        self, ctx: Any, size: tuple[int, int], *, offscreen: bool, samples: int, fxaa: bool
+    ) -> None:
         import moderngl
 
         self._ctx = ctx
@@ -59,8 +60,10 @@ class PostPass:
         if self.fxaa:
             post = ctx.texture(size, 4)
             self.final, self.final_tex = ctx.framebuffer(color_attachments=[post]), post
-            prog = ctx.program(vertex_shader=shader_source("fullscreen.vert"),
-                               fragment_shader=shader_source("fxaa.frag"))  # fmt: skip
+            prog = ctx.program(
+                vertex_shader=shader_source("fullscreen.vert"),
+                fragment_shader=shader_source("fxaa.frag"),
+            )
             prog["u_image"].value = 0
             self._fxaa = ctx.vertex_array(prog, [])
 
@@ -90,8 +93,9 @@ class PostPass:
                 self.antialias(self._scene_tex, self.final)
         self.stale = False
 
-    def antialias(self, texture: Any, target: Any,
-                  rects: list[tuple[int, int, int, int]] | None = None) -> None:  # fmt: skip
+    def antialias(
+        self, texture: Any, target: Any, rects: list[tuple[int, int, int, int]] | None = None
+    ) -> None:
         """The FXAA pass over ``texture`` into framebuffer ``target`` of the same size, over the
         whole frame or only within ``rects`` (x, y, w, h from the bottom left)."""
         import moderngl
@@ -102,8 +106,12 @@ class PostPass:
         vao = self._fxaa
         sampler = self._samplers.get(id(texture))
         if sampler is None:
-            sampler = ctx.sampler(texture=texture, filter=(moderngl.LINEAR, moderngl.LINEAR),
-                                  repeat_x=False, repeat_y=False)  # fmt: skip
+            sampler = ctx.sampler(
+                texture=texture,
+                filter=(moderngl.LINEAR, moderngl.LINEAR),
+                repeat_x=False,
+                repeat_y=False,
+            )
             self._samplers[id(texture)] = sampler
         target.use()
         w, h = texture.size

@@ -81,13 +81,17 @@ class ReadbackPass:
         ctx = self._ctx
         w, h = size
         passes = []
-        for frag, filt in (("i420_luma.frag", moderngl.NEAREST),
-                           ("i420_chroma.frag", moderngl.LINEAR)):  # fmt: skip
-            prog = ctx.program(vertex_shader=shader_source("fullscreen.vert"),
-                               fragment_shader=shader_source(frag))  # fmt: skip
+        for frag, filt in (
+            ("i420_luma.frag", moderngl.NEAREST),
+            ("i420_chroma.frag", moderngl.LINEAR),
+        ):
+            prog = ctx.program(
+                vertex_shader=shader_source("fullscreen.vert"), fragment_shader=shader_source(frag)
+            )
             prog["u_image"].value = 0
-            sampler = ctx.sampler(texture=self._post.final_tex, filter=(filt, filt),
-                                  repeat_x=False, repeat_y=False)  # fmt: skip
+            sampler = ctx.sampler(
+                texture=self._post.final_tex, filter=(filt, filt), repeat_x=False, repeat_y=False
+            )
             passes.append((ctx.vertex_array(prog, []), sampler))
         target = ctx.texture((w // 4, h * 3 // 2), 4)
         return passes, ctx.framebuffer(color_attachments=[target])

@@ -42,8 +42,13 @@ class FrameView:
 class ScenePass:
     """The kit and the body of one renderer (see the module docstring)."""
 
-    def __init__(self, gpu: Gpu, kit_mesh: KitMesh, skeleton: Skeleton | None,
-                 avatar: Avatar | Literal["mannequin"] | None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        gpu: Gpu,
+        kit_mesh: KitMesh,
+        skeleton: Skeleton | None,
+        avatar: Avatar | Literal["mannequin"] | None,
+    ) -> None:
         self._gpu = gpu
         self.kit_mesh = kit_mesh
         self.kit = KitDraw(gpu, kit_mesh)
@@ -65,8 +70,7 @@ class ScenePass:
         km = self.kit_mesh
         return km.model[0, :3, 3] if len(km.model) else np.zeros(3)
 
-    def frame(self, camera: Camera, aspect: float, lights: LightRig,
-              shadows: bool) -> FrameView:  # fmt: skip
+    def frame(self, camera: Camera, aspect: float, lights: LightRig, shadows: bool) -> FrameView:
         """The uniforms of a frame seen from ``camera`` under ``lights``."""
         vp = camera.view_projection(aspect)
         centre = self.centre()

@@ -45,8 +45,9 @@ class ShadowPass:
         self.map.repeat_x = self.map.repeat_y = False
         # a colour attachment, never looked at: a blit copies depth only between framebuffers
         # that have one (Mesa)
-        self._fbo = ctx.framebuffer(color_attachments=[ctx.renderbuffer((side, side), 1)],
-                                    depth_attachment=self.map)  # fmt: skip
+        self._fbo = ctx.framebuffer(
+            color_attachments=[ctx.renderbuffer((side, side), 1)], depth_attachment=self.map
+        )
         self.cache_static = cache_static and enabled
         self._static: list[tuple[Any, int]] = []
         self._moving: list[tuple[Any, Any, np.ndarray]] = []
@@ -71,8 +72,9 @@ class ShadowPass:
             still, move = idx[~moving[idx]], idx[moving[idx]]
             if len(still):
                 buf = ctx.buffer(rest[still].tobytes())
-                self._static.append((self._gpu.vao("depth_mesh", name, buf, *KIT_LAYOUT),
-                                     len(still)))  # fmt: skip
+                self._static.append(
+                    (self._gpu.vao("depth_mesh", name, buf, *KIT_LAYOUT), len(still))
+                )
             if len(move):
                 buf = ctx.buffer(reserve=len(move) * INSTANCE_FLOATS * 4, dynamic=True)
                 vao = self._gpu.vao("depth_mesh", name, buf, *KIT_LAYOUT)
@@ -126,6 +128,7 @@ def key_light_view_projection(key: np.ndarray, target: np.ndarray) -> np.ndarray
     dist = float(np.linalg.norm(target - key))
     fov = float(np.degrees(2.0 * np.arcsin(min(SHADOW_RADIUS_M / dist, 0.95))))
     near = max(dist - SHADOW_RADIUS_M - 0.5, 0.1)
-    vp: np.ndarray = (perspective(fov, 1.0, near, dist + SHADOW_RADIUS_M + 0.5)
-                      @ look_at(key, target)).astype(np.float32)  # fmt: skip
+    vp: np.ndarray = (
+        perspective(fov, 1.0, near, dist + SHADOW_RADIUS_M + 0.5) @ look_at(key, target)
+    ).astype(np.float32)
     return vp

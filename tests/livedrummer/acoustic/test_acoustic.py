@@ -99,8 +99,14 @@ def test_online_twin_gives_the_offline_hits_within_its_latency(held_out) -> None
 def test_mix_accuracy_on_a_held_out_groove(held_out) -> None:  # type: ignore[no-untyped-def]
     ex, mix, _ = held_out
     hits = detect(mix, SR, load_profile(None))
-    s = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
-              ex.onsets["velocity"], GROUPS_MIX)  # fmt: skip
+    s = score(
+        hits["time_s"],
+        hits["cls"],
+        ex.onsets["time_s"],
+        ex.classes,
+        ex.onsets["velocity"],
+        GROUPS_MIX,
+    )
     assert s["kick"].tp + s["kick"].fn > 10 and s["snare"].tp + s["snare"].fn > 10
     assert s["kick"].f >= 0.80, s["kick"]  # measured 0.895 (kick, 21 onsets)
     assert s["snare"].f >= 0.80, s["snare"]  # 0.917 (13)
@@ -123,8 +129,12 @@ def test_a_hihat_just_after_a_loud_snare_is_a_hit_of_its_own(held_out) -> None: 
     hat = ex.onsets[ex.classes == CLASSES.index("hihat_closed")][:1].copy()
     snare["time_s"], snare["velocity"] = 0.25, 127
     hat["time_s"], hat["velocity"] = 0.258, 100
-    pair = replace(ex, onsets=np.concatenate([snare, hat]), duration_s=0.8,
-                   classes=np.array([CLASSES.index("snare"), CLASSES.index("hihat_closed")]))  # fmt: skip
+    pair = replace(
+        ex,
+        onsets=np.concatenate([snare, hat]),
+        duration_s=0.8,
+        classes=np.array([CLASSES.index("snare"), CLASSES.index("hihat_closed")]),
+    )
     hits = detect(render_mix(pair, seed=5), SR, load_profile(None))
     got = sorted((CLASSES[int(h["cls"])], round(float(h["time_s"]), 3)) for h in hits)
     assert [c for c, _t in got] == ["hihat_closed", "snare"], got
@@ -162,8 +172,12 @@ def test_a_crash_on_a_snare_stroke_is_found_and_its_ring_is_no_stroke(held_out) 
     snare["time_s"], snare["velocity"] = (0.25, 1.25), 127
     crash["time_s"], crash["velocity"] = 0.258, 100
     codes = [CLASSES.index("snare"), CLASSES.index("crash")]
-    pair = replace(ex, onsets=np.concatenate([snare, crash]), duration_s=2.0,
-                   classes=np.array([codes[0], codes[0], codes[1]]))  # fmt: skip
+    pair = replace(
+        ex,
+        onsets=np.concatenate([snare, crash]),
+        duration_s=2.0,
+        classes=np.array([codes[0], codes[0], codes[1]]),
+    )
     stems, names = render_stems(pair, seed=5)
     assert names == ["snare", "crash"]
     hits = detect(stems, SR, load_profile(None), codes)
@@ -181,8 +195,9 @@ def test_one_mic_per_drum_accuracy_and_crosstalk(held_out) -> None:  # type: ign
     chans = [CLASSES.index(MICS[n][0]) for n in names]
     hits = detect(stems, SR, profile, chans)
     groups = {n: MICS[n] for n in names}
-    s = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
-              ex.onsets["velocity"], groups)  # fmt: skip
+    s = score(
+        hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes, ex.onsets["velocity"], groups
+    )
     assert s["kick"].f >= 0.95, s["kick"]  # measured 1.000
     assert s["snare"].f >= 0.92, s["snare"]  # 1.000
     assert s["hihat"].f >= 0.95, s["hihat"]  # 0.991
@@ -217,8 +232,14 @@ def test_a_ringing_rides_wobble_is_no_stroke_and_its_soft_strokes_are(
     stems, names = render_stems(ex, sf2, seed=14)
     chans = [CLASSES.index(MICS[n][0]) for n in names]
     hits = detect(stems, SR, load_profile(None), chans)
-    s = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
-              ex.onsets["velocity"], {"ride": ("ride",)})["ride"]  # fmt: skip
+    s = score(
+        hits["time_s"],
+        hits["cls"],
+        ex.onsets["time_s"],
+        ex.classes,
+        ex.onsets["velocity"],
+        {"ride": ("ride",)},
+    )["ride"]
     assert s.tp == 11 and s.fn == 0 and s.fp <= 1, s  # measured 11, 0, 1
 
 
@@ -278,8 +299,13 @@ def test_shipped_profile_is_the_soundfonts(sf2: Path, name: str, lookahead: int)
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "services", *args], cwd=REPO,
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "services", *args],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_transcribe_cli_writes_a_drum_file_inspect_reads(held_out, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
@@ -305,8 +331,14 @@ def test_transcribe_cli_writes_a_drum_file_inspect_reads(held_out, tmp_path: Pat
     direct = detect(mix, SR, load_profile(None))
     assert len(back) == len(direct)
     np.testing.assert_allclose(back["time_s"], np.sort(direct["time_s"]), atol=0.0011)
-    s = score(back["time_s"], classes_of(back), ex.onsets["time_s"], ex.classes,
-              ex.onsets["velocity"], GROUPS_MIX)  # fmt: skip
+    s = score(
+        back["time_s"],
+        classes_of(back),
+        ex.onsets["time_s"],
+        ex.classes,
+        ex.onsets["velocity"],
+        GROUPS_MIX,
+    )
     assert s["kick"].f >= 0.78 and s["snare"].f >= 0.78 and s["hihat"].f >= 0.6, s
     # one microphone per drum, from a multi-channel file
     wav = _write_wav(tmp_path / "stems.wav", stems)
@@ -333,11 +365,10 @@ def test_transcribe_bad_input_is_one_line(
         (["transcribe", str(empty), "-o", out], "empty.wav: not an audio file FFmpeg can read"),
         (["transcribe", str(text), "-o", out], "notes.wav: not an audio file FFmpeg can read"),
         (["transcribe", str(silent), "-o", out], "silent.wav: silent (peak digital silence)"),
-        (["transcribe", str(mono), "-o", out, "--channels", "2=snare"],
-         "channel 2 named, but"),
+        (["transcribe", str(mono), "-o", out, "--channels", "2=snare"], "channel 2 named, but"),
         (["transcribe", str(mono), "-o", out, "--channels", "kick"], "is not CHANNEL=DRUM"),
         (["transcribe", str(mono), "-o", out, "--audio-profile", "nope"], "'nope' not found"),
-    ]  # fmt: skip
+    ]
     capsys.readouterr()
     for argv, message in cases:
         assert main(argv) == 2, argv
@@ -391,8 +422,14 @@ def test_steady_noise_is_no_hit_and_the_hats_in_it_are(held_out) -> None:  # typ
     hat = stems[:, names.index("hihat")].astype(np.float64)
     noisy = hat + 10 ** (-50 / 20) * np.random.default_rng(6).standard_normal(len(hat))
     hits = detect(noisy[:, None], SR, profile, [CLASSES.index("hihat_closed")])
-    s = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
-              ex.onsets["velocity"], {"hihat": MICS["hihat"]})["hihat"]  # fmt: skip
+    s = score(
+        hits["time_s"],
+        hits["cls"],
+        ex.onsets["time_s"],
+        ex.classes,
+        ex.onsets["velocity"],
+        {"hihat": MICS["hihat"]},
+    )["hihat"]
     assert s.tp >= 53 and s.fp <= 6, s  # measured 54 found, 5 false, 1 missed
 
 
@@ -428,8 +465,16 @@ def test_a_lookahead_one_profile_decides_a_frame_sooner(held_out, tmp_path: Path
     """``audio profile --lookahead 1``: its templates are read one frame after the onset, and
     its online detector gives its offline hits one frame (2.67 ms) sooner than the default."""
     ex, mix, _ = held_out
-    out = _cli("audio", "profile", "--soundfont", str(DEFAULT_SF2), "--lookahead", "1",
-               "-o", str(tmp_path / "fast.toml"))  # fmt: skip
+    out = _cli(
+        "audio",
+        "profile",
+        "--soundfont",
+        str(DEFAULT_SF2),
+        "--lookahead",
+        "1",
+        "-o",
+        str(tmp_path / "fast.toml"),
+    )
     assert out.returncode == 0, out.stderr
     fast = load_profile(str(tmp_path / "fast.toml"))
     assert fast.settings.lookahead == 1
@@ -444,11 +489,25 @@ def test_a_lookahead_one_profile_decides_a_frame_sooner(held_out, tmp_path: Path
     assert (fed >= decided).all()  # no hit before its decision frame is in
     assert (fed - decided < 3000).all()  # and out with the block that carried that frame
     hits = detect(mix, SR, fast)
-    s = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
-              ex.onsets["velocity"], GROUPS_MIX)  # fmt: skip
+    s = score(
+        hits["time_s"],
+        hits["cls"],
+        ex.onsets["time_s"],
+        ex.classes,
+        ex.onsets["velocity"],
+        GROUPS_MIX,
+    )
     # measured kick 0.895, snare 0.870, hi-hat 0.933
     assert s["kick"].f >= 0.80 and s["snare"].f >= 0.80 and s["hihat"].f >= 0.80, s
-    bad = _cli("audio", "profile", "--soundfont", str(DEFAULT_SF2), "--lookahead", "0",
-               "-o", str(tmp_path / "x.toml"))  # fmt: skip
+    bad = _cli(
+        "audio",
+        "profile",
+        "--soundfont",
+        str(DEFAULT_SF2),
+        "--lookahead",
+        "0",
+        "-o",
+        str(tmp_path / "x.toml"),
+    )
     assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0, bad.stderr
     assert "--lookahead" in bad.stderr

@@ -81,8 +81,9 @@ def test_colouring_features_is_filtering_the_bands() -> None:
 
 def test_the_running_mean_is_the_detectors_and_moves_with_a_colouring() -> None:
     rng = np.random.default_rng(5)
-    feats = np.stack([hit_features(rng.uniform(0.01, 2.0, (5, N_BANDS)), False)
-                      for _ in range(300)])  # fmt: skip
+    feats = np.stack(
+        [hit_features(rng.uniform(0.01, 2.0, (5, N_BANDS)), False) for _ in range(300)]
+    )
     prior = np.zeros(N_BANDS)
     means, share = running_means(feats, prior)
     norm = RecordingNorm(prior)
@@ -100,8 +101,10 @@ def test_the_running_mean_is_the_detectors_and_moves_with_a_colouring() -> None:
     a = model_input(feats[late], means[late])[:, part]
     b = model_input(coloured(feats, offset)[late], moved[late])[:, part]
     assert np.abs(a - b).max() < 0.2 * np.abs(offset).max()
-    assert np.abs(onset_spectrum(feats[late]) - onset_spectrum(coloured(feats, offset)[late])
-                  ).max() > 0.9 * np.abs(offset).max()  # fmt: skip
+    assert (
+        np.abs(onset_spectrum(feats[late]) - onset_spectrum(coloured(feats, offset)[late])).max()
+        > 0.9 * np.abs(offset).max()
+    )
 
 
 def test_fit_is_seeded_and_learns_a_separable_toy() -> None:
@@ -125,10 +128,24 @@ def test_fit_is_seeded_and_learns_a_separable_toy() -> None:
 
 
 def test_bench_held_out_unknown_kit_is_one_line(groove_dir: Path) -> None:
-    r = subprocess.run([sys.executable, "-m", "services", "bench", "transcribe",
-                        "--leave-one-kit-out", "--held-out", "nokit", "--corpus",
-                        str(groove_dir)], cwd=REPO, capture_output=True, text=True,
-                       timeout=60)  # fmt: skip
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "bench",
+            "transcribe",
+            "--leave-one-kit-out",
+            "--held-out",
+            "nokit",
+            "--corpus",
+            str(groove_dir),
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert r.returncode == 2, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
     assert "--held-out: unknown kit 'nokit'" in r.stderr

@@ -48,8 +48,14 @@ def test_the_shipped_model_transcribes_a_kit_it_was_not_trained_on(unheard) -> N
     model = load_model(None)
     assert "timgm6mb" not in model.name  # the test's kit never entered training
     hits = detect(mix, SR, load_profile(None), model=model)
-    got = score(hits["time_s"], hits["cls"], ex.onsets["time_s"], ex.classes,
-                ex.onsets["velocity"], GROUPS_MIX)  # fmt: skip
+    got = score(
+        hits["time_s"],
+        hits["cls"],
+        ex.onsets["time_s"],
+        ex.classes,
+        ex.onsets["velocity"],
+        GROUPS_MIX,
+    )
     # measured: kick 0.80 (12 of 14), snare 0.86 (9 of 9, 3 false), hi-hat 0.90
     assert got["kick"].f >= 0.80, got
     assert got["snare"].f >= 0.80, got
@@ -79,11 +85,34 @@ def test_acoustic_train_is_deterministic(groove_dir: Path, tmp_path: Path) -> No
     for run in ("a", "b"):
         env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / f"cache-{run}")}
         out = tmp_path / f"model-{run}.npz"
-        r = subprocess.run([sys.executable, "-m", "services", "acoustic", "train", "--kits",
-                            "builtin", "--hold-out", "none", "--files", "1", "--seconds", "3",
-                            "--epochs", "2", "--corpus", str(groove_dir), "-o", str(out)],
-                           cwd=REPO, capture_output=True, text=True, timeout=120,
-                           env=env)  # fmt: skip
+        r = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "services",
+                "acoustic",
+                "train",
+                "--kits",
+                "builtin",
+                "--hold-out",
+                "none",
+                "--files",
+                "1",
+                "--seconds",
+                "3",
+                "--epochs",
+                "2",
+                "--corpus",
+                str(groove_dir),
+                "-o",
+                str(out),
+            ],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=120,
+            env=env,
+        )
         assert r.returncode == 0, r.stderr
         assert "trained on builtin" in r.stdout
         outs.append(read_model(out))
@@ -94,12 +123,27 @@ def test_acoustic_train_is_deterministic(groove_dir: Path, tmp_path: Path) -> No
 
 
 def test_acoustic_train_bad_options_are_one_line(tmp_path: Path) -> None:
-    for argv, says in ((["--hold-out", "nokit"], "--hold-out: unknown kit 'nokit'"),
-                       (["--kits", "nokit"], "unknown kit 'nokit'"),
-                       (["--files", "0"], "must be positive")):  # fmt: skip
-        r = subprocess.run([sys.executable, "-m", "services", "acoustic", "train", *argv,
-                            "-o", str(tmp_path / "m.npz")], cwd=REPO, capture_output=True,
-                           text=True, timeout=60)  # fmt: skip
+    for argv, says in (
+        (["--hold-out", "nokit"], "--hold-out: unknown kit 'nokit'"),
+        (["--kits", "nokit"], "unknown kit 'nokit'"),
+        (["--files", "0"], "must be positive"),
+    ):
+        r = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "services",
+                "acoustic",
+                "train",
+                *argv,
+                "-o",
+                str(tmp_path / "m.npz"),
+            ],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
         assert says in r.stderr
 

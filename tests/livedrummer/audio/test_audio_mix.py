@@ -65,8 +65,10 @@ def test_voices_follow_zone_and_articulation() -> None:
     assert voice_for("hihat", Zone.PEDAL, HiHat.PEDAL) == "hihat_pedal"
     assert voice_for("snare", Zone.CROSS_STICK, HiHat.NONE) == "click"
     assert voice_for("ride", Zone.BELL, HiHat.NONE) == "ride_bell"
-    hi, lo = voice_for("tom1", Zone.HEAD, HiHat.NONE, KIT), voice_for("tom3", Zone.HEAD,
-                                                                      HiHat.NONE, KIT)  # fmt: skip
+    hi, lo = (
+        voice_for("tom1", Zone.HEAD, HiHat.NONE, KIT),
+        voice_for("tom3", Zone.HEAD, HiHat.NONE, KIT),
+    )
     assert float(hi[4:]) > float(lo[4:])  # the smaller tom sounds higher
 
 
@@ -86,8 +88,9 @@ def test_each_stroke_starts_on_its_sample() -> None:
 
 def test_closed_hihat_chokes_the_open_one() -> None:
     open_only = onsets((0.1, "hihat", 100, Zone.EDGE, HiHat.OPEN))
-    choked = onsets((0.1, "hihat", 100, Zone.EDGE, HiHat.OPEN),
-                    (0.3, "hihat", 1, Zone.BOW, HiHat.CLOSED))  # fmt: skip
+    choked = onsets(
+        (0.1, "hihat", 100, Zone.EDGE, HiHat.OPEN), (0.3, "hihat", 1, Zone.BOW, HiHat.CLOSED)
+    )
     a, b = mix_onsets(open_only, 1.0, KIT), mix_onsets(choked, 1.0, KIT)
     late = slice(int(0.5 * SAMPLE_RATE), None)
     assert np.abs(a[late]).max() > 0.01
@@ -102,8 +105,12 @@ def test_panning_puts_the_hihat_left_and_the_floor_tom_right() -> None:
 
 
 def test_loud_mixes_are_scaled_not_clipped() -> None:
-    on = onsets(*((0.0, inst, 127, Zone.HEAD, HiHat.NONE)
-                  for inst in ("kick", "snare", "crash1", "crash2", "tom1", "tom2")))  # fmt: skip
+    on = onsets(
+        *(
+            (0.0, inst, 127, Zone.HEAD, HiHat.NONE)
+            for inst in ("kick", "snare", "crash1", "crash2", "tom1", "tom2")
+        )
+    )
     mix = mix_onsets(on, 1.0, KIT)
     assert 0.5 < np.abs(mix).max() <= 0.9 + 1e-6
 
@@ -121,8 +128,9 @@ def rms(x: np.ndarray) -> float:
 
 def test_a_grab_stops_the_crash_after_a_short_fade_and_the_next_stroke_rings() -> None:
     sr, grab, again = SAMPLE_RATE, 0.6, 1.3
-    on = onsets((0.1, "crash1", 90, Zone.BOW, HiHat.NONE),
-                (again, "crash1", 90, Zone.BOW, HiHat.NONE))  # fmt: skip
+    on = onsets(
+        (0.1, "crash1", 90, Zone.BOW, HiHat.NONE), (again, "crash1", 90, Zone.BOW, HiHat.NONE)
+    )
     free = mix_onsets(on, 2.0, KIT)
     choked = mix_onsets(on, 2.0, KIT, chokes=grabs(crash1=[grab]))
     g, f, a = round(grab * sr), round(GRAB_FADE_S * sr), round(again * sr)
@@ -134,16 +142,19 @@ def test_a_grab_stops_the_crash_after_a_short_fade_and_the_next_stroke_rings() -
     # so it never jumps more than the crash itself does from one sample to the next
     gain = choked[g : g + f, 0] / free[g : g + f, 0]
     np.testing.assert_allclose(gain, np.linspace(1.0, 0.0, f), atol=1e-5)
-    assert np.abs(np.diff(choked[g - f : g + f + 1, 0])).max() <= np.abs(
-        np.diff(free[g - f : g + f + 1, 0])).max() + 1e-6  # fmt: skip
+    assert (
+        np.abs(np.diff(choked[g - f : g + f + 1, 0])).max()
+        <= np.abs(np.diff(free[g - f : g + f + 1, 0])).max() + 1e-6
+    )
     # the stroke after the grab sounds in full (the free mix also has the first one's tail)
     alone = mix_onsets(on[1:], 2.0, KIT)
     np.testing.assert_allclose(choked[a:], alone[a:], atol=1e-6)
 
 
 def test_a_grab_stops_only_its_own_cymbal() -> None:
-    both = onsets((0.1, "crash1", 80, Zone.BOW, HiHat.NONE), (0.1, "ride", 80, Zone.BOW,
-                                                               HiHat.NONE))  # fmt: skip
+    both = onsets(
+        (0.1, "crash1", 80, Zone.BOW, HiHat.NONE), (0.1, "ride", 80, Zone.BOW, HiHat.NONE)
+    )
     choked = mix_onsets(both, 1.5, KIT, chokes=grabs(crash1=[0.5]))
     ride = mix_onsets(both[1:], 1.5, KIT)
     after = round((0.5 + GRAB_FADE_S) * SAMPLE_RATE)
@@ -152,8 +163,10 @@ def test_a_grab_stops_only_its_own_cymbal() -> None:
 
 
 def test_choke_rule_a_grab_stops_what_rings_at_or_before_it() -> None:
-    on = onsets(*((t, "crash1", 100, Zone.BOW, HiHat.NONE) for t in (0.1, 0.5, 0.9)),
-                (0.2, "crash2", 100, Zone.BOW, HiHat.NONE))  # fmt: skip
+    on = onsets(
+        *((t, "crash1", 100, Zone.BOW, HiHat.NONE) for t in (0.1, 0.5, 0.9)),
+        (0.2, "crash2", 100, Zone.BOW, HiHat.NONE),
+    )
     cut = choke_cut_s(on, KIT, grabs(crash1=[0.5, 0.7]))
     assert cut.tolist() == [0.5, 0.5, np.inf, np.inf]  # a grab on the stroke's own time too
     assert np.isinf(choke_cut_s(on, KIT, None)).all()

@@ -40,8 +40,9 @@ def envelope(audio: np.ndarray) -> np.ndarray:
 def test_each_instrument_attacks_within_a_frame_of_its_onset(timgm: Path) -> None:
     notes = [36, 38, 42, 45, 37, 46, 51, 49]  # kick, snare, hats, tom, side stick, ride, crash
     times = [0.3 + 0.9 * k for k in range(len(notes))]
-    audio = render_soundfont(onsets([(t, n, 110) for t, n in zip(times, notes, strict=True)]),
-                             times[-1] + 0.8, timgm, SR)  # fmt: skip
+    audio = render_soundfont(
+        onsets([(t, n, 110) for t, n in zip(times, notes, strict=True)]), times[-1] + 0.8, timgm, SR
+    )
     env = envelope(audio)
     assert env[: int(0.29 * SR)].max() < 1e-4  # nothing before the first onset
     for t, note in zip(times, notes, strict=True):

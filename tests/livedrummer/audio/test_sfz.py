@@ -23,8 +23,11 @@ REPO = Path(__file__).resolve().parents[3]
 
 def tone(path: Path, hz: float, seconds: float, rate: int = SR, decay_s: float = 10.0) -> Path:
     t = np.arange(round(seconds * rate)) / rate
-    sf.write(str(path), (0.5 * np.sin(2 * np.pi * hz * t) * np.exp(-t / decay_s)).astype(
-        np.float32), rate)  # fmt: skip
+    sf.write(
+        str(path),
+        (0.5 * np.sin(2 * np.pi * hz * t) * np.exp(-t / decay_s)).astype(np.float32),
+        rate,
+    )
     return path
 
 
@@ -72,17 +75,25 @@ def onsets(hits: list[tuple[float, str, int]]) -> np.ndarray:
     return rows
 
 
-def test_regions_inherit_their_group_and_global_and_unknown_opcodes_are_listed(kit: Path
-                                                                              ) -> None:  # fmt: skip
+def test_regions_inherit_their_group_and_global_and_unknown_opcodes_are_listed(kit: Path) -> None:
     sfz = load_sfz(kit)
     assert [r.sample.name for r in sfz.regions] == [
-        "kick.wav", "snare a.wav", "snare b.flac", "snare loud.wav", "hat open.wav",
-        "hat closed.wav"]  # fmt: skip
+        "kick.wav",
+        "snare a.wav",
+        "snare b.flac",
+        "snare loud.wav",
+        "hat open.wav",
+        "hat closed.wav",
+    ]
     kick, snare_a, snare_b, loud, hat_open, hat_closed = sfz.regions
     assert kick.sample.parent == kit.parent / "samples" and kick.volume_db == -3.0
     assert (kick.lokey, kick.hikey, kick.keycenter, kick.loop_mode) == (36, 36, 36, "one_shot")
     assert (snare_a.lokey, snare_a.hivel, snare_a.seq_length, snare_a.seq_position) == (
-        38, 90, 2, 1)  # fmt: skip
+        38,
+        90,
+        2,
+        1,
+    )
     assert snare_b.seq_position == 2 and loud.lovel == 91 and loud.release_s == 0.02
     assert (hat_open.group, hat_open.off_by, hat_open.pan) == (1, 2, -50.0)
     assert (hat_closed.group, hat_closed.off_by, hat_closed.tune_cents) == (2, 0, 5.0)
@@ -130,8 +141,13 @@ def spectrum_peak(x: np.ndarray) -> float:
 
 
 def test_layers_round_robin_and_attacks_on_the_onset(kit: Path) -> None:
-    hits = [(0.1, "kick", 100), (0.6, "snare", 60), (0.9, "snare", 60), (1.2, "snare", 60),
-            (1.5, "snare", 120)]  # fmt: skip
+    hits = [
+        (0.1, "kick", 100),
+        (0.6, "snare", 60),
+        (0.9, "snare", 60),
+        (1.2, "snare", 60),
+        (1.5, "snare", 120),
+    ]
     audio = render_sfz(onsets(hits), 2.0, kit, SR)
     assert np.abs(audio[: round(0.1 * SR)]).max() == 0.0
     assert first_loud(audio, 0.0) == pytest.approx(0.1, abs=2 / SR)
@@ -165,10 +181,33 @@ def test_render_with_an_sfz_kit_and_a_bad_kit_is_one_line(kit: Path, tmp_path: P
         ]
     )
     out = tmp_path / "out.mp4"
-    run = subprocess.run([sys.executable, "-m", "services", "render", str(mid), "-o", str(out),
-                          "--size", "160x90", "--fps", "10", "--aa", "0", "--tail", "0.3",
-                          "--map", "general-midi", "--sfz", str(kit)], cwd=REPO,
-                         capture_output=True, text=True, timeout=300)  # fmt: skip
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "render",
+            str(mid),
+            "-o",
+            str(out),
+            "--size",
+            "160x90",
+            "--fps",
+            "10",
+            "--aa",
+            "0",
+            "--tail",
+            "0.3",
+            "--map",
+            "general-midi",
+            "--sfz",
+            str(kit),
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0 and out.is_file(), run.stderr[-1500:]
     import av
 
@@ -176,9 +215,13 @@ def test_render_with_an_sfz_kit_and_a_bad_kit_is_one_line(kit: Path, tmp_path: P
         audio = np.concatenate([f.to_ndarray().T for f in c.decode(audio=0)])
     assert np.abs(audio).max() > 0.05  # the SFZ kit sounds in the video
     (kit.parent / "samples" / "kick.wav").unlink()
-    run = subprocess.run([sys.executable, "-m", "services", "render", str(mid), "-o", str(out),
-                          "--sfz", str(kit)], cwd=REPO, capture_output=True, text=True,
-                         timeout=120)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-m", "services", "render", str(mid), "-o", str(out), "--sfz", str(kit)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     lines = run.stderr.strip().splitlines()
     assert run.returncode == 2 and len(lines) == 1, run.stderr
     assert "kit.sfz:5: sample" in lines[0] and "kick.wav" in lines[0]
@@ -205,8 +248,16 @@ def test_a_grab_cuts_a_ringing_cymbal_sample(tmp_path: Path) -> None:
 def test_the_live_sfz_mixer_is_the_offline_render_block_by_block(kit: Path) -> None:
     from livedrummer.audio.sfz_live import SfzLiveMixer
 
-    hits = [(0.05, "hat_open", 80), (0.2, "kick", 90), (0.31, "snare", 70), (0.45, "hat_closed", 80),
-            (0.6, "snare", 70), (0.7, "hat_open", 80), (0.9, "snare", 110), (1.0, "hat_closed", 60)]  # fmt: skip
+    hits = [
+        (0.05, "hat_open", 80),
+        (0.2, "kick", 90),
+        (0.31, "snare", 70),
+        (0.45, "hat_closed", 80),
+        (0.6, "snare", 70),
+        (0.7, "hat_open", 80),
+        (0.9, "snare", 110),
+        (1.0, "hat_closed", 60),
+    ]
     on = onsets(hits)
     offline = render_sfz(on, 1.6, kit, SR)
     assert np.abs(offline).max() < 0.9  # not scaled for headroom: the twins must agree

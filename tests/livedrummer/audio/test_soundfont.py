@@ -65,8 +65,9 @@ def onsets(hits: list[tuple[float, int, int]], map_name: str = "general-midi") -
     for t, note, vel in hits:
         spec = note_map.lookup(note)
         assert spec is not None, note
-        rows.append(Onset(t, note, vel, 9, spec.instrument, spec.zone, spec.hihat,
-                          math.nan).to_record())  # fmt: skip
+        rows.append(
+            Onset(t, note, vel, 9, spec.instrument, spec.zone, spec.hihat, math.nan).to_record()
+        )
     return np.array(rows, ONSET_DTYPE)
 
 
@@ -132,8 +133,10 @@ def test_a_grab_stops_a_ringing_cymbal_after_a_short_fade(ringing_sf2: Path) -> 
     ramp = np.linspace(1.0, 0.0, f)
     loud = np.abs(free[g : g + f, 0]) > 0.05  # a ratio means something where there is sound
     np.testing.assert_allclose(gain[loud], ramp[loud], atol=1e-3)
-    assert np.abs(np.diff(choked[g - f : g + f + 1, 0])).max() <= np.abs(
-        np.diff(free[g - f : g + f + 1, 0])).max() + 1e-4  # fmt: skip
+    assert (
+        np.abs(np.diff(choked[g - f : g + f + 1, 0])).max()
+        <= np.abs(np.diff(free[g - f : g + f + 1, 0])).max() + 1e-4
+    )
     # the stroke after the grab sounds as if alone (the free track has the first one's tail)
     alone = render_soundfont(hits[1:], 2.0, ringing_sf2, SR)
     np.testing.assert_allclose(choked[a:], alone[a:], atol=1e-5)
@@ -190,8 +193,24 @@ def test_render_cli_puts_the_soundfont_track_in_the_video(
         pytest.skip(str(exc))  # as tests/services/cli/test_render_export.py: no EGL, no video
     out = tmp_path / "out.mp4"
     fps = 30
-    code = main(["render", str(tiny_mid), "-o", str(out), "--size", "160x90", "--fps", str(fps),
-                 "--tail", "0.5", "--camera", "front", "--soundfont", str(sf2)])  # fmt: skip
+    code = main(
+        [
+            "render",
+            str(tiny_mid),
+            "-o",
+            str(out),
+            "--size",
+            "160x90",
+            "--fps",
+            str(fps),
+            "--tail",
+            "0.5",
+            "--camera",
+            "front",
+            "--soundfont",
+            str(sf2),
+        ]
+    )
     assert code == 0
     assert f"from {sf2}" in capsys.readouterr().out
     with av.open(str(out)) as c:
@@ -233,8 +252,13 @@ def test_render_cli_stops_a_choked_crash_in_the_soundfont_track(
 
 
 def _cli(*argv: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "services", *argv], capture_output=True,
-                          text=True, cwd=REPO, timeout=60)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "services", *argv],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
+    )
 
 
 @pytest.mark.parametrize("kind", ["missing", "random", "truncated", "no-drum-kit"])
@@ -258,8 +282,19 @@ def test_a_bad_soundfont_is_one_line_naming_the_file(
 
 def test_up_refuses_a_bad_soundfont_before_the_show(tmp_path: Path) -> None:
     missing = tmp_path / "nope.sf2"
-    done = _cli("up", "--demo", "--headless", "--seconds", "30", "--frames-dir", str(tmp_path / "live"),
-                "--video", str(tmp_path / "show.mp4"), "--soundfont", str(missing))  # fmt: skip
+    done = _cli(
+        "up",
+        "--demo",
+        "--headless",
+        "--seconds",
+        "30",
+        "--frames-dir",
+        str(tmp_path / "live"),
+        "--video",
+        str(tmp_path / "show.mp4"),
+        "--soundfont",
+        str(missing),
+    )
     assert done.returncode == 2
     lines = done.stderr.splitlines()
     assert len(lines) == 1 and str(missing) in lines[0], lines

@@ -26,8 +26,9 @@ def test_in_steady_running_it_is_right_to_a_tenth_of_a_period() -> None:
     assert abs(clock.sample_for(1.5 + 0.002) - 24_000) <= 0.1 * PERIOD
 
 
-def test_early_looks_are_ignored_and_a_slip_is_followed_at_once_and_back_within_the_window(
-) -> None:  # fmt: skip
+def test_early_looks_are_ignored_and_a_slip_is_followed_at_once_and_back_within_the_window() -> (
+    None
+):
     clock = StreamClock(SR, period=PERIOD)
     steady(clock, 10.0, 200, 10.0)
     before = clock.zero_s

@@ -62,8 +62,16 @@ def test_the_character_is_a_valid_mesh_bound_in_the_rest_pose() -> None:
     rest = rest_positions(SegmentLengths())
     assert np.allclose(mesh.bind[:, :3, :3], np.eye(3))
     assert np.allclose(mesh.bind[:, :3, 3], rest, atol=1e-6)
-    assert {m.name for m in mesh.materials} >= {"skin", "shirt", "trousers", "shoes", "hair",
-                                                  "eye_white", "iris", "lips"}  # fmt: skip
+    assert {m.name for m in mesh.materials} >= {
+        "skin",
+        "shirt",
+        "trousers",
+        "shoes",
+        "hair",
+        "eye_white",
+        "iris",
+        "lips",
+    }
     for material in (SKIN, SHIRT, TROUSERS, SHOES, HAIR, EYE_WHITE, IRIS):
         assert material_vertices(material).size > 0, MATERIALS[material].name
     colours = {m.base_color for m in MATERIALS}

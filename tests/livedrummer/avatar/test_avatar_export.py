@@ -32,13 +32,15 @@ def read(g: pygltflib.GLTF2, index: int) -> np.ndarray:
     view = g.bufferViews[acc.bufferView]
     blob = g.binary_blob()
     n = _W[acc.type]
-    out = np.frombuffer(blob, _DT[acc.componentType], acc.count * n,
-                        (view.byteOffset or 0) + (acc.byteOffset or 0))  # fmt: skip
+    out = np.frombuffer(
+        blob, _DT[acc.componentType], acc.count * n, (view.byteOffset or 0) + (acc.byteOffset or 0)
+    )
     return out.reshape(acc.count, n)
 
 
-def trs(node: pygltflib.Node, t: np.ndarray | None = None, r: np.ndarray | None = None
-        ) -> np.ndarray:  # fmt: skip
+def trs(
+    node: pygltflib.Node, t: np.ndarray | None = None, r: np.ndarray | None = None
+) -> np.ndarray:
     m = np.eye(4)
     rot = r if r is not None else np.asarray(node.rotation or [0, 0, 0, 1.0])
     x, y, z, w = rot
@@ -106,8 +108,10 @@ def test_kit_moves_as_the_renderer_moves_it(tmp_path: Path) -> None:
     g = pygltflib.GLTF2.load_from_bytes(data)
     anim = g.animations[0]
     k = 2
-    values = {(c.target.node, c.target.path): read(g, anim.samplers[c.sampler].output)[k]
-              for c in anim.channels}  # fmt: skip
+    values = {
+        (c.target.node, c.target.path): read(g, anim.samplers[c.sampler].output)[k]
+        for c in anim.channels
+    }
     movers = [i for i, n in enumerate(g.nodes) if n.name.endswith(" motion")]
     assert movers
     expect = kit.instances(channels[k])[:, :16].reshape(-1, 4, 4).transpose(0, 2, 1)
@@ -123,11 +127,23 @@ def test_kit_moves_as_the_renderer_moves_it(tmp_path: Path) -> None:
 def test_export_cli_writes_a_glb_a_player_can_read(groove_dir: Path, tmp_path: Path) -> None:
     out = tmp_path / "show.glb"
     proc = subprocess.run(
-        [sys.executable, "-m", "services", "export",
-         str(groove_dir / "drummer1/session1/1_funk_80_beat_4-4.mid"), "--map", "roland-td",
-         "-o", str(out), "--fps", "30"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "export",
+            str(groove_dir / "drummer1/session1/1_funk_80_beat_4-4.mid"),
+            "--map",
+            "roland-td",
+            "-o",
+            str(out),
+            "--fps",
+            "30",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     frames = int(proc.stdout.split(": ")[1].split()[0])
     g = pygltflib.GLTF2.load(str(out))
@@ -138,9 +154,19 @@ def test_export_cli_writes_a_glb_a_player_can_read(groove_dir: Path, tmp_path: P
     assert any(n.name.startswith("kit ") and n.mesh is not None for n in g.nodes)
     assert len(g.animations[0].channels) > N_JOINTS - len(LEAVES) + 1  # cymbals, hi-hat, beater
     bad = subprocess.run(
-        [sys.executable, "-m", "services", "export",
-         str(groove_dir / "drummer1/session1/1_funk_80_beat_4-4.mid"), "-o",
-         str(tmp_path / "x.gltf"), "--format", "gltf"],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "export",
+            str(groove_dir / "drummer1/session1/1_funk_80_beat_4-4.mid"),
+            "-o",
+            str(tmp_path / "x.gltf"),
+            "--format",
+            "gltf",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert bad.returncode == 2 and "name the file .glb" in bad.stderr

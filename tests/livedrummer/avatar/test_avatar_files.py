@@ -55,14 +55,26 @@ def main_joint(avatar: Avatar, name: str) -> np.ndarray:
     [("short.glb", "Blender/Rigify"), ("tall.glb", "Unreal"), ("vrm0.vrm", "VRM 0.x"),
      ("vrm1.vrm", "VRM 1.0"), ("rigid.glb", "Blender/Rigify"), ("mixamo.glb", "Mixamo")],
 )  # fmt: skip
-def test_each_convention_maps_every_joint(files: dict[str, Path], name: str, convention: str
-                                          ) -> None:  # fmt: skip
+def test_each_convention_maps_every_joint(
+    files: dict[str, Path], name: str, convention: str
+) -> None:
     info = inspect_avatar(files[name])
     assert info.error == "" and info.convention == convention
     assert info.avatar is not None
     mapped = info.avatar.bones
-    for ours in ("pelvis", "lower_back", "chest", "neck", "head", "r_shoulder", "r_elbow",
-                 "r_wrist", "l_hip", "l_knee", "l_ankle"):  # fmt: skip
+    for ours in (
+        "pelvis",
+        "lower_back",
+        "chest",
+        "neck",
+        "head",
+        "r_shoulder",
+        "r_elbow",
+        "r_wrist",
+        "l_hip",
+        "l_knee",
+        "l_ankle",
+    ):
         assert ours in mapped
     # VRM "right" is the drummer's right (+x): the right wrist came from the right hand
     assert af.node_name("rightHand", af.AVATARS[name].naming) == mapped["r_wrist"]
@@ -70,8 +82,7 @@ def test_each_convention_maps_every_joint(files: dict[str, Path], name: str, con
 
 
 @pytest.mark.parametrize("name", list(af.AVATARS))
-def test_rest_pose_hangs_the_arms_and_faces_forward(avatars: dict[str, Avatar], name: str
-                                                    ) -> None:  # fmt: skip
+def test_rest_pose_hangs_the_arms_and_faces_forward(avatars: dict[str, Avatar], name: str) -> None:
     a = avatars[name]
     verts, joints = posed(a)
     for side, sign in (("r", 1.0), ("l", -1.0)):
@@ -139,8 +150,9 @@ def test_facing_and_scale_are_found(files: dict[str, Path]) -> None:
         assert f is not None and f.up == "+y"
 
 
-def test_mesh_skins_materials_and_textures(avatars: dict[str, Avatar], files: dict[str, Path]
-                                           ) -> None:  # fmt: skip
+def test_mesh_skins_materials_and_textures(
+    avatars: dict[str, Avatar], files: dict[str, Path]
+) -> None:
     scene = read_gltf_file(files["vrm1.vrm"])
     assert scene.textures == 1
     a = avatars["vrm1.vrm"]
@@ -158,8 +170,9 @@ def test_mesh_skins_materials_and_textures(avatars: dict[str, Avatar], files: di
     assert set(a.mesh.joints[idx, 0].tolist()) == {J["head"]}
 
 
-def test_fingers_are_curled_towards_the_palm(files: dict[str, Path], avatars: dict[str, Avatar]
-                                             ) -> None:  # fmt: skip
+def test_fingers_are_curled_towards_the_palm(
+    files: dict[str, Path], avatars: dict[str, Avatar]
+) -> None:
     a = avatars["short.glb"]
     verts, joints = posed(a)
     k = af.AVATARS["short.glb"].height_m / af.HEIGHT_M
@@ -208,9 +221,11 @@ def broken(tmp_path: Path, change: object, name: str = "bad.vrm") -> Path:
 
 
 def test_not_gltf(tmp_path: Path) -> None:
-    for data, problem in ((b"MThd\x00\x00\x00\x06", "not a glTF file"),
-                          (b"glTF\x02\x00\x00\x00\xff\xff", "not a readable glTF file"),
-                          (b'{"asset": {"version": "1.0"}}', "glTF version 1.0")):  # fmt: skip
+    for data, problem in (
+        (b"MThd\x00\x00\x00\x06", "not a glTF file"),
+        (b"glTF\x02\x00\x00\x00\xff\xff", "not a readable glTF file"),
+        (b'{"asset": {"version": "1.0"}}', "glTF version 1.0"),
+    ):
         path = tmp_path / "x.glb"
         path.write_bytes(data)
         with pytest.raises(AvatarError) as exc:
@@ -234,8 +249,9 @@ def test_missing_bones_are_named(tmp_path: Path) -> None:
     path = af.write(tmp_path, "gap.vrm", af.Spec(vrm="1", drop=("leftHand", "rightLowerLeg")))
     with pytest.raises(AvatarError) as exc:
         load_avatar_file(path)
-    assert one_line(exc, path).endswith("required bone(s) missing (VRM 1.0): leftHand, "
-                                        "rightLowerLeg")  # fmt: skip
+    assert one_line(exc, path).endswith(
+        "required bone(s) missing (VRM 1.0): leftHand, rightLowerLeg"
+    )
     info = inspect_avatar(path)
     assert info.missing == ["leftHand", "rightLowerLeg"] and info.avatar is None
 

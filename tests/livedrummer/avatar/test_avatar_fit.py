@@ -48,13 +48,15 @@ def test_a_scaled_avatar_is_the_avatar_of_that_height(small: Avatar, tmp_path: P
     np.testing.assert_allclose(scaled.mesh.positions, tall.mesh.positions, atol=1e-5)
     # the loader floors hip_forward at 5 mm (both files have less), so the hips differ by it
     hips = [J["r_hip"], J["l_hip"]]
-    np.testing.assert_allclose(np.delete(scaled.mesh.bind, hips, 0),
-                               np.delete(tall.mesh.bind, hips, 0), atol=1e-5)  # fmt: skip
+    np.testing.assert_allclose(
+        np.delete(scaled.mesh.bind, hips, 0), np.delete(tall.mesh.bind, hips, 0), atol=1e-5
+    )
     for f in dataclasses.fields(scaled.lengths):
         if f.name == "hip_forward":
             continue
-        assert getattr(scaled.lengths, f.name) == pytest.approx(getattr(tall.lengths, f.name),
-                                                                abs=1e-4), f.name  # fmt: skip
+        assert getattr(scaled.lengths, f.name) == pytest.approx(
+            getattr(tall.lengths, f.name), abs=1e-4
+        ), f.name
     assert scaled.lengths.stick == small.lengths.stick == 0.30  # a prop keeps its size
     assert fit.height_m(scaled) == pytest.approx(1.75, abs=1e-4)
     assert scaled.digest != small.digest  # a synth and a display can tell them apart
@@ -71,8 +73,9 @@ def test_auto_scales_a_small_avatar_to_the_kits_body(small: Avatar) -> None:
     assert "scaled x" in done.line and "does not reach the kit as it is" in done.line
 
 
-def test_the_scaled_small_avatar_keeps_the_sticks_on_the_drums(small: Avatar,
-                                                               groove_dir: Path) -> None:  # fmt: skip
+def test_the_scaled_small_avatar_keeps_the_sticks_on_the_drums(
+    small: Avatar, groove_dir: Path
+) -> None:
     kit = load_kit("rock5")
     done = fit.fit_avatar(kit, small)
     note_map = load_note_map("roland-td")
@@ -102,7 +105,8 @@ def test_moving_the_kit_scales_throne_pieces_and_pedals(tmp_path: Path) -> None:
 
 
 def test_auto_leaves_an_avatar_that_reaches_alone_and_refuses_what_it_cannot(
-        small: Avatar, tmp_path: Path) -> None:  # fmt: skip
+    small: Avatar, tmp_path: Path
+) -> None:
     kit = load_kit("rock5")
     own = _avatar(tmp_path, 1.80)
     done = fit.fit_avatar(kit, own, "auto")

@@ -52,8 +52,11 @@ def test_a_vertex_weighted_to_one_joint_follows_it_rigidly() -> None:
 def test_two_joint_weights_blend_linearly() -> None:
     bind = rest_bind()
     p = bind[J["r_wrist"], :3, 3][None]
-    m = mesh(np.repeat(p, 3, 0), np.tile([J["r_wrist"], J["r_elbow"], 0, 0], (3, 1)),
-             np.tile([0.25, 0.75, 0, 0], (3, 1)))  # fmt: skip
+    m = mesh(
+        np.repeat(p, 3, 0),
+        np.tile([J["r_wrist"], J["r_elbow"], 0, 0], (3, 1)),
+        np.tile([0.25, 0.75, 0, 0], (3, 1)),
+    )
     world = bind.astype(np.float64).copy()
     world[J["r_wrist"], :3, 3] += (0.1, 0.0, 0.0)
     world[J["r_elbow"], :3, 3] += (0.0, 0.2, 0.0)

@@ -46,8 +46,14 @@ def read_bvh(text: str) -> tuple[dict[str, np.ndarray], float]:
             assert take() == "Site"
             pending = nodes[stack[-1]]["name"] + "/end"
         elif tok == "{":
-            nodes.append({"name": pending, "parent": stack[-1] if stack else -1,
-                          "offset": None, "channels": []})  # fmt: skip
+            nodes.append(
+                {
+                    "name": pending,
+                    "parent": stack[-1] if stack else -1,
+                    "offset": None,
+                    "channels": [],
+                }
+            )
             stack.append(len(nodes) - 1)
         elif tok == "OFFSET":
             nodes[stack[-1]]["offset"] = np.array([float(take()) for _ in range(3)])
@@ -108,8 +114,13 @@ def test_independent_reader_matches_our_forward_kinematics() -> None:
     got, frame_time = read_bvh(bvh_text(rig.skeleton, local, root, 30.0))
     assert abs(frame_time - 1 / 30) < 1e-8
     m = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
-    ends = {"head_top": "head/end", "r_tip": "r_stick/end", "l_tip": "l_stick/end",
-            "r_toe": "r_ankle/end", "l_toe": "l_ankle/end"}  # fmt: skip
+    ends = {
+        "head_top": "head/end",
+        "r_tip": "r_stick/end",
+        "l_tip": "l_stick/end",
+        "r_toe": "r_ankle/end",
+        "l_toe": "l_ankle/end",
+    }
     for j, name in enumerate(JOINTS):
         theirs = got[ends.get(name, name)]
         np.testing.assert_allclose(theirs, ours[:, j] @ m.T * 100.0, atol=2e-3, err_msg=name)
@@ -121,8 +132,11 @@ def test_export_cli_writes_a_bvh(tmp_path: Path) -> None:
     command = [str(script)] if script.exists() else [sys.executable, "-m", "services"]
     res = subprocess.run(
         [*command, "export", str(DEMO), "-o", str(out), "--map", "roland-td", "--fps", "24"],
-        capture_output=True, text=True, check=False, timeout=120,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=120,
+    )
     assert res.returncode == 0, res.stderr
     text = out.read_text()
     frames = int(re.search(r"Frames: (\d+)", text).group(1))  # type: ignore[union-attr]

@@ -64,10 +64,24 @@ def test_poses_carry_kit_channels() -> None:
 def test_check_cli_json_fields() -> None:
     command = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "services"]
     res = subprocess.run(
-        [*command, "check", str(DEMO), "--map", "roland-td", "--kit", "rock5-left", "--json",
-         "--fps", "60"],
-        capture_output=True, text=True, timeout=120, env=dict(os.environ), check=False,
-    )  # fmt: skip
+        [
+            *command,
+            "check",
+            str(DEMO),
+            "--map",
+            "roland-td",
+            "--kit",
+            "rock5-left",
+            "--json",
+            "--fps",
+            "60",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=dict(os.environ),
+        check=False,
+    )
     assert res.returncode == 0, res.stderr
     out = json.loads(res.stdout)
     assert out["notes"] > 700

@@ -108,9 +108,12 @@ def test_30_and_60_fps_draw_the_same_reaction() -> None:
 @pytest.fixture(scope="module")
 def faces_vrm(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     folder = tmp_path_factory.mktemp("faces")
-    return {v: af.write(folder, f"faces{v}.vrm", af.Spec(height_m=1.75, pose="A", facing=f,
-                                                         vrm=v, faces=True))
-            for v, f in (("0", "-z"), ("1", "+z"))}  # fmt: skip
+    return {
+        v: af.write(
+            folder, f"faces{v}.vrm", af.Spec(height_m=1.75, pose="A", facing=f, vrm=v, faces=True)
+        )
+        for v, f in (("0", "-z"), ("1", "+z"))
+    }
 
 
 @pytest.mark.parametrize("version", ["0", "1"])
@@ -119,8 +122,9 @@ def test_a_vrms_expressions_become_its_face(faces_vrm: dict[str, Path], version:
     assert set(a.faces) == {"blink", "happy", "surprised"}  # the file has no look expressions
     head = a.faces["blink"].vertices
     assert head.size == 24  # the head's boxes (face, nose, hair: 3 x 8 corners)
-    np.testing.assert_allclose(a.faces["blink"].deltas, np.tile([0.0, 0.0, -0.01], (24, 1)),
-                               atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        a.faces["blink"].deltas, np.tile([0.0, 0.0, -0.01], (24, 1)), atol=1e-6
+    )
     # joy/happy is bound at half weight; the file's +x is the character's left, our -x
     want = 0.5 * 0.02 * (-1.0 if version == "1" else 1.0)
     np.testing.assert_allclose(a.faces["happy"].deltas[:, 0], want, atol=1e-6)
@@ -209,8 +213,14 @@ def _crash_file(path: Path) -> None:
     mid = mido.MidiFile(ticks_per_beat=480)
     track = mido.MidiTrack()
     last = 0
-    for tick, note, vel in ((0, 42, 60), (480, 42, 60), (960, 49, 120), (960, 36, 100),
-                            (1440, 42, 60), (1920, 38, 60)):  # fmt: skip
+    for tick, note, vel in (
+        (0, 42, 60),
+        (480, 42, 60),
+        (960, 49, 120),
+        (960, 36, 100),
+        (1440, 42, 60),
+        (1920, 38, 60),
+    ):
         track.append(mido.Message("note_on", channel=9, note=note, velocity=vel, time=tick - last))
         track.append(mido.Message("note_off", channel=9, note=note, velocity=0, time=0))
         last = tick

@@ -74,8 +74,9 @@ def test_head_and_eyes_find_the_struck_piece(rig: Rig, groove_dir: Path) -> None
         th = t_on[hands]
         alone = (np.diff(th, prepend=-np.inf) >= 0.3) & (np.diff(th, append=np.inf) >= 0.2)
         pick = hands[alone]
-        point, _, _ = rig.targets.lookup(st.piece[pick].astype(np.int64),
-                                         st.onsets["zone"][pick].astype(np.int64))  # fmt: skip
+        point, _, _ = rig.targets.lookup(
+            st.piece[pick].astype(np.int64), st.onsets["zone"][pick].astype(np.int64)
+        )
         wq, wp = anim.world(t_on[pick])
         g = gaze_direction(wq[:, J["head"]], f, 0.0, P)
         want = azimuth(point - wp[:, J["head"]])

@@ -39,8 +39,10 @@ def test_targets_lie_on_the_surface_inside_the_disc(name: str) -> None:
 def test_cymbal_zones_order_bell_bow_edge_and_hihat_lifts() -> None:
     kit = load_kit("rock5")
     ride = kit.piece("ride")
-    r = {z: np.linalg.norm(zone_target(ride, z).point - np.asarray(ride.position_m))
-         for z in (Zone.BELL, Zone.BOW, Zone.EDGE)}  # fmt: skip
+    r = {
+        z: np.linalg.norm(zone_target(ride, z).point - np.asarray(ride.position_m))
+        for z in (Zone.BELL, Zone.BOW, Zone.EDGE)
+    }
     assert r[Zone.BELL] < r[Zone.BOW] < r[Zone.EDGE] <= ride.radius_m
     table = target_table(kit)
     hat = [p.name for p in kit.pieces].index("hihat")
@@ -62,8 +64,15 @@ def test_every_hand_zone_reached_exactly_by_both_arms(name: str) -> None:
                 if rig.targets.is_pedal[i, zone.code]:
                     continue
                 point, normal, pitch = rig.targets.lookup(np.array([i]), np.array([zone.code]))
-                sol = solve_arm(skel.lengths, wp[:, J[f"{side}_shoulder"]],
-                                wq[:, J["chest"]], sign, point, normal, pitch)  # fmt: skip
+                sol = solve_arm(
+                    skel.lengths,
+                    wp[:, J[f"{side}_shoulder"]],
+                    wq[:, J["chest"]],
+                    sign,
+                    point,
+                    normal,
+                    pitch,
+                )
                 assert rig.hand_ok[k, i, zone.code]
                 assert np.linalg.norm(sol.tip[0] - point[0]) < 1e-9
                 # bones keep their lengths
@@ -99,8 +108,9 @@ def test_unreachable_piece_is_a_named_error_at_load() -> None:
     kit = load_kit("rock5")
     far = dataclasses.replace(kit.piece("crash2"), position_m=(1.6, 1.4, 1.9))
     pieces = tuple(far if p.name == "crash2" else p for p in kit.pieces)
-    bad = Kit(kit.name, kit.description, kit.handedness, kit.seat_height_m, pieces,
-              source="test-kit.toml")  # fmt: skip
+    bad = Kit(
+        kit.name, kit.description, kit.handedness, kit.seat_height_m, pieces, source="test-kit.toml"
+    )
     with pytest.raises(UnreachableError, match=r"test-kit.toml.*'crash2'.*RH stick by \d+ mm"):
         build_rig(bad)
 
@@ -124,8 +134,20 @@ def test_a_users_piece_in_reach_is_hit_exactly(
 ) -> None:
     kind = PieceKind.RIDE if cymbal else PieceKind.TOM
     zones = (Zone.BOW, Zone.EDGE, Zone.BELL) if cymbal else (Zone.HEAD, Zone.RIM)
-    piece = Piece("mine", kind, (x, y, z), 0.15, 0.0 if cymbal else 0.2, tilt, facing, zones,
-                  ("tom1",), Limb.RH, 0.1, 0.5)  # fmt: skip
+    piece = Piece(
+        "mine",
+        kind,
+        (x, y, z),
+        0.15,
+        0.0 if cymbal else 0.2,
+        tilt,
+        facing,
+        zones,
+        ("tom1",),
+        Limb.RH,
+        0.1,
+        0.5,
+    )
     kit = Kit("user", "", "right", 0.52, (piece,))
     skel = build_skeleton(seat_height_m=0.52)
     _, wp = neutral_world(skel, 10.0)

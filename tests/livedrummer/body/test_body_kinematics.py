@@ -96,8 +96,14 @@ def test_pose_dtype_layout_is_packed_float32() -> None:
     offsets = [dt.fields[name][1] for name in dt.names]
     assert offsets == sorted(offsets) and offsets[0] == 0
     t = np.array([0.5, 1.0])
-    poses = pack_poses(t, quat.identity((2, N_JOINTS)), np.ones((2, N_JOINTS, 3)),
-                       np.zeros((2, 10)), np.zeros((2, 10)), np.full((2, 10), 0.25))  # fmt: skip
+    poses = pack_poses(
+        t,
+        quat.identity((2, N_JOINTS)),
+        np.ones((2, N_JOINTS, 3)),
+        np.zeros((2, 10)),
+        np.zeros((2, 10)),
+        np.full((2, 10), 0.25),
+    )
     raw = poses.tobytes()
     again = np.frombuffer(raw, dtype=dt)
     assert again["glow"][1, 3] == np.float32(0.25) and again["time_s"][1] == 1.0

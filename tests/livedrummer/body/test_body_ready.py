@@ -31,8 +31,15 @@ def test_ready_keys_wait_in_long_rests_only() -> None:
     ready = out.keys.note >= t.size
     # one before the first note, two in the 0.8 s rest (over note 1's piece), one after the last
     np.testing.assert_array_equal(out.note, [0, 1, 1, 3])
-    np.testing.assert_allclose(out.time_s, [1.0 - 0.05 - R.lead_s, 1.2 + 0.05 + R.settle_s,
-                                            2.0 - 0.05 - R.lead_s, 2.1 + 0.05 + R.settle_s])  # fmt: skip
+    np.testing.assert_allclose(
+        out.time_s,
+        [
+            1.0 - 0.05 - R.lead_s,
+            1.2 + 0.05 + R.settle_s,
+            2.0 - 0.05 - R.lead_s,
+            2.1 + 0.05 + R.settle_s,
+        ],
+    )
     assert np.all(out.keys.kind[ready] == TRAVEL)
     np.testing.assert_array_equal(np.sort(out.keys.note[ready]), t.size + np.arange(4))
     # the travel arc of the rest that now waits is gone; the short rest's stays
@@ -43,8 +50,7 @@ def test_ready_keys_wait_in_long_rests_only() -> None:
     assert off.keys is keys and off.time_s.size == 0
 
 
-def test_a_resting_hand_waits_above_its_last_piece_stick_up(rig: Rig, groove: Performance
-                                                            ) -> None:  # fmt: skip
+def test_a_resting_hand_waits_above_its_last_piece_stick_up(rig: Rig, groove: Performance) -> None:
     done = perform(groove, rig, load_note_map("roland-td"))
     st, anim = done.sticking, done.animation
     t_on = st.onsets["time_s"].astype(np.float64)
@@ -59,8 +65,9 @@ def test_a_resting_hand_waits_above_its_last_piece_stick_up(rig: Rig, groove: Pe
                 continue
             waits += 1
             n = notes[i]
-            point, _, _ = rig.targets.lookup(st.piece[n : n + 1].astype(np.int64),
-                                             st.onsets["zone"][n : n + 1].astype(np.int64))  # fmt: skip
+            point, _, _ = rig.targets.lookup(
+                st.piece[n : n + 1].astype(np.int64), st.onsets["zone"][n : n + 1].astype(np.int64)
+            )
             _, wp = anim.world(mid)
             _, at = anim.world(t[i : i + 1])
             tip = wp[:, ARM[side][4]]
@@ -82,8 +89,12 @@ def test_the_live_synth_draws_the_same_wait(rig: Rig, groove: Performance) -> No
     onsets["time_s"] += START
     out = play(LiveSynth(rig, SynthParams(predict=False)), onsets, 1 / 120)
     sticking = stick_online(onsets, rig.kit, 0.03)
-    offline = animate(rig, sticking, groove.grid.beat_s + START,
-                      hihat_openness(onsets, np.zeros(0, CONTROL_DTYPE)))  # fmt: skip
+    offline = animate(
+        rig,
+        sticking,
+        groove.grid.beat_s + START,
+        hihat_openness(onsets, np.zeros(0, CONTROL_DTYPE)),
+    )
     t_on = sticking.onsets["time_s"].astype(np.float64)
     worst, waits = 0.0, 0
     for code in (0, 1):
@@ -104,10 +115,20 @@ def test_a_hand_with_nothing_to_play_waits_ready(rig: Rig, code: int) -> None:
     from livedrummer.sticking.result import Sticking
     from livedrummer.timeline.events import ONSET_DTYPE
 
-    empty = Sticking(np.zeros(0, ONSET_DTYPE), np.zeros(0, np.int8), np.zeros(0, np.int16), {},
-                     "test", rig.kit.name)  # fmt: skip
-    anim = animate(rig, empty, np.zeros(0), hihat_openness(np.zeros(0, ONSET_DTYPE),
-                                                           np.zeros(0, CONTROL_DTYPE)))  # fmt: skip
+    empty = Sticking(
+        np.zeros(0, ONSET_DTYPE),
+        np.zeros(0, np.int8),
+        np.zeros(0, np.int16),
+        {},
+        "test",
+        rig.kit.name,
+    )
+    anim = animate(
+        rig,
+        empty,
+        np.zeros(0),
+        hihat_openness(np.zeros(0, ONSET_DTYPE), np.zeros(0, CONTROL_DTYPE)),
+    )
     _, wp = anim.world(np.array([0.0, 5.0]))
     side = "R" if code == 0 else "L"
     tip, wrist = wp[:, ARM[side][4]], wp[:, ARM[side][2]]

@@ -61,9 +61,19 @@ def test_torso_twists_towards_pieces_within_the_cap_and_sways_on_beats() -> None
     p = SecondaryParams(twist_cap_deg_s=90.0)
     hand_s = np.array([1.0, 1.1, 1.2, 2.0])
     targets = np.array([[0.6, 0.5, 1.0], [-0.4, 0.4, 0.9], [0.6, 0.5, 1.0], [0.0, 0.5, 0.6]])
-    torso = build_torso(p, 0.5, np.radians(3), np.radians(6), np.arange(0.0, 3.0, 0.5),
-                        hand_s, targets, np.array([0, 0, 1.3]), np.zeros(0), np.zeros(0),
-                        hand_s)  # fmt: skip
+    torso = build_torso(
+        p,
+        0.5,
+        np.radians(3),
+        np.radians(6),
+        np.arange(0.0, 3.0, 0.5),
+        hand_s,
+        targets,
+        np.array([0, 0, 1.3]),
+        np.zeros(0),
+        np.zeros(0),
+        hand_s,
+    )
     t = np.linspace(0, 3, 3001)
     tw = torso.twist(t)
     assert np.max(np.abs(np.diff(tw)) / np.diff(t)) <= np.radians(90.0) + 1e-9

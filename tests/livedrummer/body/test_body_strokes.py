@@ -34,8 +34,14 @@ P = StrokeParams()
 def keys_for(times: list[float], ids: list[int], vel: float = 1.0, el: float = 0.5,
              params: StrokeParams = P, pieces: list[int] | None = None):  # type: ignore[no-untyped-def]  # fmt: skip
     n = len(times)
-    return stroke_keys(np.array(times), np.array(ids), np.full(n, vel), np.full(n, el), params,
-                       None if pieces is None else np.array(pieces))  # fmt: skip
+    return stroke_keys(
+        np.array(times),
+        np.array(ids),
+        np.full(n, vel),
+        np.full(n, el),
+        params,
+        None if pieces is None else np.array(pieces),
+    )
 
 
 def test_single_stroke_before_contact_after() -> None:
@@ -112,10 +118,14 @@ def test_ctb_passes_through_keys_with_a_corner_at_contact() -> None:
     cont = np.array([0.0, -1.0, 0.0, 0.0])
     np.testing.assert_allclose(spline.evaluate(t, v, t, tension, cont), v, atol=1e-12)
     eps = 1e-6
-    left = (spline.evaluate(t, v, np.array([0.1]), tension, cont)
-            - spline.evaluate(t, v, np.array([0.1 - eps]), tension, cont)) / eps  # fmt: skip
-    right = (spline.evaluate(t, v, np.array([0.1 + eps]), tension, cont)
-             - spline.evaluate(t, v, np.array([0.1]), tension, cont)) / eps  # fmt: skip
+    left = (
+        spline.evaluate(t, v, np.array([0.1]), tension, cont)
+        - spline.evaluate(t, v, np.array([0.1 - eps]), tension, cont)
+    ) / eps
+    right = (
+        spline.evaluate(t, v, np.array([0.1 + eps]), tension, cont)
+        - spline.evaluate(t, v, np.array([0.1]), tension, cont)
+    ) / eps
     assert left[0] < 0 < right[0]  # the stick reverses at impact
     dense = spline.evaluate(t, v, np.linspace(0, 0.5, 2001), tension, cont)
     assert dense.min() >= -1e-12  # never below the contact value
@@ -136,8 +146,17 @@ def _sticking(kit: Kit, notes: list[tuple[float, str, Zone, int, Limb]]) -> Stic
     on = np.zeros(len(notes), dtype=ONSET_DTYPE)
     names = [p.name for p in kit.pieces]
     for i, (t, piece, zone, vel, _) in enumerate(notes):
-        on[i] = (t, 38, vel, 9, INSTRUMENT_CODE[kit.piece(piece).plays[0]], ZONES.index(zone),
-                 HIHATS.index(HiHat.NONE), np.nan, 0)  # fmt: skip
+        on[i] = (
+            t,
+            38,
+            vel,
+            9,
+            INSTRUMENT_CODE[kit.piece(piece).plays[0]],
+            ZONES.index(zone),
+            HIHATS.index(HiHat.NONE),
+            np.nan,
+            0,
+        )
     limb = np.array([LIMB_CODE[n[4]] for n in notes], dtype=np.int8)
     piece_idx = np.array([names.index(n[1]) for n in notes], dtype=np.int16)
     return Sticking(on, limb, piece_idx, {}, "test", kit.name)
@@ -164,8 +183,13 @@ def test_preparation_height_grows_with_velocity() -> None:
 def test_zero_elasticity_body_rebound_stays_on_the_head() -> None:
     kit = load_kit("rock5")
     dead = dataclasses.replace(kit.piece("snare"), elasticity=0.0)
-    dull = Kit(kit.name, "", "right", kit.seat_height_m,
-               tuple(dead if p.name == "snare" else p for p in kit.pieces))  # fmt: skip
+    dull = Kit(
+        kit.name,
+        "",
+        "right",
+        kit.seat_height_m,
+        tuple(dead if p.name == "snare" else p for p in kit.pieces),
+    )
     # at the rebound (the stick's key, the earliest of the lagged ones: later the hand rises
     # into its ready wait, livedrummer.body.ready)
     assert _tip_height_above_snare(dull, 110, 1.03) == pytest.approx(0.0, abs=1e-9)

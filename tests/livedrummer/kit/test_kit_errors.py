@@ -124,8 +124,13 @@ def test_pieces_far_away_or_under_the_floor_are_refused_at_load(
 def test_a_kick_resting_on_the_floor_is_accepted(tmp_path: Path) -> None:
     # rock5's kick head (radius 0.279 m, vertical) touches the floor at z = 0.001 m; one
     # centimetre lower still touches it, within the tolerance, and the rig still plays it.
-    path = edited(tmp_path, KIT, "position_m = [0.06, 0.58, 0.28]",
-                  "position_m = [0.06, 0.58, 0.271]", "mine.toml")  # fmt: skip
+    path = edited(
+        tmp_path,
+        KIT,
+        "position_m = [0.06, 0.58, 0.28]",
+        "position_m = [0.06, 0.58, 0.271]",
+        "mine.toml",
+    )
     rig = build_rig(load_kit(str(path)))
     assert rig.hand_ok.any()
     for name in ("rock5", "rock5-left"):

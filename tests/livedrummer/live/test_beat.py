@@ -89,8 +89,12 @@ def test_sessions_export_writes_the_detected_tempo_map(tmp_path: Path) -> None:
     w.append_onsets(on, 0.0, 0)
     w.close()
     out = tmp_path / "rock.mid"
-    run = subprocess.run([sys.executable, "-m", "services", "sessions", "export", str(w.path),
-                          "-o", str(out)], capture_output=True, text=True, timeout=60)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-m", "services", "sessions", "export", str(w.path), "-o", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert run.returncode == 0, run.stderr
     back = read_midi_file(out, load_note_map("roland-td"))
     played = on["time_s"] - on["time_s"][0]
@@ -139,8 +143,12 @@ def polled(on: np.ndarray, end_s: float) -> tuple[BeatTracker, list[np.ndarray]]
 @pytest.mark.parametrize("bpm", [84.0, 118.0])
 def test_a_syncopated_groove_locks_on_the_beat_and_the_beats_never_jump(bpm: float) -> None:
     on, beats = funk(bpm, 12)
-    det = track_beats(on["time_s"].astype(np.float64), onset_weights(on), float(beats[-1]) + 0.3,
-                      downbeats=downbeat_weights(on))  # fmt: skip
+    det = track_beats(
+        on["time_s"].astype(np.float64),
+        onset_weights(on),
+        float(beats[-1]) + 0.3,
+        downbeats=downbeat_weights(on),
+    )
     assert beat_accuracy(det, beats, float(beats[16])) >= 0.95
     _, online = polled(on, float(beats[-1]) + 0.3)
     got = np.concatenate(online)
@@ -199,9 +207,17 @@ def test_a_corrected_downbeat_never_skips_a_bar_number() -> None:
 
 
 def test_bar_cues_fire_once_each_in_bar_order() -> None:
-    cues = parse_cues({"cue": [{"name": "b", "bar": 5, "preset": "relaxed"},
-                               {"name": "a", "bar": 2}, {"name": "x", "at_s": 3.0},
-                               {"name": "n"}]}, "test")  # fmt: skip
+    cues = parse_cues(
+        {
+            "cue": [
+                {"name": "b", "bar": 5, "preset": "relaxed"},
+                {"name": "a", "bar": 2},
+                {"name": "x", "at_s": 3.0},
+                {"name": "n"},
+            ]
+        },
+        "test",
+    )
     fire = BarCues(cues)
     assert fire.due([]) == [] and fire.due([(0.0, 1)]) == []
     assert [(t, c.name) for t, c in fire.due([(2.0, 2)])] == [(2.0, "a")]

@@ -63,17 +63,33 @@ def test_learn_a_controller_then_steer_up_with_it(
 ) -> None:
     out = tmp_path / "show.toml"
     learn = subprocess.Popen(
-        [sys.executable, "-m", "services", "control", "learn", "--virtual", "learnctl",
-         "--api", "jack", "-o", str(out)],
-        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "control",
+            "learn",
+            "--virtual",
+            "learnctl",
+            "--api",
+            "jack",
+            "-o",
+            str(out),
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     assert learn.stdin is not None and learn.stdout is not None
     surface = player(wait_port("learnctl"))
     # each control moved, and the answer typed (the first answer is wrong: asked again)
-    script = [([0xB0, 7, 40], ["camera nowhere", "param head_amplitude_deg"]),
-              ([0x99, 36, 100], ["camera front"]),
-              ([0x99, 38, 100], ["skip"]),
-              ([0x99, 37, 100], ["blackout"])]  # fmt: skip
+    script = [
+        ([0xB0, 7, 40], ["camera nowhere", "param head_amplitude_deg"]),
+        ([0x99, 36, 100], ["camera front"]),
+        ([0x99, 38, 100], ["skip"]),
+        ([0x99, 37, 100], ["blackout"]),
+    ]
     lines: list[str] = []
     try:
         for message, answers in script:
@@ -101,7 +117,10 @@ def test_learn_a_controller_then_steer_up_with_it(
     assert f"wrote {out}: 3 controls" in rest
     learned = load_control_map(out)
     assert [(b.kind, b.number, b.target) for b in learned.bindings] == [
-        ("cc", 7, "param"), ("note", 36, "camera"), ("note", 37, "blackout")]  # fmt: skip
+        ("cc", 7, "param"),
+        ("note", 36, "camera"),
+        ("note", 37, "blackout"),
+    ]
 
     # the controller: a virtual output port that up opens as its --control-midi
     ctl = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "desk")
@@ -110,8 +129,21 @@ def test_learn_a_controller_then_steer_up_with_it(
     probe.bind(("127.0.0.1", 0))
     port = probe.getsockname()[1]
     probe.close()
-    proc = launch(tmp_path, "--seconds", "60", "--osc", str(port), "--fps", "10", "--control",
-                  str(out), "--control-midi", "faders", "--api", "jack")  # fmt: skip
+    proc = launch(
+        tmp_path,
+        "--seconds",
+        "60",
+        "--osc",
+        str(port),
+        "--fps",
+        "10",
+        "--control",
+        str(out),
+        "--control-midi",
+        "faders",
+        "--api",
+        "jack",
+    )
     client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     client.bind(("127.0.0.1", 0))
     client.settimeout(5.0)

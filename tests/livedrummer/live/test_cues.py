@@ -76,8 +76,9 @@ def test_a_cue_list_loads_strictly(tmp_path: Path) -> None:
 def test_a_style_cue_eases_from_one_animation_to_the_other(rig: Rig, groove: Performance) -> None:
     note_map = load_note_map("roland-td")
     plain = BodyScene(rig.kit, perform(groove, rig, note_map))
-    energetic = perform(groove, rig, note_map, load_expression("energetic"),
-                        sticking=plain.performed.sticking)  # fmt: skip
+    energetic = perform(
+        groove, rig, note_map, load_expression("energetic"), sticking=plain.performed.sticking
+    )
     cued = CuedBodyScene(rig.kit, plain.performed, ((3.0, energetic),), ramp_s=0.5)
     times = np.arange(2.0, 4.5, 1 / 240)
     rot = cued.poses(times)["rotation"]
@@ -92,8 +93,9 @@ def test_a_style_cue_eases_from_one_animation_to_the_other(rig: Rig, groove: Per
     assert speed[ramp].max() <= speed[~ramp].max(), "no joint is faster during the ramp"
 
 
-def test_render_fires_the_cues_at_their_times_and_bars(gl_ok: None, tmp_path: Path,
-                                                       write_midi: MidiWriter) -> None:  # fmt: skip
+def test_render_fires_the_cues_at_their_times_and_bars(
+    gl_ok: None, tmp_path: Path, write_midi: MidiWriter
+) -> None:
     # 120 bpm, 4/4: bar 2 starts at 2.0 s; a snare on each beat, a hi-hat on each eighth
     msgs: list[mido.Message] = []
     for k in range(16):
@@ -111,10 +113,28 @@ def test_render_fires_the_cues_at_their_times_and_bars(gl_ok: None, tmp_path: Pa
     cues.write_text(CUES)
     out = tmp_path / "frames"
     run = subprocess.run(
-        [sys.executable, "-m", "services", "render", str(midi), "--frames-dir", str(out),
-         "--size", "160x90", "--fps", "10", "--tail", "0.5", "--cues", str(cues)],
-        capture_output=True, text=True, cwd=REPO, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "render",
+            str(midi),
+            "--frames-dir",
+            str(out),
+            "--size",
+            "160x90",
+            "--fps",
+            "10",
+            "--tail",
+            "0.5",
+            "--cues",
+            str(cues),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     assert "2 timed cues (1 change the style)" in run.stderr
     frame = {i: read_png(out / f"frame_{i:06d}.png").astype(int) for i in (5, 9, 11, 15, 26, 34)}

@@ -13,17 +13,21 @@ from tests.services.cli.test_live_up import launch, wait_running
 from tests.services.show.test_live_osc import state
 
 
-def test_up_fires_a_bar_cue_when_the_beat_tracker_counts_its_bar(gl_ok: None, tmp_path: Path
-                                                                 ) -> None:  # fmt: skip
+def test_up_fires_a_bar_cue_when_the_beat_tracker_counts_its_bar(
+    gl_ok: None, tmp_path: Path
+) -> None:
     probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     probe.bind(("127.0.0.1", 0))
     port = probe.getsockname()[1]
     probe.close()
     cues = tmp_path / "cues.toml"
-    cues.write_text('[[cue]]\nname = "chorus"\nbar = 4\npreset = "energetic"\n'
-                    '[cue.params]\nhead_amplitude_deg = 12.5\n')  # fmt: skip
-    proc = launch(tmp_path, "--seconds", "60", "--osc", str(port), "--fps", "10",
-                  "--cues", str(cues))  # fmt: skip
+    cues.write_text(
+        '[[cue]]\nname = "chorus"\nbar = 4\npreset = "energetic"\n'
+        "[cue.params]\nhead_amplitude_deg = 12.5\n"
+    )
+    proc = launch(
+        tmp_path, "--seconds", "60", "--osc", str(port), "--fps", "10", "--cues", str(cues)
+    )
     client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     client.bind(("127.0.0.1", 0))
     client.settimeout(5.0)

@@ -43,8 +43,17 @@ CONTROLS = [(0.04, ControlKind.HIHAT_PEDAL, 4, 0), (0.4, ControlKind.CHOKE, 49, 
 def strokes() -> np.ndarray:
     rows = np.zeros(len(STROKES), ONSET_DTYPE)
     for i, (t, note, piece, zone, hat) in enumerate(STROKES):
-        rows[i] = (t, note, 70, 9, INSTRUMENTS.index(piece), ZONES.index(zone),
-                   HIHATS.index(hat), math.nan, 0)  # fmt: skip
+        rows[i] = (
+            t,
+            note,
+            70,
+            9,
+            INSTRUMENTS.index(piece),
+            ZONES.index(zone),
+            HIHATS.index(hat),
+            math.nan,
+            0,
+        )
     return rows
 
 
@@ -59,9 +68,11 @@ def live(mixer: LiveMixer, kit: Kit, seed: int, with_controls: bool = True) -> n
     """Onsets and controls fed in time order (controls first at one instant, as a module sends
     them), each about 30 ms before it sounds; blocks of random sizes."""
     reader = CutReader(load_note_map("roland-td"), kit)
-    events = sorted([(float(r["time_s"]), 1, r) for r in strokes()]
-                    + [(float(r["time_s"]), 0, r) for r in controls() if with_controls],
-                    key=lambda e: (e[0], e[1]))  # fmt: skip
+    events = sorted(
+        [(float(r["time_s"]), 1, r) for r in strokes()]
+        + [(float(r["time_s"]), 0, r) for r in controls() if with_controls],
+        key=lambda e: (e[0], e[1]),
+    )
     rng = np.random.default_rng(seed)
     n, blocks, k = round(SECONDS * SR), [], 0
     while mixer.rendered < n:
@@ -77,8 +88,9 @@ def live(mixer: LiveMixer, kit: Kit, seed: int, with_controls: bool = True) -> n
     return np.concatenate(blocks)[:n]
 
 
-def cut_by_the_two(offline: np.ndarray, free: np.ndarray,
-                   render: Callable[[np.ndarray], np.ndarray]) -> None:  # fmt: skip
+def cut_by_the_two(
+    offline: np.ndarray, free: np.ndarray, render: Callable[[np.ndarray], np.ndarray]
+) -> None:
     """The offline twin itself cuts: after the first grab only the hi-hat and the ride sound,
     after the pedal closes only the ride and the chick (as those alone would sound)."""
     on = strokes()
@@ -92,8 +104,9 @@ def cut_by_the_two(offline: np.ndarray, free: np.ndarray,
 def test_grabs_and_pedal_closings_become_cuts_per_piece() -> None:
     kit = load_kit("rock5")
     names = [p.name for p in kit.pieces]
-    chokes = dict(zip(names, sound_chokes(controls(), load_note_map("roland-td"), kit),
-                      strict=True))  # fmt: skip
+    chokes = dict(
+        zip(names, sound_chokes(controls(), load_note_map("roland-td"), kit), strict=True)
+    )
     # the grabs (a release cuts nothing; 55 is the crash's edge), and two closings of the pedal
     # (the first row only says where it is; opening cuts nothing), just before their instants
     assert chokes["crash1"].tolist() == [0.4, 1.0]
@@ -119,15 +132,25 @@ def sfz_kit(tmp_path: Path) -> Path:
     import soundfile as sf
 
     t = np.arange(round(2.0 * SR)) / SR
-    for name, hz in (("crash", 700.0), ("ride", 900.0), ("open", 1100.0), ("closed", 2100.0),
-                     ("pedal", 1700.0)):  # fmt: skip
-        sf.write(str(tmp_path / f"{name}.wav"), (0.3 * np.sin(2 * np.pi * hz * t)
-                                                  * np.exp(-t / 1.5)).astype(np.float32), SR)  # fmt: skip
+    for name, hz in (
+        ("crash", 700.0),
+        ("ride", 900.0),
+        ("open", 1100.0),
+        ("closed", 2100.0),
+        ("pedal", 1700.0),
+    ):
+        sf.write(
+            str(tmp_path / f"{name}.wav"),
+            (0.3 * np.sin(2 * np.pi * hz * t) * np.exp(-t / 1.5)).astype(np.float32),
+            SR,
+        )
     path = tmp_path / "kit.sfz"
-    path.write_text("<region> key=49 sample=crash.wav\n<region> key=51 sample=ride.wav\n"
-                    "<group> group=1 off_by=2 ampeg_release=0.01\n<region> key=46 sample=open.wav\n"
-                    "<group> group=2\n<region> key=42 sample=closed.wav\n"
-                    "<region> key=44 sample=pedal.wav\n")  # fmt: skip
+    path.write_text(
+        "<region> key=49 sample=crash.wav\n<region> key=51 sample=ride.wav\n"
+        "<group> group=1 off_by=2 ampeg_release=0.01\n<region> key=46 sample=open.wav\n"
+        "<group> group=2\n<region> key=42 sample=closed.wav\n"
+        "<region> key=44 sample=pedal.wav\n"
+    )
     return path
 
 

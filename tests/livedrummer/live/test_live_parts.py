@@ -43,8 +43,10 @@ def test_to_local_inverts_the_chain_s_world_rotations() -> None:
 
 def _bone_lengths(rows: np.ndarray) -> np.ndarray:
     pos = rows["position"].astype(np.float64)
-    return np.stack([np.linalg.norm(pos[:, j] - pos[:, PARENTS[j]], axis=-1)
-                     for j in range(1, len(PARENTS))], -1)  # fmt: skip
+    return np.stack(
+        [np.linalg.norm(pos[:, j] - pos[:, PARENTS[j]], axis=-1) for j in range(1, len(PARENTS))],
+        -1,
+    )
 
 
 def test_the_cross_fade_keeps_every_bone_s_length(rig: Rig, groove: Performance) -> None:
@@ -141,10 +143,12 @@ def test_a_choke_stops_the_cymbal_live_as_it_does_offline(rig: Rig, write_midi: 
     note_map = load_note_map("roland-td")
     crash = next(i for i, p in enumerate(rig.kit.pieces) if p.kind is PieceKind.CRASH)
     crash_note = next(
-        n for n in range(128)
-        if (s := note_map.lookup(n)) is not None and (pc := rig.kit.resolve(s.instrument))
-        is not None and pc.name == rig.kit.pieces[crash].name
-    )  # fmt: skip
+        n
+        for n in range(128)
+        if (s := note_map.lookup(n)) is not None
+        and (pc := rig.kit.resolve(s.instrument)) is not None
+        and pc.name == rig.kit.pieces[crash].name
+    )
     perf = _choke_groove(write_midi, crash_note)
     assert perf.controls.size == 2
     choke_s = float(perf.controls["time_s"][0])

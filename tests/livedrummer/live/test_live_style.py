@@ -51,8 +51,9 @@ def joint_speed(out: PoseBatch) -> tuple[np.ndarray, np.ndarray]:
     return frames[1:], speed
 
 
-def switch_and_surroundings(rig: Rig, groove: Performance, params: SynthParams
-                            ) -> tuple[float, float]:  # fmt: skip
+def switch_and_surroundings(
+    rig: Rig, groove: Performance, params: SynthParams
+) -> tuple[float, float]:
     onsets = groove.onsets[groove.onsets["time_s"] < 6.0].copy()
     onsets["time_s"] += START
     synth = LiveSynth(rig, params)
@@ -61,7 +62,9 @@ def switch_and_surroundings(rig: Rig, groove: Performance, params: SynthParams
     show = SWITCH + params.delay_s  # the first pose the change can reach
     span = params.style_ramp_s + 2 * params.blend_s + 0.05
     during = (mid >= show - 0.05) & (mid <= show + span)
-    around = ((mid >= show - 1.5) & (mid < show - 0.05)) | ((mid > show + span) & (mid <= show + span + 1.5))  # fmt: skip
+    around = ((mid >= show - 1.5) & (mid < show - 0.05)) | (
+        (mid > show + span) & (mid <= show + span + 1.5)
+    )
     return float(speed[during].max()), float(speed[around].max())
 
 

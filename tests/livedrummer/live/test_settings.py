@@ -58,9 +58,13 @@ def _toml(data: dict[str, object]) -> list[str]:
 def test_the_digest_tells_apart_settings_that_differ_in_one_field() -> None:
     other = ShowSettings(**{**FULL.__dict__, "note_map": "roland-td"})
     assert other.digest() != FULL.digest()
-    assert FULL.summary() == {"map": "general-midi", "kit": "/kits/my kit.toml",
-                              "delay_ms": 62.5, "lookahead_ms": 25.0,
-                              "digest": FULL.digest()}  # fmt: skip
+    assert FULL.summary() == {
+        "map": "general-midi",
+        "kit": "/kits/my kit.toml",
+        "delay_ms": 62.5,
+        "lookahead_ms": 25.0,
+        "digest": FULL.digest(),
+    }
 
 
 @pytest.mark.parametrize(
@@ -112,11 +116,18 @@ def test_a_service_given_a_bad_settings_file_says_one_line_and_exits_2(tmp_path:
     data["delay"]["delay_ms"] = 5.0
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps(data))
-    for argv in (["synth", "--settings", str(bad)],
-                 ["input", "--file", str(REPO / "kits"), "--settings", str(bad)],
-                 ["display", "--live", "--headless", "--settings", str(bad)]):  # fmt: skip
-        proc = subprocess.run([sys.executable, "-m", "services", *argv], capture_output=True,
-                              text=True, cwd=REPO, timeout=60)  # fmt: skip
+    for argv in (
+        ["synth", "--settings", str(bad)],
+        ["input", "--file", str(REPO / "kits"), "--settings", str(bad)],
+        ["display", "--live", "--headless", "--settings", str(bad)],
+    ):
+        proc = subprocess.run(
+            [sys.executable, "-m", "services", *argv],
+            capture_output=True,
+            text=True,
+            cwd=REPO,
+            timeout=60,
+        )
         assert proc.returncode == 2, (argv, proc.stderr)
         lines = proc.stderr.strip().splitlines()
         assert len(lines) == 1, (argv, proc.stderr)
@@ -125,9 +136,24 @@ def test_a_service_given_a_bad_settings_file_says_one_line_and_exits_2(tmp_path:
 
 def test_a_flag_given_beside_a_settings_file_is_refused(tmp_path: Path) -> None:
     path = FULL.save(tmp_path / "s.json")
-    proc = subprocess.run([sys.executable, "-m", "services", "synth", "--settings", str(path),
-                           "--delay-ms", "80", "--kit", "jazz4"], capture_output=True,
-                          text=True, cwd=REPO, timeout=60)  # fmt: skip
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "synth",
+            "--settings",
+            str(path),
+            "--delay-ms",
+            "80",
+            "--kit",
+            "jazz4",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
+    )
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.strip().endswith(
         f"--settings {path}: --kit, --delay-ms given beside it; the file holds them "
@@ -137,9 +163,23 @@ def test_a_flag_given_beside_a_settings_file_is_refused(tmp_path: Path) -> None:
 
 def test_an_audio_input_refuses_settings_with_another_map_than_it_writes(tmp_path: Path) -> None:
     path = ShowSettings("roland-td").save(tmp_path / "s.json")
-    proc = subprocess.run([sys.executable, "-m", "services", "input", "--audio", "system",
-                           "--settings", str(path), "--no-journal"], capture_output=True,
-                          text=True, cwd=REPO, timeout=60)  # fmt: skip
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "input",
+            "--audio",
+            "system",
+            "--settings",
+            str(path),
+            "--no-journal",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
+    )
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.strip().splitlines() == [
         f"livedrummer: error: --settings {path}: note_map 'roland-td': --audio writes "

@@ -91,8 +91,9 @@ def test_with_no_input_the_drummer_breathes(rig: Rig) -> None:
     assert np.abs(np.diff(head, axis=0)).max() < 0.002, "idling is smooth"
 
 
-def test_prediction_raises_the_stick_before_regular_hits(rig: Rig, groove: Performance,
-                                                         monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
+def test_prediction_raises_the_stick_before_regular_hits(
+    rig: Rig, groove: Performance, monkeypatch: pytest.MonkeyPatch
+) -> None:
     # a hand resting long enough waits ready (livedrummer.body.ready), its stick up live as
     # offline, which leaves the predictor nothing to add on this groove (0.97 either way, see
     # test_body_ready): its own share is measured without the ready waits
@@ -105,8 +106,12 @@ def test_prediction_raises_the_stick_before_regular_hits(rig: Rig, groove: Perfo
         synth = LiveSynth(rig, SynthParams(predict=predict))
         out = play(synth, onsets, 1 / 120)
         sticking = stick_online(onsets, rig.kit, 0.03)
-        offline = animate(rig, sticking, groove.grid.beat_s + START,
-                          hihat_openness(onsets, np.zeros(0, CONTROL_DTYPE)))  # fmt: skip
+        offline = animate(
+            rig,
+            sticking,
+            groove.grid.beat_s + START,
+            hihat_openness(onsets, np.zeros(0, CONTROL_DTYPE)),
+        )
         hands = np.flatnonzero((sticking.limb >= 0) & (sticking.limb <= 1) & (sticking.piece >= 0))
         t = sticking.onsets["time_s"][hands].astype(np.float64)
         _, at = offline.world(t)

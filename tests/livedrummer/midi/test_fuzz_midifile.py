@@ -148,9 +148,18 @@ def test_cli_reports_bad_files_in_one_line(sample: list[Path], tmp_path: Path) -
         path = tmp_path / f"{kind}.mid"
         path.write_bytes(data)
         proc = subprocess.run(
-            [str(REPO / ".venv" / "bin" / "livedrummer"), "inspect", str(path), "--map", "roland-td"],
-            capture_output=True, text=True, timeout=60, cwd=REPO,
-        )  # fmt: skip
+            [
+                str(REPO / ".venv" / "bin" / "livedrummer"),
+                "inspect",
+                str(path),
+                "--map",
+                "roland-td",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            cwd=REPO,
+        )
         lines = proc.stderr.strip().splitlines()
         assert proc.returncode == 2, (kind, proc.stderr)
         assert len(lines) == 1 and "Traceback" not in proc.stderr, (kind, proc.stderr)

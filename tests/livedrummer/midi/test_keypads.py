@@ -27,8 +27,10 @@ REPO = Path(__file__).resolve().parents[3]
 
 def test_the_layout_plays_every_named_piece_on_free_keys() -> None:
     gm = load_note_map("general-midi")
-    played = {(gm.notes[p.note].instrument, gm.notes[p.note].zone.value, gm.notes[p.note].hihat.value)
-              for p in KEYPADS.values()}  # fmt: skip
+    played = {
+        (gm.notes[p.note].instrument, gm.notes[p.note].zone.value, gm.notes[p.note].hihat.value)
+        for p in KEYPADS.values()
+    }
     instruments = {i for i, _, _ in played}
     assert {"kick", "snare", "hihat", "crash1", "ride"} <= instruments
     assert sum(i.startswith("tom") for i in instruments) == 3
@@ -105,13 +107,19 @@ def test_the_player_mixes_a_key_over_the_track_from_the_next_buffer() -> None:
 @pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
                     reason="xvfb-run or xdotool not installed")  # fmt: skip
 def test_keys_in_a_real_file_window_play_pieces() -> None:
-    press = ("sleep 2; xdotool search --sync --name '^livedrummer$' "
-             "key z shift+x ctrl+t space")  # fmt: skip
-    script = (f"{sys.executable} -m services -v display --size 320x180 --aa 0 --seconds 4 "
-              f"& {press}; wait")  # fmt: skip
+    press = "sleep 2; xdotool search --sync --name '^livedrummer$' key z shift+x ctrl+t space"
+    script = (
+        f"{sys.executable} -m services -v display --size 320x180 --aa 0 --seconds 4 & {press}; wait"
+    )
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    run = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", script],
-                         cwd=REPO, capture_output=True, text=True, timeout=180, env=env)  # fmt: skip
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", script],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=180,
+        env=env,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     played = [line.split("keys: ")[1] for line in run.stderr.splitlines() if "keys: note" in line]
     assert played == ["note 36 velocity 80", "note 38 velocity 120", "note 42 velocity 40"]
@@ -126,8 +134,9 @@ def test_every_key_reaches_a_piece_of_the_default_kit() -> None:
 
 @pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
                     reason="xvfb-run or xdotool not installed")  # fmt: skip
-def test_keys_in_a_live_window_reach_the_input_daemon_as_notes(jack_server: str,
-                                                               tmp_path: Path) -> None:  # fmt: skip
+def test_keys_in_a_live_window_reach_the_input_daemon_as_notes(
+    jack_server: str, tmp_path: Path
+) -> None:
     """The live window's keys go out over a real MIDI port (JACK) into ``input --virtual``,
     which publishes them as onsets (read on its ZeroMQ stream) as a kit's pads would be."""
     import json
@@ -137,11 +146,29 @@ def test_keys_in_a_live_window_reach_the_input_daemon_as_notes(jack_server: str,
     from livedrummer import protocol as p
 
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
-    inp = subprocess.Popen([sys.executable, "-m", "services", "input", "--virtual",
-                            "livedrummer-keys", "--api", "jack", "--map", "general-midi",
-                            "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
-                            "--no-journal"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                           text=True, env=env)  # fmt: skip
+    inp = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "input",
+            "--virtual",
+            "livedrummer-keys",
+            "--api",
+            "jack",
+            "--map",
+            "general-midi",
+            "--pub",
+            "tcp://127.0.0.1:*",
+            "--control",
+            "tcp://127.0.0.1:*",
+            "--no-journal",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     sub = ctx.socket(zmq.SUB)
     try:
@@ -150,15 +177,24 @@ def test_keys_in_a_live_window_reach_the_input_daemon_as_notes(jack_server: str,
         sub.setsockopt(zmq.LINGER, 0)
         sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
         sub.connect(info["pub"])
-        press = ("sleep 3; xdotool search --sync --name '^livedrummer$' key z; sleep 0.3; "
-                 "xdotool search --name '^livedrummer$' key shift+x; sleep 0.3; "
-                 "xdotool search --name '^livedrummer$' key ctrl+u; sleep 1; "
-                 "xdotool search --name '^livedrummer$' key q")  # fmt: skip
-        script = (f"{sys.executable} -m services -v display --live --sub tcp://127.0.0.1:9 "
-                  f"--size 320x180 --aa 0 --keys-port livedrummer-keys & {press}; wait")  # fmt: skip
+        press = (
+            "sleep 3; xdotool search --sync --name '^livedrummer$' key z; sleep 0.3; "
+            "xdotool search --name '^livedrummer$' key shift+x; sleep 0.3; "
+            "xdotool search --name '^livedrummer$' key ctrl+u; sleep 1; "
+            "xdotool search --name '^livedrummer$' key q"
+        )
+        script = (
+            f"{sys.executable} -m services -v display --live --sub tcp://127.0.0.1:9 "
+            f"--size 320x180 --aa 0 --keys-port livedrummer-keys & {press}; wait"
+        )
         wenv = {k: v for k, v in env.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-        win = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", script],
-                             capture_output=True, text=True, timeout=120, env=wenv)  # fmt: skip
+        win = subprocess.run(
+            ["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", script],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            env=wenv,
+        )
         assert win.returncode == 0, win.stderr[-2000:]
         seen: list[tuple[int, int]] = []
         deadline = time.monotonic() + 5
@@ -176,8 +212,9 @@ def test_keys_in_a_live_window_reach_the_input_daemon_as_notes(jack_server: str,
 
 @pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
                     reason="xvfb-run or xdotool not installed")  # fmt: skip
-def test_up_keys_plays_the_window_s_keys_into_the_pipeline(jack_server: str,
-                                                           tmp_path: Path) -> None:  # fmt: skip
+def test_up_keys_plays_the_window_s_keys_into_the_pipeline(
+    jack_server: str, tmp_path: Path
+) -> None:
     """``up --keys`` out of the box: keys pressed in its window come out of its input daemon's
     stream as onsets (the show stops ``--seconds`` after the first frame)."""
     import socket
@@ -196,15 +233,24 @@ def test_up_keys_plays_the_window_s_keys_into_the_pipeline(jack_server: str,
     sub.setsockopt(zmq.LINGER, 0)
     sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
     sub.connect(f"tcp://127.0.0.1:{base}")
-    press = ("xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1; "
-             "xdotool search --name '^livedrummer$' key z; sleep 0.3; "
-             "xdotool search --name '^livedrummer$' key shift+x")  # fmt: skip
-    script = (f"{sys.executable} -m services up --keys --api jack --port-base {base} "
-              f"--no-journal --size 320x180 --seconds 5 & {press}; wait")  # fmt: skip
+    press = (
+        "xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1; "
+        "xdotool search --name '^livedrummer$' key z; sleep 0.3; "
+        "xdotool search --name '^livedrummer$' key shift+x"
+    )
+    script = (
+        f"{sys.executable} -m services up --keys --api jack --port-base {base} "
+        f"--no-journal --size 320x180 --seconds 5 & {press}; wait"
+    )
     try:
-        up = subprocess.Popen(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", script],
-                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                              env=env, cwd=REPO)  # fmt: skip
+        up = subprocess.Popen(
+            ["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", script],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env=env,
+            cwd=REPO,
+        )
         seen: list[tuple[int, int]] = []
         deadline = time.monotonic() + 60
         while len(seen) < 2 and time.monotonic() < deadline and up.poll() is None:
@@ -229,19 +275,33 @@ def test_a_key_in_the_file_window_is_heard_through_jack(jack_server: str, tmp_pa
     from services.bench._jackrec import JackRecorder, attacks
 
     mid = mido.MidiFile(ticks_per_beat=480)
-    mid.tracks.append(mido.MidiTrack([
-        mido.Message("note_on", note=36, velocity=100, channel=9, time=9600),  # at 10 s
-        mido.Message("note_off", note=36, velocity=0, channel=9, time=10),
-    ]))  # fmt: skip
+    mid.tracks.append(
+        mido.MidiTrack(
+            [
+                mido.Message("note_on", note=36, velocity=100, channel=9, time=9600),  # at 10 s
+                mido.Message("note_off", note=36, velocity=0, channel=9, time=10),
+            ]
+        )
+    )
     mid.save(tmp_path / "late.mid")
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     recorder = JackRecorder(env)
-    press = ("xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1.5; "
-             "xdotool search --name '^livedrummer$' key shift+x")  # fmt: skip
-    cmd = (f"{sys.executable} -m services -v display {tmp_path / 'late.mid'} --map general-midi "
-           f"--size 320x180 --aa 0 --seconds 3.5 --audio-device 'system, JACK' & {press}; wait")  # fmt: skip
-    run = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", cmd],
-                         cwd=REPO, capture_output=True, text=True, timeout=180, env=env)  # fmt: skip
+    press = (
+        "xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1.5; "
+        "xdotool search --name '^livedrummer$' key shift+x"
+    )
+    cmd = (
+        f"{sys.executable} -m services -v display {tmp_path / 'late.mid'} --map general-midi "
+        f"--size 320x180 --aa 0 --seconds 3.5 --audio-device 'system, JACK' & {press}; wait"
+    )
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", cmd],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=180,
+        env=env,
+    )
     rec = recorder.stop()
     assert run.returncode == 0, run.stderr[-2000:]
     assert "no sound" not in run.stderr and "keys: note 38 velocity 120" in run.stderr

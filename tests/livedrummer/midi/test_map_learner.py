@@ -23,7 +23,10 @@ def test_a_hit_sending_several_notes_answers_one_prompt() -> None:
     assert learner.feed(hit(40), 10.600 + SAME_HIT_S / 2) is not None
     assert learner.feed(hit(40), 11.300) == "Snare rim (rim shot): note 40"
     assert {n: d.label for n, d in learner.notes().items()} == {
-        36: "Kick", 38: "Snare head", 40: "Snare rim (rim shot)"}  # fmt: skip
+        36: "Kick",
+        38: "Snare head",
+        40: "Snare rim (rim shot)",
+    }
 
 
 def test_without_times_every_new_note_answers_the_next_prompt() -> None:

@@ -33,8 +33,10 @@ TD = load_note_map("roland-td")
 
 def note(n: int, t: int = 0, ch: int = 9, vel: int = 100) -> list[mido.Message]:
     """A note-on and its note-off ten ticks later (``t``: delta before the note-on)."""
-    return [mido.Message("note_on", channel=ch, note=n, velocity=vel, time=t),
-            mido.Message("note_on", channel=ch, note=n, velocity=0, time=10)]  # fmt: skip
+    return [
+        mido.Message("note_on", channel=ch, note=n, velocity=vel, time=t),
+        mido.Message("note_on", channel=ch, note=n, velocity=0, time=10),
+    ]
 
 
 def save(path: Path, *tracks: list[mido.Message], midi_type: int = 1) -> Path:
@@ -74,8 +76,13 @@ def band_song(path: Path) -> Path:
 
 
 def cli(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "services", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=300)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "services", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=300,
+    )
 
 
 # ---- 1. the drum channel ----------------------------------------------------------------------
@@ -148,8 +155,10 @@ def test_channel_choice_rules() -> None:
 
 
 def test_file_with_no_drum_notes_says_so_and_writes_nothing(tmp_path: Path) -> None:
-    tempo_only = [mido.MetaMessage("set_tempo", tempo=500_000),
-                  mido.MetaMessage("end_of_track", time=480 * 40)]  # fmt: skip
+    tempo_only = [
+        mido.MetaMessage("set_tempo", tempo=500_000),
+        mido.MetaMessage("end_of_track", time=480 * 40),
+    ]
     path = save(tmp_path / "empty.mid", tempo_only)
     out = tmp_path / "empty.bvh"
     proc = cli("export", str(path), "-o", str(out))
@@ -164,8 +173,10 @@ def test_file_with_no_drum_notes_says_so_and_writes_nothing(tmp_path: Path) -> N
 
 
 def drum_file(tmp_path: Path, name: str = "d.mid") -> Path:
-    messages = [mido.MetaMessage("set_tempo", tempo=500_000),
-                mido.MetaMessage("time_signature", numerator=4, denominator=4)]  # fmt: skip
+    messages = [
+        mido.MetaMessage("set_tempo", tempo=500_000),
+        mido.MetaMessage("time_signature", numerator=4, denominator=4),
+    ]
     for i in range(16):
         messages += note((36, 42, 38, 42)[i % 4], 0 if i == 0 else 230)
     return save(tmp_path / name, messages)
@@ -184,8 +195,10 @@ def test_trailing_bytes_after_the_tracks_are_a_warning(tmp_path: Path) -> None:
     clean = drum_file(tmp_path)
     data = clean.read_bytes()
     (warning,) = same_reading(data + b"\n\n", clean)
-    assert warning == (f"byte {len(data)}: 2 stray bytes where a chunk header should start: "
-                       "the 2 bytes after the last declared track are ignored")  # fmt: skip
+    assert warning == (
+        f"byte {len(data)}: 2 stray bytes where a chunk header should start: "
+        "the 2 bytes after the last declared track are ignored"
+    )
     junk = bytes(range(256)) * 12
     (warning,) = same_reading(data + junk, clean)
     assert warning.startswith(f"byte {len(data)}: corrupt chunk id")
@@ -217,8 +230,10 @@ def test_two_byte_time_signature_is_read_past(tmp_path: Path) -> None:
     with pytest.raises(IndexError):  # mido itself refuses it
         mido.MidiFile(file=io.BytesIO(bad))
     (warning,) = same_reading(bad, clean)
-    assert warning == (f"track 1 (bytes 14-{len(bad)}): byte {at}: time signature meta event "
-                       "of 2 bytes (expected 4) read as text")  # fmt: skip
+    assert warning == (
+        f"track 1 (bytes 14-{len(bad)}): byte {at}: time signature meta event "
+        "of 2 bytes (expected 4) read as text"
+    )
 
 
 def _fix_track_length(data: bytes, change: int) -> bytes:
@@ -251,8 +266,9 @@ def test_running_status_after_sysex_is_read(tmp_path: Path) -> None:
     data += struct.pack(">I", len(body)) + bytes(body)
     reference = save(tmp_path / "clean.mid", clean, midi_type=0)
     warnings = same_reading(data, reference)
-    assert warnings == (f"track 1 (bytes 14-{len(data)}): byte 35: running status after a "
-                        "SysEx event (3 times)",)  # fmt: skip
+    assert warnings == (
+        f"track 1 (bytes 14-{len(data)}): byte 35: running status after a SysEx event (3 times)",
+    )
 
 
 def test_rmid_wrapper_is_unwrapped(tmp_path: Path) -> None:
@@ -272,8 +288,9 @@ def test_unreadable_track_is_still_one_line_naming_the_byte(tmp_path: Path) -> N
     data += struct.pack(">I", len(body)) + body
     with pytest.raises(MidiFileError) as err:
         read_midi_bytes(data, "bad.mid", GM)
-    assert str(err.value) == (f"bad.mid: track 1 (bytes 14-{len(data)}): byte 28: data byte "
-                              "0xC8 is not in range 0..127")  # fmt: skip
+    assert str(err.value) == (
+        f"bad.mid: track 1 (bytes 14-{len(data)}): byte 28: data byte 0xC8 is not in range 0..127"
+    )
 
 
 def test_inspect_json_counts_every_warning(tmp_path: Path) -> None:
@@ -300,8 +317,14 @@ def test_check_folder_reads_every_extension_and_goes_on_past_a_broken_file(
     for name in ("a.mid", "B.MID", "c.midi", "sub/d.kar"):
         save(folder / name, short)
     smf = (folder / "a.mid").read_bytes()
-    (folder / "e.RMI").write_bytes(b"RIFF" + struct.pack("<I", 12 + len(smf)) + b"RMID"
-                                   + b"data" + struct.pack("<I", len(smf)) + smf)  # fmt: skip
+    (folder / "e.RMI").write_bytes(
+        b"RIFF"
+        + struct.pack("<I", 12 + len(smf))
+        + b"RMID"
+        + b"data"
+        + struct.pack("<I", len(smf))
+        + smf
+    )
     (folder / "broken.mid").write_bytes(smf[:30])
     (folder / "notes.txt").write_text("not MIDI")
     proc = cli("check", str(folder), "--json", "--summary", "--fps", "60")
@@ -321,8 +344,7 @@ def test_every_file_command_prints_the_unknown_notes_line(tmp_path: Path) -> Non
     # note 0: no bundled map names it (the drum plugins' maps name nearly every other note)
     messages = [m for i in range(4) for m in note((36, 0)[i % 2], 0 if i == 0 else 470)]
     path = save(tmp_path / "odd.mid", messages)
-    line = (f"livedrummer: {path}: unknown notes: note 0 x2 (not in map general-midi; "
-            "not played)")  # fmt: skip
+    line = f"livedrummer: {path}: unknown notes: note 0 x2 (not in map general-midi; not played)"
     out = tmp_path / "odd.bvh"
     for args in (["sticking", str(path)], ["export", str(path), "-o", str(out), "--fps", "10"]):
         proc = cli(*args)
@@ -453,13 +475,20 @@ def test_a_chart_plays_its_expert_drums_with_tom_markers(tmp_path: Path) -> None
     assert perf.map_name == "rock-band-chart"
     by_piece: dict[str, dict[str, int]] = perf.summary()["by_piece"]
     counts = {k: sum(v.values()) for k, v in by_piece.items()}
-    assert counts == {"kick": gems[96], "snare": gems[97], "hihat": gems[98] - toms,
-                      "tom1": toms, "crash1": gems[100]}  # fmt: skip
+    assert counts == {
+        "kick": gems[96],
+        "snare": gems[97],
+        "hihat": gems[98] - toms,
+        "tom1": toms,
+        "crash1": gems[100],
+    }
     assert toms == 4
     assert perf.stats.unknown_notes == Counter()
     assert sum(perf.stats.ignored_notes.values()) == 24  # Hard gems and animation notes
-    assert perf.notices == ("rhythm-game chart: track 'PART DRUMS' read, Expert gems played, "
-                            "1 tom markers applied; 12 notes on its other tracks ignored",)  # fmt: skip
+    assert perf.notices == (
+        "rhythm-game chart: track 'PART DRUMS' read, Expert gems played, "
+        "1 tom markers applied; 12 notes on its other tracks ignored",
+    )
 
 
 # ---- 4. the percussion extension --------------------------------------------------------------
@@ -481,8 +510,10 @@ def test_percussion_extension_plays_gm_percussion_notes(tmp_path: Path) -> None:
     assert all(plain.limb[i] == NOT_PLAYED for i in percussion)
     assert all(extended.limb[i] != NOT_PLAYED for i in range(len(notes)))
     kit = load_kit("rock5-left+percussion")  # mirrored with its kit
-    assert kit.piece("cowbell").position_m[0] == -load_kit("rock5+percussion").piece(
-        "cowbell").position_m[0]  # fmt: skip
+    assert (
+        kit.piece("cowbell").position_m[0]
+        == -load_kit("rock5+percussion").piece("cowbell").position_m[0]
+    )
     proc = cli("check", str(path), "--kit", "rock5+percussion", "--json", "--summary")
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
@@ -511,13 +542,17 @@ def test_the_not_played_count_names_the_kit_that_plays_the_percussion(tmp_path: 
     from livedrummer.kit.loader import kit_that_plays, load_kit
 
     notes = [36, 54, 38, 56, 36, 76, 38, 56]  # kick, tambourine, snare, cowbell, conga, cowbell
-    path = save(tmp_path / "perc.mid", [m for i, n in enumerate(notes)
-                                        for m in note(n, 0 if i == 0 else 230)])  # fmt: skip
+    path = save(
+        tmp_path / "perc.mid",
+        [m for i, n in enumerate(notes) for m in note(n, 0 if i == 0 else 230)],
+    )
     proc = cli("check", str(path), "--fps", "30")
     assert proc.returncode == 0, proc.stderr
     (line,) = [ln for ln in proc.stdout.splitlines() if "not played" in ln]
-    assert line.endswith("(not played: 4; cowbell x2, tambourine x1, percussion x1 have no piece "
-                         "on rock5: --kit rock5+percussion plays them)")  # fmt: skip
+    assert line.endswith(
+        "(not played: 4; cowbell x2, tambourine x1, percussion x1 have no piece "
+        "on rock5: --kit rock5+percussion plays them)"
+    )
     out = json.loads(cli("check", str(path), "--fps", "30", "--json", "--summary").stdout)
     assert out["no_piece"] == {"cowbell": 2, "tambourine": 1, "percussion": 1}
     assert out["kit_that_plays_them"] == "rock5+percussion"

@@ -33,17 +33,22 @@ def meta(kind: str, t: int = 0, **kw: int) -> mido.MetaMessage:
 def test_tempo_changes_become_seconds(write_midi: MidiWriter) -> None:
     # 120 bpm for one beat (0.5 s), then 60 bpm: the next beat lasts 1 s.
     path = write_midi(
-        [meta("set_tempo", tempo=500_000), on(38), on(38, t=480),
-         meta("set_tempo", tempo=1_000_000), on(38, t=480), on(38, t=240)]
-    )  # fmt: skip
+        [
+            meta("set_tempo", tempo=500_000),
+            on(38),
+            on(38, t=480),
+            meta("set_tempo", tempo=1_000_000),
+            on(38, t=480),
+            on(38, t=240),
+        ]
+    )
     perf = read_midi_file(path, GM)
     assert perf.onsets["time_s"].tolist() == pytest.approx([0.0, 0.5, 1.5, 2.0])
     assert [round(b) for _, b in perf.tempo.bpm_changes()] == [120, 60]
 
 
 def test_tracks_merge_in_time_order(write_midi: MidiWriter) -> None:
-    path = write_midi([meta("set_tempo", tempo=500_000)], [on(36), on(36, t=960)],
-                      [on(42, t=480)])  # fmt: skip
+    path = write_midi([meta("set_tempo", tempo=500_000)], [on(36), on(36, t=960)], [on(42, t=480)])
     perf = read_midi_file(path, GM)
     assert perf.onsets["note"].tolist() == [36, 42, 36]
     assert perf.onsets["time_s"].tolist() == pytest.approx([0.0, 0.5, 1.0])
@@ -52,9 +57,13 @@ def test_tracks_merge_in_time_order(write_midi: MidiWriter) -> None:
 def test_grid_follows_time_signatures(write_midi: MidiWriter) -> None:
     # Two bars of 4/4, then 6/8 (eighth-note beats, six per bar).
     path = write_midi(
-        [meta("time_signature", numerator=4, denominator=4), on(36),
-         meta("time_signature", t=8 * 480, numerator=6, denominator=8), on(36, t=6 * 240)]
-    )  # fmt: skip
+        [
+            meta("time_signature", numerator=4, denominator=4),
+            on(36),
+            meta("time_signature", t=8 * 480, numerator=6, denominator=8),
+            on(36, t=6 * 240),
+        ]
+    )
     grid = read_midi_file(path, GM).grid
     assert grid.beat_in_bar[:8].tolist() == [0, 1, 2, 3, 0, 1, 2, 3]
     assert grid.bar[:8].tolist() == [0, 0, 0, 0, 1, 1, 1, 1]

@@ -15,10 +15,20 @@ MAPS = Path(__file__).resolve().parents[3] / "kits" / "maps"
 
 def test_bundled_maps() -> None:
     assert note_map_names() == [
-        "addictive2", "alesis-nitro", "alesis-surge", "ezdrummer2", "ezdrummer3", "general-midi",
-        "mt-powerdrumkit", "rock-band-chart", "roland-td", "ssd5", "superior3", "yamaha-dtx",
+        "addictive2",
+        "alesis-nitro",
+        "alesis-surge",
+        "ezdrummer2",
+        "ezdrummer3",
+        "general-midi",
+        "mt-powerdrumkit",
+        "rock-band-chart",
+        "roland-td",
+        "ssd5",
+        "superior3",
+        "yamaha-dtx",
         "yamaha-dtx502",
-    ]  # fmt: skip
+    ]
 
 
 def test_general_midi_covers_every_percussion_note() -> None:
@@ -55,12 +65,20 @@ def test_roland_td_map_matches_the_td11_layout_with_tom4_and_aux() -> None:
 
 def test_dtx502_map_follows_the_reference_manual_table() -> None:
     dtx = load_note_map("yamaha-dtx502")
-    assert {n: (s.instrument, s.zone.value) for n, s in dtx.notes.items() if n in
-            (36, 38, 59, 49, 78, 85, 83, 35)} == {
-        36: ("kick", "head"), 38: ("snare", "head"), 59: ("crash1", "bow"),
-        49: ("crash1", "edge"), 78: ("hihat", "edge"), 85: ("hihat", "bell"),
-        83: ("hihat", "pedal"), 35: ("kick", "head"),
-    }  # fmt: skip
+    assert {
+        n: (s.instrument, s.zone.value)
+        for n, s in dtx.notes.items()
+        if n in (36, 38, 59, 49, 78, 85, 83, 35)
+    } == {
+        36: ("kick", "head"),
+        38: ("snare", "head"),
+        59: ("crash1", "bow"),
+        49: ("crash1", "edge"),
+        78: ("hihat", "edge"),
+        85: ("hihat", "bell"),
+        83: ("hihat", "pedal"),
+        35: ("kick", "head"),
+    }
     assert "DTX502 Reference Manual" in Path(dtx.source).read_text()  # the source is cited
 
 

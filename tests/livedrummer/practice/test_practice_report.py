@@ -40,12 +40,24 @@ def chromium() -> str:
 
 def browse(page: Path, tmp_path: Path, *extra: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [chromium(), "--headless", "--no-sandbox", "--disable-gpu",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync",
-         "--no-first-run", f"--user-data-dir={tmp_path / 'chromium'}", "--window-size=1100,2400",
-         *extra, page.as_uri()],
-        capture_output=True, text=True, timeout=90,
-    )  # fmt: skip
+        [
+            chromium(),
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--no-first-run",
+            f"--user-data-dir={tmp_path / 'chromium'}",
+            "--window-size=1100,2400",
+            *extra,
+            page.as_uri(),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=90,
+    )
 
 
 def run(*args: str, **env: str) -> subprocess.CompletedProcess[str]:
@@ -70,8 +82,20 @@ def test_take_and_history_reports_render_in_chromium(groove_dir: Path, tmp_path:
     plant_take(ref, take, seed=5)
     report = tmp_path / "take.html"
     home = str(tmp_path / "home")
-    proc = run("practice", "score", str(ref), str(take), "--map", "roland-td", "--take-map",
-               "roland-td", "--report", str(report), "--save", LIVEDRUMMER_HOME=home)  # fmt: skip
+    proc = run(
+        "practice",
+        "score",
+        str(ref),
+        str(take),
+        "--map",
+        "roland-td",
+        "--take-map",
+        "roland-td",
+        "--report",
+        str(report),
+        "--save",
+        LIVEDRUMMER_HOME=home,
+    )
     assert proc.returncode == 0, proc.stderr
     text = report.read_text(encoding="utf-8")
     # Self-contained: no link leaves the page (only the SVGs' own #id references).

@@ -19,8 +19,9 @@ def rows() -> np.ndarray:
 
 
 def test_a_shown_onset_round_trips_on_the_pose_stream() -> None:
-    msg = p.Message(p.Kind.SHOWN_ONSET, rows(), performer=3, seq=7, send_time_s=10.0,
-                    stream=p.Stream.POSES)  # fmt: skip
+    msg = p.Message(
+        p.Kind.SHOWN_ONSET, rows(), performer=3, seq=7, send_time_s=10.0, stream=p.Stream.POSES
+    )
     frames = p.encode(msg)
     assert frames[0][:6] == p.topic(p.Kind.SHOWN_ONSET) and p.PROTOCOL_VERSION == 2
     back = p.decode(frames)
@@ -50,8 +51,14 @@ def controls() -> np.ndarray:
 
 
 def test_a_shown_control_round_trips_and_its_rows_are_checked_as_controls_are() -> None:
-    msg = p.Message(p.Kind.SHOWN_CONTROL, controls(), performer=2, seq=8, send_time_s=10.0,
-                    stream=p.Stream.POSES)  # fmt: skip
+    msg = p.Message(
+        p.Kind.SHOWN_CONTROL,
+        controls(),
+        performer=2,
+        seq=8,
+        send_time_s=10.0,
+        stream=p.Stream.POSES,
+    )
     frames = p.encode(msg)
     assert frames[0][:6] == p.topic(p.Kind.SHOWN_CONTROL) and frames[0][5] == 9
     back = p.decode(frames)

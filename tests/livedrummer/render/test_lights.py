@@ -56,10 +56,13 @@ def kit_with(tmp_path: Path, lights: str) -> Path:
 
 
 def test_a_kit_file_sets_its_lights_and_a_typo_names_file_and_field(tmp_path: Path) -> None:
-    path = kit_with(tmp_path, '[lights]\nlook = "studio"\nexposure = 1.2\n'
-                    '[lights.rim]\ncolor = "#ff0000"\nintensity = 5.0\n'
-                    "[lights.wash]\nenabled = false\ndirection = [30.0, 70.0]\n"
-                    "[lights.fill]\ncolor = [0.5, 0.25, 1.0]\n")  # fmt: skip
+    path = kit_with(
+        tmp_path,
+        '[lights]\nlook = "studio"\nexposure = 1.2\n'
+        '[lights.rim]\ncolor = "#ff0000"\nintensity = 5.0\n'
+        "[lights.wash]\nenabled = false\ndirection = [30.0, 70.0]\n"
+        "[lights.fill]\ncolor = [0.5, 0.25, 1.0]\n",
+    )
     kit = load_kit_file(path)
     rig = resolve_lights(None, kit.lights)
     assert rig.name == "custom" and rig.exposure == 1.2
@@ -69,12 +72,14 @@ def test_a_kit_file_sets_its_lights_and_a_typo_names_file_and_field(tmp_path: Pa
     assert (rig.wash.azimuth_deg, rig.wash.elevation_deg) == (30.0, 70.0)
     assert rig.fill.color == (0.5, 0.25, 1.0)
     assert load_kit("rock5").lights is None
-    for text, match in (("[lights.key]\nintensty = 2.0\n", r"\[lights.key\] intensty"),
-                        ("[lights.key]\nintensity = 50.0\n", r"\[lights.key\] intensity.*outside"),
-                        ('[lights]\nlook = "disco"\n', r"\[lights\] look"),
-                        ("[lights.spot]\nintensity = 1.0\n", r"\[lights\] spot"),
-                        ("[lights.rim]\ncolor = [2.0, 0.0, 0.0]\n", r"\[lights.rim\] color"),
-                        ("[lights.key]\nenabled = 1\n", r"\[lights.key\] enabled")):  # fmt: skip
+    for text, match in (
+        ("[lights.key]\nintensty = 2.0\n", r"\[lights.key\] intensty"),
+        ("[lights.key]\nintensity = 50.0\n", r"\[lights.key\] intensity.*outside"),
+        ('[lights]\nlook = "disco"\n', r"\[lights\] look"),
+        ("[lights.spot]\nintensity = 1.0\n", r"\[lights\] spot"),
+        ("[lights.rim]\ncolor = [2.0, 0.0, 0.0]\n", r"\[lights.rim\] color"),
+        ("[lights.key]\nenabled = 1\n", r"\[lights.key\] enabled"),
+    ):
         with pytest.raises(KitError, match=match) as err:
             load_kit_file(kit_with(tmp_path, text))
         assert str(err.value).startswith(str(tmp_path / "lit.toml")) and "\n" not in str(err.value)
@@ -82,9 +87,22 @@ def test_a_kit_file_sets_its_lights_and_a_typo_names_file_and_field(tmp_path: Pa
 
 def test_a_bad_kit_lights_table_is_one_line_and_exit_status_2(tmp_path: Path) -> None:
     path = kit_with(tmp_path, "[lights.key]\nelevation = 120.0\n")
-    proc = subprocess.run([sys.executable, "-m", "services", "render", "--kit", str(path),
-                           "--frames-dir", str(tmp_path / "frames")],
-                          cwd=REPO, capture_output=True, text=True, timeout=120)  # fmt: skip
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "render",
+            "--kit",
+            str(path),
+            "--frames-dir",
+            str(tmp_path / "frames"),
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "[lights.key] elevation" in lines[0] and str(path) in lines[0]
@@ -92,18 +110,27 @@ def test_a_bad_kit_lights_table_is_one_line_and_exit_status_2(tmp_path: Path) ->
 
 def test_stage_and_preset_files_set_lights_and_the_command_line_wins(tmp_path: Path) -> None:
     stage_path = tmp_path / "stage.toml"
-    stage_path.write_text('[[performer]]\nid = "a"\nfile = "a.mid"\n\n'
-                          '[lights]\nlook = "neon"\n[lights.key]\nintensity = 1.5\n')  # fmt: skip
+    stage_path.write_text(
+        '[[performer]]\nid = "a"\nfile = "a.mid"\n\n'
+        '[lights]\nlook = "neon"\n[lights.key]\nintensity = 1.5\n'
+    )
     stage = load_stage(stage_path)
     preset_path = tmp_path / "lit-preset.toml"
-    preset_path.write_text((REPO / "kits/presets/relaxed.toml").read_text()
-                           + '\n[lights]\nlook = "daylight"\n[lights.rim]\nintensity = 0.5\n'
-                           '[lights.fill]\nintensity = 0.7\n')  # fmt: skip
+    preset_path.write_text(
+        (REPO / "kits/presets/relaxed.toml").read_text()
+        + '\n[lights]\nlook = "daylight"\n[lights.rim]\nintensity = 0.5\n'
+        "[lights.fill]\nintensity = 0.7\n"
+    )
     load_expression(str(preset_path))  # a preset with lights still plays
     preset = preset_lights(str(preset_path))
-    kit = load_kit_file(kit_with(tmp_path, '[lights]\nlook = "studio"\n'
-                                 "[lights.wash]\nintensity = 2.5\n"
-                                 "[lights.rim]\nintensity = 4.0\n"))  # fmt: skip
+    kit = load_kit_file(
+        kit_with(
+            tmp_path,
+            '[lights]\nlook = "studio"\n'
+            "[lights.wash]\nintensity = 2.5\n"
+            "[lights.rim]\nintensity = 4.0\n",
+        )
+    )
     assert preset_lights("relaxed") is None
     # default < kit < preset < stage < --look
     assert resolve_lights(None) == look_rig(DEFAULT_LOOK)
@@ -137,8 +164,9 @@ def test_a_light_switched_off_adds_nothing_and_keeps_its_settings() -> None:
 
 def test_a_fade_mixes_two_rigs_the_short_way_round() -> None:
     a = with_light_param(LOOKS["concert"], "key", "azimuth", 170.0)
-    b = with_light_param(with_light_param(LOOKS["neon"], "key", "azimuth", -170.0),
-                         "rim", "enabled", 0)  # fmt: skip
+    b = with_light_param(
+        with_light_param(LOOKS["neon"], "key", "azimuth", -170.0), "rim", "enabled", 0
+    )
     assert blend_rigs(a, b, 0.0) == a and blend_rigs(a, b, 1.0) == b
     mid = blend_rigs(a, b, 0.5)
     assert mid.key.azimuth_deg == pytest.approx(180.0)  # across the back, not the front
@@ -170,11 +198,14 @@ def test_osc_look_and_light_commands_become_checked_cues() -> None:
         ("/livedrummer/light/key/intensity", (4.0,), lambda r: r.key.intensity == 4.0),
         ("/livedrummer/light/fill/color", (1.0, 0.5, 0), lambda r: r.fill.color == (1, 0.5, 0)),
         ("/livedrummer/light/rim/color", ("#00ff00",), lambda r: r.rim.color == (0, 1, 0)),
-        ("/livedrummer/light/wash/direction", (90, 45.0),
-         lambda r: (r.wash.azimuth_deg, r.wash.elevation_deg) == (90, 45)),
+        (
+            "/livedrummer/light/wash/direction",
+            (90, 45.0),
+            lambda r: (r.wash.azimuth_deg, r.wash.elevation_deg) == (90, 45),
+        ),
         ("/livedrummer/light/key/enabled", (False,), lambda r: not r.key.enabled),
         ("/livedrummer/light/key/g", (0.25, 3.0), lambda r: r.key.color[1] == 0.25),
-    ):  # fmt: skip
+    ):
         cue = light_cue(address, args, rig)
         assert cue.lights is not None and check(cue.lights.apply(rig)), address
     assert light_cue("/livedrummer/light/key/g", (0.25, 3.0), rig).fade_s == 3.0
@@ -190,18 +221,27 @@ def test_osc_look_and_light_commands_become_checked_cues() -> None:
         ("/livedrummer/light/key/color", (1.0, 0.0), "3 values"),
         ("/livedrummer/light/key/direction", (1.0, float("nan")), "not a number"),
         ("/livedrummer/light/key/enabled", (3,), "0 or 1"),
-    ):  # fmt: skip
+    ):
         with pytest.raises(ValueError, match=match):
             light_cue(address, args, rig)
 
 
 def test_cues_set_a_look_and_light_parameters_with_a_fade() -> None:
-    cues = parse_cues({"cue": [
-        {"name": "verse", "bar": 3, "look": "neon", "fade_s": 2.0},
-        {"name": "solo", "bar": 5, "camera": "front",
-         "lights": {"key": {"intensity": 6.0}, "rim": {"enabled": False}}},
-        {"name": "sunrise", "lights": {"look": "daylight"}, "fade_s": 4.0},
-    ]}, "show.toml")  # fmt: skip
+    cues = parse_cues(
+        {
+            "cue": [
+                {"name": "verse", "bar": 3, "look": "neon", "fade_s": 2.0},
+                {
+                    "name": "solo",
+                    "bar": 5,
+                    "camera": "front",
+                    "lights": {"key": {"intensity": 6.0}, "rim": {"enabled": False}},
+                },
+                {"name": "sunrise", "lights": {"look": "daylight"}, "fade_s": 4.0},
+            ]
+        },
+        "show.toml",
+    )
     assert cues["verse"].lights == LightSpec("neon") and cues["verse"].stages
     stage = Stage(KIT, "stage")
     fire_stage(stage, cues["verse"], 1.0)
@@ -209,22 +249,27 @@ def test_cues_set_a_look_and_light_parameters_with_a_fade() -> None:
     fire_stage(stage, cues["solo"], 3.0)  # over the lights in force: neon's
     lit = stage.lights_at(3.0)
     assert lit.key.intensity == 6.0 and not lit.rim.enabled and lit.fill == LOOKS["neon"].fill
-    for cue, match in (({"name": "x", "fade_s": 1.0}, "fade_s: fades a light change"),
-                       ({"name": "x", "look": "disco"}, "look"),
-                       ({"name": "x", "look": "neon", "lights": {"look": "studio"}},
-                        "given twice"),
-                       ({"name": "x", "lights": {"key": {"intensty": 1.0}}},
-                        r"\[cue 'x'.lights.key\] intensty")):  # fmt: skip
+    for cue, match in (
+        ({"name": "x", "fade_s": 1.0}, "fade_s: fades a light change"),
+        ({"name": "x", "look": "disco"}, "look"),
+        ({"name": "x", "look": "neon", "lights": {"look": "studio"}}, "given twice"),
+        ({"name": "x", "lights": {"key": {"intensty": 1.0}}}, r"\[cue 'x'.lights.key\] intensty"),
+    ):
         with pytest.raises(CueError, match=match) as err:
             parse_cues({"cue": [cue]}, "show.toml")
         assert "show.toml" in str(err.value)
 
 
 def test_a_bar_cues_lights_reach_the_display_from_its_own_cue_list() -> None:
-    cues = parse_cues({"cue": [
-        {"name": "dim", "bar": 3, "lights": {"wash": {"intensity": 0.0}}, "fade_s": 0.5},
-        {"name": "cut", "bar": 4, "camera": "front", "cut": True},
-    ]}, "t")  # fmt: skip
+    cues = parse_cues(
+        {
+            "cue": [
+                {"name": "dim", "bar": 3, "lights": {"wash": {"intensity": 0.0}}, "fade_s": 0.5},
+                {"name": "cut", "bar": 4, "camera": "front", "cut": True},
+            ]
+        },
+        "t",
+    )
     rows = stage_cue_rows([(1.0, 3, cues["dim"]), (2.0, 4, cues["cut"])])
     assert rows.size == 2, "a lights-only bar cue still tells the displays its bar"
     assert with_lights_of(stage_cue_of(rows[0]), cues).lights == cues["dim"].lights
@@ -283,11 +328,30 @@ def test_display_live_starts_from_the_kit_lights_under_look(gl_ok: None, tmp_pat
     def first_frame(name: str, *extra: str) -> np.ndarray:
         out = tmp_path / name
         proc = subprocess.run(
-            [sys.executable, "-m", "services", "display", "--live", "--headless", "--sub",
-             "tcp://127.0.0.1:1", "--max-frames", "2", "--fps", "10", "--size", "160x90",
-             "--frames-dir", str(out), *extra],
-            cwd=REPO, capture_output=True, text=True, timeout=120,
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "services",
+                "display",
+                "--live",
+                "--headless",
+                "--sub",
+                "tcp://127.0.0.1:1",
+                "--max-frames",
+                "2",
+                "--fps",
+                "10",
+                "--size",
+                "160x90",
+                "--frames-dir",
+                str(out),
+                *extra,
+            ],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert proc.returncode == 0, proc.stderr
         return read_png(out / "frame_000001.png").astype(int)
 
@@ -298,26 +362,48 @@ def test_display_live_starts_from_the_kit_lights_under_look(gl_ok: None, tmp_pat
     assert np.abs(over - kit).mean() > 3.0, "--look wins over the kit's [lights]"
 
 
-def test_render_fires_light_cues_with_their_fades(gl_ok: None, tmp_path: Path,
-                                                  write_midi: MidiWriter) -> None:  # fmt: skip
+def test_render_fires_light_cues_with_their_fades(
+    gl_ok: None, tmp_path: Path, write_midi: MidiWriter
+) -> None:
     from tests.services.show.test_live_osc import read_png
 
     msgs = []
     for k in range(8):  # a snare each half second
-        msgs.append(mido.Message("note_on", channel=9, note=38, velocity=90, time=0 if k == 0
-                                 else 480))  # fmt: skip
+        msgs.append(
+            mido.Message("note_on", channel=9, note=38, velocity=90, time=0 if k == 0 else 480)
+        )
         msgs.append(mido.Message("note_off", channel=9, note=38, velocity=0, time=0))
     midi = write_midi(msgs)
     cues = tmp_path / "cues.toml"
     off = "\n".join(f"[cue.lights.{n}]\nenabled = false" for n in ("key", "fill", "rim", "wash"))
-    cues.write_text(f'[[cue]]\nname = "dark"\nat_s = 0.5\n{off}\n\n'
-                    '[[cue]]\nname = "up"\nat_s = 1.0\nlook = "studio"\nfade_s = 1.0\n')  # fmt: skip
+    cues.write_text(
+        f'[[cue]]\nname = "dark"\nat_s = 0.5\n{off}\n\n'
+        '[[cue]]\nname = "up"\nat_s = 1.0\nlook = "studio"\nfade_s = 1.0\n'
+    )
     out = tmp_path / "frames"
     run = subprocess.run(
-        [sys.executable, "-m", "services", "render", str(midi), "--frames-dir", str(out),
-         "--size", "160x90", "--fps", "10", "--tail", "0.5", "--cues", str(cues)],
-        capture_output=True, text=True, cwd=REPO, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "render",
+            str(midi),
+            "--frames-dir",
+            str(out),
+            "--size",
+            "160x90",
+            "--fps",
+            "10",
+            "--tail",
+            "0.5",
+            "--cues",
+            str(cues),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     mean = {i: read_png(out / f"frame_{i:06d}.png").astype(float).mean() for i in (4, 7, 15, 22)}
     assert mean[7] < 0.5 * mean[4], "the lights are off from 0.5 s"
@@ -333,11 +419,33 @@ def test_the_file_window_is_lit_by_look_and_by_the_kit(tmp_path: Path) -> None:
     def shot(name: str, *extra: str) -> np.ndarray:
         png = tmp_path / f"{name}.png"
         run = subprocess.run(
-            ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", sys.executable, "-m", "services",
-             "display", "--size", "320x180", "--aa", "0", "--camera", "front", "--seconds",
-             "0.5", "--no-sound", "--screenshot", str(png), *extra],
-            cwd=REPO, capture_output=True, text=True, timeout=120,
-        )  # fmt: skip
+            [
+                "xvfb-run",
+                "-a",
+                "-s",
+                "-screen 0 640x360x24",
+                sys.executable,
+                "-m",
+                "services",
+                "display",
+                "--size",
+                "320x180",
+                "--aa",
+                "0",
+                "--camera",
+                "front",
+                "--seconds",
+                "0.5",
+                "--no-sound",
+                "--screenshot",
+                str(png),
+                *extra,
+            ],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert run.returncode == 0, run.stderr
         return read_png(png).astype(float)
 

@@ -69,8 +69,9 @@ def test_pan_keeps_the_point_under_the_cursor() -> None:
     shift = np.asarray(moved.eye) - np.asarray(FRONT.eye)
     np.testing.assert_allclose(np.asarray(moved.target) - np.asarray(FRONT.target), shift)
     # the old target, at the centre before, is now where the cursor went: 40 right, 25 up
-    np.testing.assert_allclose(pixel(moved, np.asarray(FRONT.target)),
-                               [W / 2 + 40.0, H / 2 - 25.0], atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(
+        pixel(moved, np.asarray(FRONT.target)), [W / 2 + 40.0, H / 2 - 25.0], atol=1e-6
+    )
 
 
 def test_viewpoints_round_trip_and_bad_files_are_named(tmp_path: Path) -> None:
@@ -88,11 +89,19 @@ def test_viewpoints_round_trip_and_bad_files_are_named(tmp_path: Path) -> None:
         ("{", "not JSON"),
         (json.dumps({"version": 2, "viewpoints": {}}), "version"),
         (json.dumps({"version": 1, "viewpoints": {"9": data["viewpoints"]["3"]}}), "viewpoints.9"),
-        (json.dumps({"version": 1, "viewpoints": {"3": {**data["viewpoints"]["3"],
-                                                         "eye": [0, "x", 1]}}}), "3.eye"),
-        (json.dumps({"version": 1, "viewpoints": {"3": {**data["viewpoints"]["3"],
-                                                         "fov_deg": 400}}}), "fov_deg"),
-    ):  # fmt: skip
+        (
+            json.dumps(
+                {"version": 1, "viewpoints": {"3": {**data["viewpoints"]["3"], "eye": [0, "x", 1]}}}
+            ),
+            "3.eye",
+        ),
+        (
+            json.dumps(
+                {"version": 1, "viewpoints": {"3": {**data["viewpoints"]["3"], "fov_deg": 400}}}
+            ),
+            "fov_deg",
+        ),
+    ):
         path.write_text(bad)
         with pytest.raises(ViewpointError, match=field) as err:
             Viewpoints.load(path)
@@ -102,13 +111,21 @@ def test_viewpoints_round_trip_and_bad_files_are_named(tmp_path: Path) -> None:
 
 
 def _window(home: Path, shot: Path, xdo: str, seconds: float = 5.0) -> None:
-    script = (f"{sys.executable} -m services display --size {W}x{H} --aa 0 --camera front "
-              f"--seconds {seconds} --screenshot {shot} & sleep 2; "
-              f"W=$(xdotool search --sync --name '^livedrummer$' | head -1); {xdo}; wait")  # fmt: skip
+    script = (
+        f"{sys.executable} -m services display --size {W}x{H} --aa 0 --camera front "
+        f"--seconds {seconds} --screenshot {shot} & sleep 2; "
+        f"W=$(xdotool search --sync --name '^livedrummer$' | head -1); {xdo}; wait"
+    )
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     env["LIVEDRUMMER_HOME"] = str(home)
-    run = subprocess.run(["xvfb-run", "-a", "-s", f"-screen 0 {W}x{H}x24", "sh", "-c", script],
-                         cwd=REPO, capture_output=True, text=True, timeout=180, env=env)  # fmt: skip
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", f"-screen 0 {W}x{H}x24", "sh", "-c", script],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=180,
+        env=env,
+    )
     assert run.returncode == 0 and shot.exists(), run.stderr[-2000:]
 
 
@@ -130,7 +147,7 @@ def test_a_dragged_view_is_stored_and_recalled_in_a_real_window(tmp_path: Path) 
         "xdotool mousemove --window $W 390 225 mousemove --window $W 400 225 mousedown 1 "
         "mousemove --window $W 480 225 mousemove --window $W 560 205 mouseup 1 click 4 click 4; "
         "sleep 0.5; xdotool key --window $W shift+3"
-    )  # fmt: skip
+    )
     _window(home, tmp_path / "dragged.png", drag)
     stored = Viewpoints.load(home / "viewpoints.json").recall(3)
     assert stored is not None
@@ -142,6 +159,7 @@ def test_a_dragged_view_is_stored_and_recalled_in_a_real_window(tmp_path: Path) 
     # a new run recalls it with 3: the picture is the stored view, not the front camera's
     _window(home, tmp_path / "recalled.png", "xdotool key --window $W 3")
     _window(home, tmp_path / "front.png", ":", seconds=3.0)
-    dragged, recalled, front = (_grey(tmp_path / f"{n}.png") for n in ("dragged", "recalled",
-                                                                        "front"))  # fmt: skip
+    dragged, recalled, front = (
+        _grey(tmp_path / f"{n}.png") for n in ("dragged", "recalled", "front")
+    )
     assert np.abs(recalled - dragged).mean() < 0.5 * np.abs(recalled - front).mean()

@@ -39,8 +39,13 @@ def kit():  # type: ignore[no-untyped-def]
 
 def test_skeleton_rejects_a_parent_after_its_child() -> None:
     with pytest.raises(SceneError, match="parent"):
-        Skeleton(("a", "b"), np.array([1, -1], np.int32), np.ones(2, np.float32),
-                 np.ones(2, np.float32), np.zeros(2, np.uint8))  # fmt: skip
+        Skeleton(
+            ("a", "b"),
+            np.array([1, -1], np.int32),
+            np.ones(2, np.float32),
+            np.ones(2, np.float32),
+            np.zeros(2, np.uint8),
+        )
     with pytest.raises(SceneError, match="not a joint"):
         Skeleton.build([("a", None, 0.1, 0.1, Tone.SKIN), ("b", "zz", 0.1, 0.1, Tone.SKIN)])
 

@@ -77,12 +77,20 @@ def test_step_size_cycles_and_the_readout_shows_loop_and_step() -> None:
 def test_a_and_b_loop_the_real_window(tmp_path: Path) -> None:
     log = tmp_path / "frames.jsonl"
     win = "xdotool search --sync --name '^livedrummer$'"
-    script = (f"{sys.executable} -m services display --size 320x180 --aa 0 --no-sound "
-              f"--seconds 9 --frame-log {log} & sleep 3; {win} key a; sleep 1.5; {win} key b; "
-              "wait")  # fmt: skip
+    script = (
+        f"{sys.executable} -m services display --size 320x180 --aa 0 --no-sound "
+        f"--seconds 9 --frame-log {log} & sleep 3; {win} key a; sleep 1.5; {win} key b; "
+        "wait"
+    )
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    run = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 640x360x24", "sh", "-c", script],
-                         cwd=REPO, capture_output=True, text=True, timeout=180, env=env)  # fmt: skip
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", "sh", "-c", script],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=180,
+        env=env,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     shown = [json.loads(line)["t"] for line in log.read_text().splitlines()]
     back = [i for i in range(1, len(shown)) if shown[i] < shown[i - 1] - 0.2]

@@ -114,8 +114,9 @@ def test_check_stage_plays_each_channel_on_its_own_kit(tmp_path: Path, capsys) -
         f'kit = "{kit}"\n\n'
         for ch, kit in zip(counts, kits, strict=True)
     )
-    (tmp_path / "stage.toml").write_text('[formation]\nshape = "arc"\nfacing = "center"\n\n'
-                                         + performers)  # fmt: skip
+    (tmp_path / "stage.toml").write_text(
+        '[formation]\nshape = "arc"\nfacing = "center"\n\n' + performers
+    )
     assert main(["check", "--stage", str(tmp_path / "stage.toml"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     drummers = out["drummers"]
@@ -185,12 +186,33 @@ def test_render_stage_draws_every_drummer_in_its_place(tmp_path: Path) -> None:
     chans = list(counts)[:2]
     (tmp_path / "duo.toml").write_text(
         '[formation]\nshape = "line"\nspacing = 4.0\n\n'
-        + "".join(f'[[performer]]\nid = "d{c}"\nfile = "band.mid"\nchannel = {c}\n'
-                  f'map = "general-midi"\n\n' for c in chans)
-    )  # fmt: skip
+        + "".join(
+            f'[[performer]]\nid = "d{c}"\nfile = "band.mid"\nchannel = {c}\n'
+            f'map = "general-midi"\n\n'
+            for c in chans
+        )
+    )
     frames = tmp_path / "frames"
-    assert main(["render", "--stage", str(tmp_path / "duo.toml"), "--frames-dir", str(frames),
-                 "--size", "320x180", "--fps", "4", "--tail", "0", "--camera", "front"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "render",
+                "--stage",
+                str(tmp_path / "duo.toml"),
+                "--frames-dir",
+                str(frames),
+                "--size",
+                "320x180",
+                "--fps",
+                "4",
+                "--tail",
+                "0",
+                "--camera",
+                "front",
+            ]
+        )
+        == 0
+    )
     pngs = sorted(frames.glob("*.png"))
     assert len(pngs) >= 4
     with av.open(str(pngs[2])) as c:
@@ -202,8 +224,24 @@ def test_render_stage_draws_every_drummer_in_its_place(tmp_path: Path) -> None:
     assert left > 150 and right > 150, (left, right)  # one drummer on each side
     assert not lit[:, 150:170].any(axis=0).all()  # with a gap between them
     out = tmp_path / "duo.mp4"
-    assert main(["render", "--stage", str(tmp_path / "duo.toml"), "-o", str(out), "--size",
-                 "160x90", "--fps", "5", "--tail", "0"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "render",
+                "--stage",
+                str(tmp_path / "duo.toml"),
+                "-o",
+                str(out),
+                "--size",
+                "160x90",
+                "--fps",
+                "5",
+                "--tail",
+                "0",
+            ]
+        )
+        == 0
+    )
     with av.open(str(out)) as c:
         audio = np.concatenate([f.to_ndarray() for f in c.decode(audio=0)], axis=1)
     assert np.abs(audio).max() > 0.05  # both parts' drum track

@@ -139,15 +139,17 @@ def test_a_stage_floor_is_as_smooth_as_one_drummers(tmp_path: Path) -> None:
         painter = StagePainter(ctx, drummers, size, "stage")
         painter.draw([frame] * 3)
         stage = painter.read_rgba()
-        stage_depth = np.frombuffer(painter.target.read(components=1, attachment=-1, dtype="f4"),
-                                    np.float32).reshape(size[1], size[0])  # fmt: skip
+        stage_depth = np.frombuffer(
+            painter.target.read(components=1, attachment=-1, dtype="f4"), np.float32
+        ).reshape(size[1], size[0])
         stage_floor = _floor_mask(stage_depth, painter.camera.view_projection(size[0] / size[1]))
         one = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0)
         cam = pick_camera(kit, "stage")
         one.draw(frame, cam)
         single = one.read_rgba()
-        single_depth = np.frombuffer(one._fbo.read(components=1, attachment=-1, dtype="f4"),
-                                     np.float32).reshape(size[1], size[0])  # fmt: skip
+        single_depth = np.frombuffer(
+            one._fbo.read(components=1, attachment=-1, dtype="f4"), np.float32
+        ).reshape(size[1], size[0])
         single_floor = _floor_mask(single_depth, cam.view_projection(size[0] / size[1]))
     finally:
         ctx.release()
@@ -159,15 +161,51 @@ def test_a_stage_floor_is_as_smooth_as_one_drummers(tmp_path: Path) -> None:
 
 def test_render_stage_honours_end_and_tail(tmp_path: Path) -> None:
     stage = tmp_path / "trio.toml"
-    stage.write_text(f'[formation]\nshape = "line"\n\n[[performer]]\nid = "a"\nfile = "{GROOVE}"\n'
-                     'map = "roland-td"\n\n[ensemble]\ncopies = 2\n')  # fmt: skip
+    stage.write_text(
+        f'[formation]\nshape = "line"\n\n[[performer]]\nid = "a"\nfile = "{GROOVE}"\n'
+        'map = "roland-td"\n\n[ensemble]\ncopies = 2\n'
+    )
     frames = tmp_path / "frames"
-    assert main(["render", "--stage", str(stage), "--frames-dir", str(frames), "--size",
-                 "64x36", "--fps", "5", "--end", "2"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "render",
+                "--stage",
+                str(stage),
+                "--frames-dir",
+                str(frames),
+                "--size",
+                "64x36",
+                "--fps",
+                "5",
+                "--end",
+                "2",
+            ]
+        )
+        == 0
+    )
     assert len(list(frames.glob("*.png"))) == 10  # 2 s at 5 fps, not the whole 14 s
     late = tmp_path / "late"
-    assert main(["render", "--stage", str(stage), "--frames-dir", str(late), "--size",
-                 "64x36", "--fps", "5", "--start", "bar8", "--tail", "0.4"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "render",
+                "--stage",
+                str(stage),
+                "--frames-dir",
+                str(late),
+                "--size",
+                "64x36",
+                "--fps",
+                "5",
+                "--start",
+                "bar8",
+                "--tail",
+                "0.4",
+            ]
+        )
+        == 0
+    )
     from livedrummer.midi.notemap import load_note_map
     from livedrummer.midi.smf import read_midi_file
 
@@ -177,17 +215,37 @@ def test_render_stage_honours_end_and_tail(tmp_path: Path) -> None:
     # the same span as the single-drummer render of the same part with the same options
     for span, got in ((["--end", "2"], frames), (["--start", "bar8", "--tail", "0.4"], late)):
         single = tmp_path / f"single{len(span)}"
-        assert main(["render", str(GROOVE), "--map", "roland-td", "--frames-dir", str(single),
-                     "--size", "64x36", "--fps", "5", *span]) == 0  # fmt: skip
+        assert (
+            main(
+                [
+                    "render",
+                    str(GROOVE),
+                    "--map",
+                    "roland-td",
+                    "--frames-dir",
+                    str(single),
+                    "--size",
+                    "64x36",
+                    "--fps",
+                    "5",
+                    *span,
+                ]
+            )
+            == 0
+        )
         assert len(list(single.glob("*.png"))) == len(list(got.glob("*.png"))), span
 
 
 def test_a_formation_too_tight_for_its_kits_is_one_line(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
     stage = tmp_path / "tight.toml"
-    stage.write_text(f'[formation]\nshape = "line"\nspacing = 1.2\n\n[[performer]]\nid = "a"\n'
-                     f'file = "{GROOVE}"\n\n[ensemble]\ncopies = 3\n')  # fmt: skip
-    for command in (["render", "--stage", str(stage), "--frames-dir", str(tmp_path / "f")],
-                    ["check", "--stage", str(stage)]):  # fmt: skip
+    stage.write_text(
+        f'[formation]\nshape = "line"\nspacing = 1.2\n\n[[performer]]\nid = "a"\n'
+        f'file = "{GROOVE}"\n\n[ensemble]\ncopies = 3\n'
+    )
+    for command in (
+        ["render", "--stage", str(stage), "--frames-dir", str(tmp_path / "f")],
+        ["check", "--stage", str(stage)],
+    ):
         assert main(command) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1, err

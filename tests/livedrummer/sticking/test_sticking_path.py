@@ -41,8 +41,9 @@ def test_sheet_and_animation_agree_note_for_note_on_20_gmd_files(
 ) -> None:
     files = groove_files[:: len(groove_files) // 20][:20]
     assert len(files) == 20
-    checked = cli_json(capsys, "check", *map(str, files), "--map", "roland-td", "--json",
-                       "--fps", "10")  # fmt: skip
+    checked = cli_json(
+        capsys, "check", *map(str, files), "--map", "roland-td", "--json", "--fps", "10"
+    )
     assert [f["file"] for f in checked["per_file"]] == [str(p) for p in files]
     notes = [r for f in checked["per_file"] for r in f["notes"]]
     assert checked["too_fast"] == sum(r["too_fast"] for r in notes) > 0
@@ -62,8 +63,9 @@ def test_sheet_and_animation_agree_note_for_note_on_20_gmd_files(
     assert without_grid > 0
 
 
-def demo_score_with_one_hihat_note_moved(capsys: pytest.CaptureFixture[str], tmp_path: Path
-                                         ) -> tuple[Path, float]:  # fmt: skip
+def demo_score_with_one_hihat_note_moved(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> tuple[Path, float]:
     """The demo's text score with one right-hand hi-hat note given to the left hand."""
     assert main(["sticking", str(DEMO), "--map", "roland-td", "--format", "text"]) == 0
     lines = capsys.readouterr().out.splitlines()
@@ -102,16 +104,24 @@ def test_export_plays_the_limbs_of_an_edited_score(
 
 @pytest.mark.parametrize("command", ["render", "display", "check", "export"])
 def test_every_animating_command_takes_its_limbs_from_the_one_entry_point(
-    command: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+    command: str,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
     tmp_path: Path,
-) -> None:  # fmt: skip
+) -> None:
     seen: list[tuple[str, Path | None, int]] = []
 
     class StopError(LivedrummerError):
         pass
 
-    def spy(performance: Any, kit: Any, name: str = "optimal", *, score: Path | None = None,
-            lookahead_s: float | None = None) -> Sticking:  # fmt: skip
+    def spy(
+        performance: Any,
+        kit: Any,
+        name: str = "optimal",
+        *,
+        score: Path | None = None,
+        lookahead_s: float | None = None,
+    ) -> Sticking:
         seen.append((name, score, performance.grid.beat_s.size))
         raise StopError("stopped by the test")
 
@@ -175,8 +185,15 @@ def hihat_hands_per_chord(st: Sticking) -> list[int]:
 @pytest.mark.parametrize("lookahead_s", [None, 0.0, 0.03])
 def test_one_hand_on_the_hihat_per_instant(lookahead_s: float | None) -> None:
     kit = load_kit("rock5")
-    on = onsets((0.0, "hihat", 90), (0.004, "hihat", 110), (0.006, "snare"), (0.5, "hihat"),
-                (0.505, "hihat", 60), (1.0, "hihat"), (1.0, "crash1"))  # fmt: skip
+    on = onsets(
+        (0.0, "hihat", 90),
+        (0.004, "hihat", 110),
+        (0.006, "snare"),
+        (0.5, "hihat"),
+        (0.505, "hihat", 60),
+        (1.0, "hihat"),
+        (1.0, "crash1"),
+    )
     st = assign(on, kit) if lookahead_s is None else stick_online(on, kit, lookahead_s)
     assert max(hihat_hands_per_chord(st)) == 1
     # the louder hi-hat stays; live, a hand already committed keeps it (lookahead 0)

@@ -67,8 +67,9 @@ def test_optimal_keeps_the_alternation_smed_keeps(
         assert set(hands) == {RH, LH}
     optimal = fill_hands(assign(on, kit, "optimal", beat_s=beats).limb, on, start, n)
     assert optimal[0] == RH  # the lead hand on the beat, so on each grouping's first note
-    left = fill_hands(assign(on, load_kit("rock5-left"), "optimal", beat_s=beats).limb,
-                      on, start, n)  # fmt: skip
+    left = fill_hands(
+        assign(on, load_kit("rock5-left"), "optimal", beat_s=beats).limb, on, start, n
+    )
     assert left == [LH if h == RH else RH for h in optimal]  # measured from the kit: mirrored
     # live (30 ms lookahead) a note is committed before the next is heard, so the online form
     # does not pass onto the next drum (a pass is priced by the note that meets it) and plays

@@ -18,9 +18,19 @@ REPO = Path(__file__).resolve().parents[3]
 
 
 def _run(late: int, answered: str, rng: np.random.Generator) -> dict[str, object]:
-    stage = {k: rng.uniform(0.001, 0.05, 40) for k in ("loopback", "bus", "pose", "frame",
-                                                       "frame_onset", "after_onset",
-                                                       "after_bus", "in_daemon")}  # fmt: skip
+    stage = {
+        k: rng.uniform(0.001, 0.05, 40)
+        for k in (
+            "loopback",
+            "bus",
+            "pose",
+            "frame",
+            "frame_onset",
+            "after_onset",
+            "after_bus",
+            "in_daemon",
+        )
+    }
     return {
         **stage,
         "sent": 300,
@@ -75,15 +85,17 @@ def test_each_commit_goes_first_and_last_as_often(names: list[str]) -> None:
 
 
 def test_the_other_commit_is_checked_out_beside_and_removed() -> None:
-    head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True,
-                          text=True, check=True).stdout.strip()  # fmt: skip
+    head = subprocess.run(
+        ["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True, text=True, check=True
+    ).stdout.strip()
     with _compare.worktree(REPO, head) as path:
         assert (path / "livedrummer").is_dir()
         assert _compare.bench_argv(path)[-2:] == ["bench", "latency"]
         kept = path
     assert not kept.exists()
-    listed = subprocess.run(["git", "-C", str(REPO), "worktree", "list"], capture_output=True,
-                            text=True, check=True).stdout  # fmt: skip
+    listed = subprocess.run(
+        ["git", "-C", str(REPO), "worktree", "list"], capture_output=True, text=True, check=True
+    ).stdout
     assert str(kept) not in listed
     with pytest.raises(ConfigError, match="--compare no-such-rev"):
         with _compare.worktree(REPO, "no-such-rev"):

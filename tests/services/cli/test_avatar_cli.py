@@ -34,11 +34,22 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 @pytest.mark.parametrize("kit", ["rock5", "rock5-left"])
 @pytest.mark.parametrize("name", list(af.AVATARS))
-def test_check_keeps_the_sticks_on_the_drums(groove_dir: Path, files: dict[str, Path],
-                                             name: str, kit: str) -> None:  # fmt: skip
+def test_check_keeps_the_sticks_on_the_drums(
+    groove_dir: Path, files: dict[str, Path], name: str, kit: str
+) -> None:
     grooves = [str(groove_dir / g) for g in GROOVES]
-    proc = run("check", *grooves, "--map", "roland-td", "--kit", kit, "--avatar",
-               str(files[name]), "--json", "--summary")  # fmt: skip
+    proc = run(
+        "check",
+        *grooves,
+        "--map",
+        "roland-td",
+        "--kit",
+        kit,
+        "--avatar",
+        str(files[name]),
+        "--json",
+        "--summary",
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["avatar"] == str(files[name]) and out["files"] == 2
@@ -47,13 +58,24 @@ def test_check_keeps_the_sticks_on_the_drums(groove_dir: Path, files: dict[str, 
     assert out["penetration_mm"] <= 2.0
 
 
-def test_bvh_export_has_the_avatars_proportions(groove_dir: Path, files: dict[str, Path],
-                                                tmp_path: Path) -> None:  # fmt: skip
+def test_bvh_export_has_the_avatars_proportions(
+    groove_dir: Path, files: dict[str, Path], tmp_path: Path
+) -> None:
     out = {}
     for name in ("short.glb", "tall.glb"):
         bvh = tmp_path / f"{name}.bvh"
-        proc = run("export", str(groove_dir / GROOVES[0]), "--map", "roland-td", "-o", str(bvh),
-                   "--fps", "10", "--avatar", str(files[name]))  # fmt: skip
+        proc = run(
+            "export",
+            str(groove_dir / GROOVES[0]),
+            "--map",
+            "roland-td",
+            "-o",
+            str(bvh),
+            "--fps",
+            "10",
+            "--avatar",
+            str(files[name]),
+        )
         assert proc.returncode == 0, proc.stderr
         out[name] = bvh.read_text()
     # the forearm offset (elbow -> wrist) is the avatar's: 0.26 m at 1.75 m, scaled
@@ -91,14 +113,17 @@ def test_avatar_info_of_an_unusable_file_says_why_and_exits_2(tmp_path: Path) ->
 
 
 @pytest.mark.parametrize("command", ["check", "export", "render", "synth"])
-def test_a_bad_avatar_is_one_line_and_exit_2(groove_dir: Path, tmp_path: Path, command: str
-                                             ) -> None:  # fmt: skip
+def test_a_bad_avatar_is_one_line_and_exit_2(
+    groove_dir: Path, tmp_path: Path, command: str
+) -> None:
     bad = tmp_path / "bad.glb"
     bad.write_bytes(b"not a model at all")
-    args = {"check": [str(groove_dir / GROOVES[0])],
-            "export": [str(groove_dir / GROOVES[0]), "-o", str(tmp_path / "x.bvh")],
-            "render": [str(groove_dir / GROOVES[0]), "-o", str(tmp_path / "x.mp4")],
-            "synth": []}[command]  # fmt: skip
+    args = {
+        "check": [str(groove_dir / GROOVES[0])],
+        "export": [str(groove_dir / GROOVES[0]), "-o", str(tmp_path / "x.bvh")],
+        "render": [str(groove_dir / GROOVES[0]), "-o", str(tmp_path / "x.mp4")],
+        "synth": [],
+    }[command]
     proc = run(command, *args, "--avatar", str(bad))
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines()[-1] == (
@@ -106,11 +131,20 @@ def test_a_bad_avatar_is_one_line_and_exit_2(groove_dir: Path, tmp_path: Path, c
     )
 
 
-def test_an_avatar_too_small_for_the_kit_is_the_reach_error(groove_dir: Path, tmp_path: Path
-                                                            ) -> None:  # fmt: skip
+def test_an_avatar_too_small_for_the_kit_is_the_reach_error(
+    groove_dir: Path, tmp_path: Path
+) -> None:
     child = af.write(tmp_path, "child.vrm", af.Spec(height_m=0.9, vrm="1"))
-    proc = run("check", str(groove_dir / GROOVES[0]), "--map", "roland-td", "--avatar", str(child),
-               "--fit", "none")  # fmt: skip
+    proc = run(
+        "check",
+        str(groove_dir / GROOVES[0]),
+        "--map",
+        "roland-td",
+        "--avatar",
+        str(child),
+        "--fit",
+        "none",
+    )
     assert proc.returncode == 2
     (line,) = proc.stderr.strip().splitlines()
     assert "out of reach of the" in line and " mm" in line and f"with avatar {child}" in line
@@ -120,16 +154,26 @@ def test_an_avatar_too_small_for_the_kit_is_the_reach_error(groove_dir: Path, tm
 @pytest.fixture(scope="module")
 def small(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A third-party-like VRM 1.0 of 0.66 m (a VRoid-sized model)."""
-    return af.write(tmp_path_factory.mktemp("small"), "small.vrm",
-                    af.Spec(height_m=0.66, pose="A", vrm="1"))  # fmt: skip
+    return af.write(
+        tmp_path_factory.mktemp("small"), "small.vrm", af.Spec(height_m=0.66, pose="A", vrm="1")
+    )
 
 
 @pytest.mark.parametrize("kit", ["rock5", "rock5-left"])
-def test_a_small_vrm_plays_the_default_kit_fitted(groove_dir: Path, small: Path, kit: str
-                                                  ) -> None:  # fmt: skip
+def test_a_small_vrm_plays_the_default_kit_fitted(groove_dir: Path, small: Path, kit: str) -> None:
     grooves = [str(groove_dir / g) for g in GROOVES]
-    proc = run("check", *grooves, "--map", "roland-td", "--kit", kit, "--avatar", str(small),
-               "--json", "--summary")  # fmt: skip
+    proc = run(
+        "check",
+        *grooves,
+        "--map",
+        "roland-td",
+        "--kit",
+        kit,
+        "--avatar",
+        str(small),
+        "--json",
+        "--summary",
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["notes"] > 500 and out["not_played"] == 0
@@ -154,16 +198,42 @@ def _snare(tmp_path: Path) -> Path:
 
 
 @pytest.mark.parametrize("fit", ["auto", "kit"])
-def test_avatar_info_predicts_what_render_and_check_do(groove_dir: Path, small: Path,
-                                                       tmp_path: Path, fit: str) -> None:  # fmt: skip
+def test_avatar_info_predicts_what_render_and_check_do(
+    groove_dir: Path, small: Path, tmp_path: Path, fit: str
+) -> None:
     """auto scales the 0.66 m avatar; kit would have to move the kit x0.35 and refuses."""
     info = run("avatar", "info", str(small), "--fit", fit, "--json")
     said = json.loads(info.stdout)
-    check = run("check", str(groove_dir / GROOVES[0]), "--map", "roland-td", "--avatar",
-                str(small), "--fit", fit, "--json", "--summary")  # fmt: skip
-    render = run("render", str(_snare(tmp_path)), "--map", "general-midi", "--avatar", str(small),
-                 "--fit", fit, "--frames-dir", str(tmp_path / "f"), "--size", "64x36", "--fps",
-                 "5", "--tail", "0")  # fmt: skip
+    check = run(
+        "check",
+        str(groove_dir / GROOVES[0]),
+        "--map",
+        "roland-td",
+        "--avatar",
+        str(small),
+        "--fit",
+        fit,
+        "--json",
+        "--summary",
+    )
+    render = run(
+        "render",
+        str(_snare(tmp_path)),
+        "--map",
+        "general-midi",
+        "--avatar",
+        str(small),
+        "--fit",
+        fit,
+        "--frames-dir",
+        str(tmp_path / "f"),
+        "--size",
+        "64x36",
+        "--fps",
+        "5",
+        "--tail",
+        "0",
+    )
     assert said["usable"] == (fit == "auto")
     for proc in (info, check, render):
         assert proc.returncode == (0 if said["usable"] else 2), proc.stderr
@@ -211,9 +281,23 @@ def test_render_draws_the_avatar(files: dict[str, Path], tmp_path: Path) -> None
     for who in ("default", "tall.glb"):
         out = tmp_path / who
         avatar = [] if who == "default" else ["--avatar", str(files[who])]
-        proc = run("render", str(song), "--map", "general-midi", "--frames-dir", str(out),
-                   "--size", "160x90", "--fps", "10", "--tail", "0.2", "--camera", "front",
-                   *avatar)  # fmt: skip
+        proc = run(
+            "render",
+            str(song),
+            "--map",
+            "general-midi",
+            "--frames-dir",
+            str(out),
+            "--size",
+            "160x90",
+            "--fps",
+            "10",
+            "--tail",
+            "0.2",
+            "--camera",
+            "front",
+            *avatar,
+        )
         assert proc.returncode == 0, proc.stderr
         png = sorted(out.glob("*.png"))[5]
         frames[who] = decode_image(png.read_bytes(), str(png))

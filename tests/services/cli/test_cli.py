@@ -93,8 +93,16 @@ def test_kits_lists_kits_and_maps() -> None:
 
 def test_demo_plays_the_groove_live_and_records_it_without_a_screen(tmp_path: Path) -> None:
     out = tmp_path / "demo.mp4"
-    proc = run("demo", "--seconds", "4", "-o", str(out), DISPLAY="", WAYLAND_DISPLAY="",
-               LIVEDRUMMER_HOME=str(tmp_path / "home"))  # fmt: skip
+    proc = run(
+        "demo",
+        "--seconds",
+        "4",
+        "-o",
+        str(out),
+        DISPLAY="",
+        WAYLAND_DISPLAY="",
+        LIVEDRUMMER_HOME=str(tmp_path / "home"),
+    )
     assert proc.returncode == 0, proc.stderr
     assert "gmd-drummer1-funk-80.mid" in proc.stdout and "played live" in proc.stdout
     assert f"up: wrote {out.resolve()}" in proc.stdout
@@ -104,8 +112,9 @@ def test_demo_plays_the_groove_live_and_records_it_without_a_screen(tmp_path: Pa
 
 def test_demo_offline_renders_the_bundled_groove(tmp_path: Path) -> None:
     out = tmp_path / "demo.mp4"
-    proc = run("demo", "--offline", "--seconds", "3", "-o", str(out), DISPLAY="",
-               WAYLAND_DISPLAY="")  # fmt: skip
+    proc = run(
+        "demo", "--offline", "--seconds", "3", "-o", str(out), DISPLAY="", WAYLAND_DISPLAY=""
+    )
     assert proc.returncode == 0, proc.stderr
     assert "gmd-drummer1-funk-80.mid" in proc.stdout
     assert "sticking  optimal:" in proc.stdout
@@ -117,8 +126,22 @@ def test_demo_takes_size_camera_and_kit(tmp_path: Path) -> None:
     import av
 
     out = tmp_path / "demo.mp4"
-    proc = run("demo", "--offline", "--seconds", "1", "-o", str(out), "--size", "320x180",
-               "--camera", "drummer", "--kit", "rock5-left", DISPLAY="", WAYLAND_DISPLAY="")  # fmt: skip
+    proc = run(
+        "demo",
+        "--offline",
+        "--seconds",
+        "1",
+        "-o",
+        str(out),
+        "--size",
+        "320x180",
+        "--camera",
+        "drummer",
+        "--kit",
+        "rock5-left",
+        DISPLAY="",
+        WAYLAND_DISPLAY="",
+    )
     assert proc.returncode == 0, proc.stderr
     assert "320x180 @ 30 fps, camera drummer, kit rock5-left" in proc.stdout
     with av.open(str(out)) as c:

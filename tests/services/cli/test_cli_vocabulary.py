@@ -34,7 +34,9 @@ RENAMED = [
 ]
 
 
-def parsers(p: argparse.ArgumentParser, path: str = "") -> Iterator[tuple[str, argparse.ArgumentParser]]:  # fmt: skip
+def parsers(
+    p: argparse.ArgumentParser, path: str = ""
+) -> Iterator[tuple[str, argparse.ArgumentParser]]:
     yield path, p
     for a in p._actions:
         if isinstance(a, argparse._SubParsersAction):
@@ -118,12 +120,14 @@ def test_every_command_registers_with_its_one_line_help() -> None:
 def test_only_the_named_command_is_built() -> None:
     assert command_named(["-v", "kits"]) == "kits"
     assert command_named(["--help"]) is None and command_named(["nope"]) is None
-    sub = next(a for a in build_parser(["kits"])._actions
-               if isinstance(a, argparse._SubParsersAction))  # fmt: skip
+    sub = next(
+        a for a in build_parser(["kits"])._actions if isinstance(a, argparse._SubParsersAction)
+    )
     assert sub.choices["kits"].get_default("func") is not None
     assert list(sub.choices) == ["kits"]  # nothing else is built
-    stubs = next(a for a in build_parser(["--help"])._actions
-                 if isinstance(a, argparse._SubParsersAction))  # fmt: skip
+    stubs = next(
+        a for a in build_parser(["--help"])._actions if isinstance(a, argparse._SubParsersAction)
+    )
     assert list(stubs.choices) == list(COMMANDS)
     assert stubs.choices["render"].get_default("func") is None  # a stub, listed by --help
 
@@ -143,17 +147,34 @@ def test_help_and_kits_load_no_numpy_and_no_services(argv: list[str]) -> None:
         "('numpy', 'services', 'zmq', 'mido', 'moderngl') and m not in cli)\n"
         "print('HEAVY', heavy, file=sys.stderr)\n"
     )
-    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
-                          text=True, timeout=60)  # fmt: skip
+    proc = subprocess.run(
+        [sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=60
+    )
     assert "HEAVY []" in proc.stderr, proc.stderr
     assert ("kits:" if argv == ["kits"] else "COMMAND") in proc.stdout
 
 
 def test_display_live_stops_after_seconds_as_up_does(tmp_path: Path) -> None:
     proc = subprocess.run(
-        [sys.executable, "-m", "services", "display", "--live", "--headless", "--no-render",
-         "--sub", "tcp://127.0.0.1:1", "--seconds", "1", "--frames-dir", str(tmp_path)],
-        cwd=REPO, capture_output=True, text=True, timeout=60,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "display",
+            "--live",
+            "--headless",
+            "--no-render",
+            "--sub",
+            "tcp://127.0.0.1:1",
+            "--seconds",
+            "1",
+            "--frames-dir",
+            str(tmp_path),
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert proc.returncode == 0, proc.stderr
     assert "display: " in proc.stderr and (tmp_path / "frames.jsonl").exists()

@@ -36,9 +36,13 @@ COPIES = 3
 def spawn(args: list[str], tmp: Path, name: str) -> subprocess.Popen[str]:
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp / "home")}
     return subprocess.Popen(
-        [sys.executable, "-m", "services", *args], stdout=subprocess.PIPE,
-        stderr=(tmp / f"{name}.err").open("w"), text=True, env=env, cwd=REPO,
-    )  # fmt: skip
+        [sys.executable, "-m", "services", *args],
+        stdout=subprocess.PIPE,
+        stderr=(tmp / f"{name}.err").open("w"),
+        text=True,
+        env=env,
+        cwd=REPO,
+    )
 
 
 def stop(proc: subprocess.Popen[str]) -> int:
@@ -63,11 +67,31 @@ def test_three_copies_play_the_same_notes_each_shifted_within_the_delay(tmp_path
     port = pub.bind_to_random_port("tcp://127.0.0.1")
     try:
         for k in range(COPIES):
-            procs.append(spawn(["synth", "--sub", f"tcp://127.0.0.1:{port}",
-                                "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
-                                "--delay-ms", str(DELAY_MS), "--lookahead-ms", str(LOOKAHEAD_MS),
-                                "--vary", str(k), "--vary-ms", str(VARY_MS),
-                                "--vary-amplitude", str(R)], tmp_path, f"synth{k}"))  # fmt: skip
+            procs.append(
+                spawn(
+                    [
+                        "synth",
+                        "--sub",
+                        f"tcp://127.0.0.1:{port}",
+                        "--pub",
+                        "tcp://127.0.0.1:*",
+                        "--control",
+                        "tcp://127.0.0.1:*",
+                        "--delay-ms",
+                        str(DELAY_MS),
+                        "--lookahead-ms",
+                        str(LOOKAHEAD_MS),
+                        "--vary",
+                        str(k),
+                        "--vary-ms",
+                        str(VARY_MS),
+                        "--vary-amplitude",
+                        str(R),
+                    ],
+                    tmp_path,
+                    f"synth{k}",
+                )
+            )
         for k, proc in enumerate(procs):
             assert proc.stdout is not None
             line = proc.stdout.readline()
@@ -101,8 +125,9 @@ def test_three_copies_play_the_same_notes_each_shifted_within_the_delay(tmp_path
     finally:
         codes = [stop(proc) for proc in procs]
         ctx.destroy(0)
-    assert codes == [0] * COPIES, [(tmp_path / f"synth{k}.err").read_text()[-500:]
-                                   for k in range(COPIES)]  # fmt: skip
+    assert codes == [0] * COPIES, [
+        (tmp_path / f"synth{k}.err").read_text()[-500:] for k in range(COPIES)
+    ]
     assert "capped at 40 ms" in (tmp_path / "synth0.err").read_text()
     delay, bound = DELAY_MS / 1000, (DELAY_MS - LOOKAHEAD_MS) / 1000
     assert onsets.size > 15
@@ -146,12 +171,37 @@ def test_up_stage_with_three_copies_draws_three_drummers_on_the_same_notes(
     base = 7460
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
     up = subprocess.Popen(
-        [sys.executable, "-m", "services", "up", "--stage", str(stage), "--headless",
-         "--frames-dir", str(frames), "--png", "--fps", "5", "--size", "330x150",
-         "--camera", "front", "--port-base", str(base), "--no-journal",
-         "--delay-ms", str(DELAY_MS), "--lookahead-ms", str(LOOKAHEAD_MS)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=REPO,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            "--stage",
+            str(stage),
+            "--headless",
+            "--frames-dir",
+            str(frames),
+            "--png",
+            "--fps",
+            "5",
+            "--size",
+            "330x150",
+            "--camera",
+            "front",
+            "--port-base",
+            str(base),
+            "--no-journal",
+            "--delay-ms",
+            str(DELAY_MS),
+            "--lookahead-ms",
+            str(LOOKAHEAD_MS),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        cwd=REPO,
+    )
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     fmt = p.PoseFormat.from_dtype(pose_dtype(len(load_kit("rock5").pieces)))
     clock = MonotonicClock()
@@ -185,8 +235,10 @@ def test_up_stage_with_three_copies_draws_three_drummers_on_the_same_notes(
     mean_shift = []
     for k in range(COPIES):
         shown = np.concatenate([m.rows for m in got[k + 1] if m.kind is p.Kind.SHOWN_ONSET])
-        inside = shown[(shown["time_s"] > heard["time_s"][0] + delay + bound)
-                       & (shown["time_s"] < heard["time_s"][-1])]  # fmt: skip
+        inside = shown[
+            (shown["time_s"] > heard["time_s"][0] + delay + bound)
+            & (shown["time_s"] < heard["time_s"][-1])
+        ]
         assert inside.size > 5
         track = PoseTrack(keep_s=60.0)
         for m in got[k + 1]:

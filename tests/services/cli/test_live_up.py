@@ -28,10 +28,24 @@ def launch(tmp: Path, *extra: str) -> subprocess.Popen[str]:
     env.pop("WAYLAND_DISPLAY", None)
     base = free_port_base()
     return subprocess.Popen(
-        [sys.executable, "-m", "services", "up", "--demo", "--port-base", str(base),
-         "--frames-dir", str(tmp / "frames"), *extra],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            "--demo",
+            "--port-base",
+            str(base),
+            "--frames-dir",
+            str(tmp / "frames"),
+            *extra,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+        cwd=REPO,
+    )
 
 
 def wait_running(proc: subprocess.Popen[str]) -> list[str]:
@@ -98,11 +112,31 @@ def test_up_records_the_show_with_its_drum_track_on_show_time(gl_ok: None, tmp_p
     env.pop("WAYLAND_DISPLAY", None)
     base = free_port_base()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "services", "up", "--demo", "--port-base", str(base),
-         "--frames-dir", str(tmp_path / "frames"), "--seconds", "6", "--video", str(video),
-         "--size", "320x180", "--fps", "25"],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, cwd=REPO,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            "--demo",
+            "--port-base",
+            str(base),
+            "--frames-dir",
+            str(tmp_path / "frames"),
+            "--seconds",
+            "6",
+            "--video",
+            str(video),
+            "--size",
+            "320x180",
+            "--fps",
+            "25",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+        cwd=REPO,
+    )
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     sub = ctx.socket(zmq.SUB)
     sub.setsockopt(zmq.SUBSCRIBE, b"")
@@ -160,11 +194,31 @@ def test_up_gives_every_child_the_one_map_and_delay_it_resolved(
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
     proc = subprocess.run(
-        [sys.executable, "-m", "services", "up", *source, "--headless", "--no-journal",
-         "--port-base", str(free_port_base()), "--frames-dir", str(tmp_path / "frames"),
-         "--delay-ms", "45", "--lookahead-ms", "20", "--seconds", "3"],
-        capture_output=True, text=True, env=env, cwd=REPO, timeout=120,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            *source,
+            "--headless",
+            "--no-journal",
+            "--port-base",
+            str(free_port_base()),
+            "--frames-dir",
+            str(tmp_path / "frames"),
+            "--delay-ms",
+            "45",
+            "--lookahead-ms",
+            "20",
+            "--seconds",
+            "3",
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=REPO,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stderr[-2000:]
     ready = {}
     for line in proc.stdout.splitlines():
@@ -182,9 +236,12 @@ def test_up_gives_every_child_the_one_map_and_delay_it_resolved(
 def test_up_refuses_a_map_that_audio_does_not_write(tmp_path: Path) -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "services", "up", "--audio", "system", "--map", "roland-td"],
-        capture_output=True, text=True, cwd=REPO, timeout=60,
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
         env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")},
-    )  # fmt: skip
+    )
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.strip().splitlines() == [
         "livedrummer: error: --map roland-td: --audio writes general-midi notes; drop --map"

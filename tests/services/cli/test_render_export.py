@@ -54,8 +54,22 @@ def read_back(path: Path) -> tuple[int, float, np.ndarray, int, tuple[int, int]]
 
 def test_video_frames_audio_and_onsets_line_up(groove: Path, tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "out.mp4"
-    code = main(["render", str(groove), "-o", str(out), "--size", "160x90", "--fps", str(FPS),
-                 "--tail", str(TAIL_S), "--camera", "front"])  # fmt: skip
+    code = main(
+        [
+            "render",
+            str(groove),
+            "-o",
+            str(out),
+            "--size",
+            "160x90",
+            "--fps",
+            str(FPS),
+            "--tail",
+            str(TAIL_S),
+            "--camera",
+            "front",
+        ]
+    )
     assert code == 0
     assert "wrote" in capsys.readouterr().out
     perf = read_midi_file(groove, load_note_map("general-midi"))
@@ -83,11 +97,13 @@ def test_video_frames_audio_and_onsets_line_up(groove: Path, tmp_path: Path, cap
 
 def choked_crash(write_midi) -> Path:  # type: ignore[no-untyped-def]
     """A GM crash at 0.25 s, grabbed (polyphonic aftertouch 127) at 0.75 s, let go at 1.0 s."""
-    msgs: list[mido.Message] = [mido.MetaMessage("set_tempo", tempo=500_000, time=0),
+    msgs: list[mido.Message] = [
+        mido.MetaMessage("set_tempo", tempo=500_000, time=0),
         mido.Message("note_on", channel=9, note=49, velocity=120, time=240),
         mido.Message("note_off", channel=9, note=49, velocity=0, time=30),
         mido.Message("polytouch", channel=9, note=49, value=127, time=450),
-        mido.Message("polytouch", channel=9, note=49, value=0, time=240)]  # fmt: skip
+        mido.Message("polytouch", channel=9, note=49, value=0, time=240),
+    ]
     path: Path = write_midi(msgs, name="choke.mid")
     return path
 
@@ -105,8 +121,22 @@ def crash_rms_around_the_grab(audio: np.ndarray, rate: int) -> tuple[float, floa
 
 def test_a_choked_crash_stops_sounding_in_the_video(write_midi, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "out.mp4"
-    code = main(["render", str(choked_crash(write_midi)), "-o", str(out), "--size", "96x54",
-                 "--fps", "10", "--tail", "1.0", "--camera", "front"])  # fmt: skip
+    code = main(
+        [
+            "render",
+            str(choked_crash(write_midi)),
+            "-o",
+            str(out),
+            "--size",
+            "96x54",
+            "--fps",
+            "10",
+            "--tail",
+            "1.0",
+            "--camera",
+            "front",
+        ]
+    )
     assert code == 0
     _frames, _video_s, audio, rate, _size = read_back(out)
     before, after = crash_rms_around_the_grab(audio, rate)
@@ -119,15 +149,31 @@ def test_a_closing_hi_hat_stops_the_open_one_ringing_in_the_video(
 ) -> None:  # type: ignore[no-untyped-def]
     """The pedal (CC4) open, an open hi-hat at 0.25 s, the pedal closed at 0.75 s: the track
     stops ringing there, as the live sound does (the same cuts, livedrummer.audio.cuts)."""
-    msgs: list[mido.Message] = [mido.MetaMessage("set_tempo", tempo=500_000, time=0),
+    msgs: list[mido.Message] = [
+        mido.MetaMessage("set_tempo", tempo=500_000, time=0),
         mido.Message("control_change", channel=9, control=4, value=0, time=0),
         mido.Message("note_on", channel=9, note=46, velocity=120, time=240),
         mido.Message("note_off", channel=9, note=46, velocity=0, time=30),
         mido.Message("control_change", channel=9, control=4, value=127, time=450),
-        mido.Message("control_change", channel=9, control=4, value=127, time=240)]  # fmt: skip
+        mido.Message("control_change", channel=9, control=4, value=127, time=240),
+    ]
     out = tmp_path / "out.mp4"
-    code = main(["render", str(write_midi(msgs, name="hat.mid")), "-o", str(out), "--size",
-                 "96x54", "--fps", "10", "--tail", "1.0", "--camera", "front"])  # fmt: skip
+    code = main(
+        [
+            "render",
+            str(write_midi(msgs, name="hat.mid")),
+            "-o",
+            str(out),
+            "--size",
+            "96x54",
+            "--fps",
+            "10",
+            "--tail",
+            "1.0",
+            "--camera",
+            "front",
+        ]
+    )
     assert code == 0
     _frames, _video_s, audio, rate, _size = read_back(out)
     before, after = crash_rms_around_the_grab(audio, rate)  # the same instants
@@ -137,8 +183,20 @@ def test_a_closing_hi_hat_stops_the_open_one_ringing_in_the_video(
 
 def test_frames_folder_gets_pngs(groove: Path, tmp_path: Path) -> None:
     frames = tmp_path / "frames"
-    code = main(["render", str(groove), "--frames-dir", str(frames), "--size", "96x54",
-                 "--fps", "10", "--tail", "0"])  # fmt: skip
+    code = main(
+        [
+            "render",
+            str(groove),
+            "--frames-dir",
+            str(frames),
+            "--size",
+            "96x54",
+            "--fps",
+            "10",
+            "--tail",
+            "0",
+        ]
+    )
     assert code == 0
     pngs = sorted(frames.glob("*.png"))
     perf = read_midi_file(groove, load_note_map("general-midi"))
@@ -198,8 +256,20 @@ def test_video_colours_match_the_rendered_frames(groove: Path, tmp_path: Path, s
     # edges, so compare the mean colour of a grid of regions. CRF 12 keeps x264's own loss
     # (what this test does not measure) well under the bound: at CRF 16 the last frame of the
     # 164-wide clip came to 4.2 once the feet and footboards moved, against 2.5 at CRF 12.
-    argv = ["render", str(groove), "--size", size, "--fps", "10", "--tail", "0",
-            "--camera", "front", "--crf", "12"]  # fmt: skip
+    argv = [
+        "render",
+        str(groove),
+        "--size",
+        size,
+        "--fps",
+        "10",
+        "--tail",
+        "0",
+        "--camera",
+        "front",
+        "--crf",
+        "12",
+    ]
     out = tmp_path / "out.mp4"
     assert main([*argv, "-o", str(out)]) == 0
     assert main([*argv, "--frames-dir", str(tmp_path / "frames")]) == 0

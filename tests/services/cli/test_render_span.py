@@ -75,8 +75,22 @@ def test_bars_become_seconds_on_the_files_grid(waltz: Path) -> None:
 @pytest.mark.usefixtures("gl_ok")
 def test_bars_render_their_frames(waltz: Path, tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
     frames = tmp_path / "frames"
-    code = main(["render", str(waltz), "--frames-dir", str(frames), "--size", "64x36",
-                 "--fps", str(FPS), "--start", "bar2", "--end", "bar3"])  # fmt: skip
+    code = main(
+        [
+            "render",
+            str(waltz),
+            "--frames-dir",
+            str(frames),
+            "--size",
+            "64x36",
+            "--fps",
+            str(FPS),
+            "--start",
+            "bar2",
+            "--end",
+            "bar3",
+        ]
+    )
     assert code == 0
     assert len(list(frames.glob("*.png"))) == 3 * FPS  # bars 2-3: 3.0 s
     assert "(from 1.50 s to 4.50 s)" in capsys.readouterr().out
@@ -85,8 +99,22 @@ def test_bars_render_their_frames(waltz: Path, tmp_path: Path, capsys) -> None: 
 @pytest.mark.usefixtures("gl_ok")
 def test_a_span_video_has_the_spans_sound(waltz: Path, tmp_path: Path) -> None:
     out = tmp_path / "part.mp4"
-    code = main(["render", str(waltz), "-o", str(out), "--size", "64x36", "--fps", str(FPS),
-                 "--start", "2.5", "--end", "4"])  # fmt: skip
+    code = main(
+        [
+            "render",
+            str(waltz),
+            "-o",
+            str(out),
+            "--size",
+            "64x36",
+            "--fps",
+            str(FPS),
+            "--start",
+            "2.5",
+            "--end",
+            "4",
+        ]
+    )
     assert code == 0
     with av.open(str(out)) as c:
         n_frames = sum(1 for _ in c.decode(video=0))

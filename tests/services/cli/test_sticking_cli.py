@@ -23,8 +23,15 @@ def test_json_lists_every_onset_in_time_order(capsys: pytest.CaptureFixture[str]
     rows = json.loads(out)
     assert [r["time_s"] for r in rows] == sorted(r["time_s"] for r in rows)
     assert set(rows[0]) == {
-        "time_s", "note", "piece", "limb", "reason", "too_fast", "crossed", "hard"
-    }  # fmt: skip
+        "time_s",
+        "note",
+        "piece",
+        "limb",
+        "reason",
+        "too_fast",
+        "crossed",
+        "hard",
+    }
     assert {r["limb"] for r in rows} <= {"RH", "LH", "RF", "LF"}
     assert all(r["reason"] is None or isinstance(r["reason"], str) for r in rows)
     # a note is hard exactly when it is too fast or crossed, and then it says why

@@ -69,10 +69,24 @@ def test_synth_announces_its_avatar_in_ready(tmp_path: Path) -> None:
     path = af.write(tmp_path, "tall.glb")
     avatar = load_avatar_file(path)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "services", "synth", "--sub", "tcp://127.0.0.1:1",
-         "--pub", LOCAL, "--control", LOCAL, "--avatar", str(path)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "synth",
+            "--sub",
+            "tcp://127.0.0.1:1",
+            "--pub",
+            LOCAL,
+            "--control",
+            LOCAL,
+            "--avatar",
+            str(path),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout is not None
         line = json.loads(proc.stdout.readline())

@@ -43,12 +43,12 @@ def _state(client: socket.socket, port: int) -> dict[str, object]:
     return dict(zip(args[0::2], args[1::2], strict=True))  # type: ignore[arg-type]
 
 
-def test_osc_changes_the_look_and_the_lights_of_the_next_frame(gl_ok: None,
-                                                              tmp_path: Path) -> None:  # fmt: skip
+def test_osc_changes_the_look_and_the_lights_of_the_next_frame(gl_ok: None, tmp_path: Path) -> None:
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     kit = load_kit("rock5")
-    config = LiveConfig(sub="tcp://127.0.0.1:1", fps=10.0, size=(320, 180), camera="front",
-                        out=tmp_path, osc_port=0)  # fmt: skip
+    config = LiveConfig(
+        sub="tcp://127.0.0.1:1", fps=10.0, size=(320, 180), camera="front", out=tmp_path, osc_port=0
+    )
     display = LiveDisplay(kit, config, MonotonicFrameClock(), ctx)
     endpoints = display.start()
     port = int(endpoints["osc"].rsplit(":", 1)[1])
@@ -61,11 +61,13 @@ def test_osc_changes_the_look_and_the_lights_of_the_next_frame(gl_ok: None,
     try:
         first = frames.wait(lambda r: r["frame"] == 2, "drawn")
         assert first["look"] == "concert"
-        for address, args in (("/livedrummer/light/spot/intensity", (1.0,)),
-                              ("/livedrummer/light/key/intensity", (99.0,)),
-                              ("/livedrummer/light/key/color", (1.0, "x", 0.0)),
-                              ("/livedrummer/light/key/enabled", (2,)),
-                              ("/livedrummer/look", ("disco",))):  # fmt: skip
+        for address, args in (
+            ("/livedrummer/light/spot/intensity", (1.0,)),
+            ("/livedrummer/light/key/intensity", (99.0,)),
+            ("/livedrummer/light/key/color", (1.0, "x", 0.0)),
+            ("/livedrummer/light/key/enabled", (2,)),
+            ("/livedrummer/look", ("disco",)),
+        ):
             client.sendto(encode(address, args), ("127.0.0.1", port))
         assert _state(client, port)["look"] == "concert", "a bad command changes nothing"
         client.sendto(encode("/livedrummer/look", ("neon",)), ("127.0.0.1", port))
@@ -103,8 +105,7 @@ def test_osc_changes_the_look_and_the_lights_of_the_next_frame(gl_ok: None,
         ctx.destroy(0)
 
 
-def test_up_forwards_look_osc_and_bar_cues_light_the_display(gl_ok: None,
-                                                             tmp_path: Path) -> None:  # fmt: skip
+def test_up_forwards_look_osc_and_bar_cues_light_the_display(gl_ok: None, tmp_path: Path) -> None:
     from tests.services.cli.test_live_up import launch, wait_running
 
     probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -112,10 +113,25 @@ def test_up_forwards_look_osc_and_bar_cues_light_the_display(gl_ok: None,
     port = probe.getsockname()[1]
     probe.close()
     cues = tmp_path / "cues.toml"
-    cues.write_text('[[cue]]\nname = "dim"\nbar = 4\n[cue.lights.key]\nenabled = false\n'
-                    "[cue.lights.fill]\nenabled = false\n[cue.lights.wash]\nenabled = false\n")  # fmt: skip
-    proc = launch(tmp_path, "--headless", "--seconds", "14", "--png", "--fps", "10",
-                  "--osc", str(port), "--look", "studio", "--cues", str(cues))  # fmt: skip
+    cues.write_text(
+        '[[cue]]\nname = "dim"\nbar = 4\n[cue.lights.key]\nenabled = false\n'
+        "[cue.lights.fill]\nenabled = false\n[cue.lights.wash]\nenabled = false\n"
+    )
+    proc = launch(
+        tmp_path,
+        "--headless",
+        "--seconds",
+        "14",
+        "--png",
+        "--fps",
+        "10",
+        "--osc",
+        str(port),
+        "--look",
+        "studio",
+        "--cues",
+        str(cues),
+    )
     client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     client.bind(("127.0.0.1", 0))
     client.settimeout(5.0)

@@ -48,9 +48,12 @@ def test_two_displays_on_one_synth_both_get_every_contact(tmp_path: Path) -> Non
     pub = ctx.socket(zmq.XPUB)
     pub.setsockopt(zmq.LINGER, 0)
     port = pub.bind_to_random_port("tcp://127.0.0.1")
-    synth = SynthService(LiveSynth(build_rig(kit), params),
-                         SynthConfig(sub=f"tcp://127.0.0.1:{port}", pub=LOCAL, control=LOCAL),
-                         clock, ctx)  # fmt: skip
+    synth = SynthService(
+        LiveSynth(build_rig(kit), params),
+        SynthConfig(sub=f"tcp://127.0.0.1:{port}", pub=LOCAL, control=LOCAL),
+        clock,
+        ctx,
+    )
     eps = synth.start()
     stop = threading.Event()
     threads = [threading.Thread(target=synth.run, args=(stop,), daemon=True)]

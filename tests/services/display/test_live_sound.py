@@ -38,8 +38,11 @@ def click_kit(folder: Path) -> Path:
 
     t = np.arange(2400) / 48_000
     for name, hz in (("rim.wav", 1500.0), ("block.wav", 900.0)):
-        sf.write(str(folder / name), (0.6 * np.sin(2 * np.pi * hz * t) * np.exp(-t / 0.01))
-                 .astype(np.float32), 48_000)  # fmt: skip
+        sf.write(
+            str(folder / name),
+            (0.6 * np.sin(2 * np.pi * hz * t) * np.exp(-t / 0.01)).astype(np.float32),
+            48_000,
+        )
     path = folder / "clicks.sfz"
     # the rim click plays as GM 37; the block as whatever GM note the block is (any above 37)
     path.write_text("<region> key=37 sample=rim.wav\n<region> lokey=38 sample=block.wav\n")
@@ -70,8 +73,9 @@ def kit_argv(kit: str, folder: Path) -> list[str]:
 
 
 @pytest.mark.parametrize("kit", ["built-in", "sfz", "soundfont"])
-def test_each_onset_is_heard_at_onset_plus_d(jack_default_server: str, tmp_path: Path, kit: str
-                                             ) -> None:  # fmt: skip
+def test_each_onset_is_heard_at_onset_plus_d(
+    jack_default_server: str, tmp_path: Path, kit: str
+) -> None:
     from services.bench._jackrec import JackRecorder, attacks, steady
 
     clock = MonotonicClock()
@@ -84,8 +88,7 @@ def test_each_onset_is_heard_at_onset_plus_d(jack_default_server: str, tmp_path:
 
     def send(row: np.ndarray) -> None:
         nonlocal seq
-        bus.send_multipart(p.encode(p.Message(p.Kind.ONSET, row, seq=seq,
-                                              send_time_s=clock.now())))  # fmt: skip
+        bus.send_multipart(p.encode(p.Message(p.Kind.ONSET, row, seq=seq, send_time_s=clock.now())))
         seq += 1
 
     recorder = JackRecorder(dict(os.environ))
@@ -157,8 +160,10 @@ def test_each_onset_is_heard_at_onset_plus_d(jack_default_server: str, tmp_path:
     on_time = np.array([came.get(round(e, 6), np.inf) < e - 0.012 for e in expected])
     judged = steady(rec, expected) & on_time
     ms = np.percentile(np.abs(lag[judged]) * 1000, [50, 90, 99]) if judged.any() else [0] * 3
-    print(f"sound - (onset + D): |lag| p50 {ms[0]:.2f} p90 {ms[1]:.2f} p99 {ms[2]:.2f} ms over "
-          f"{judged.sum()} onsets of steady graph; signed {np.round(lag * 1000, 1).tolist()}")  # fmt: skip
+    print(
+        f"sound - (onset + D): |lag| p50 {ms[0]:.2f} p90 {ms[1]:.2f} p99 {ms[2]:.2f} ms over "
+        f"{judged.sum()} onsets of steady graph; signed {np.round(lag * 1000, 1).tolist()}"
+    )
     # placed, not just heard: a wrong clock or latency shows as a whole offset
     assert np.percentile(np.abs(lag[np.abs(lag) < 0.1]), 50) <= 0.010, (lag * 1000).round(1)
     # ±2 ms at p90 where the JACK graph ran steadily, judged only on a machine that is not
@@ -180,8 +185,12 @@ def test_bench_audio_prints_its_figures(tmp_path: Path) -> None:
 
     if shutil.which("jackd") is None:
         pytest.skip("jackd not installed")
-    run = subprocess.run([sys.executable, "-m", "services", "bench", "audio", "--seconds", "1.5"],
-                         capture_output=True, text=True, timeout=180)  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-m", "services", "bench", "audio", "--seconds", "1.5"],
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
     assert run.returncode == 0, run.stderr[-1500:]
     out = run.stdout
     heard = re.search(r"heard: (\d+) of (\d+) onsets", out)

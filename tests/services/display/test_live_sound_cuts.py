@@ -28,8 +28,17 @@ RING_S = 0.3  # from a stroke to its cut
 
 def stroke(t: float, note: int, piece: str, zone: Zone, hat: HiHat) -> np.ndarray:
     row = np.zeros(1, ONSET_DTYPE)
-    row[0] = (t, note, 110, 9, INSTRUMENTS.index(piece), ZONES.index(zone), HIHATS.index(hat),
-              math.nan, 0)  # fmt: skip
+    row[0] = (
+        t,
+        note,
+        110,
+        9,
+        INSTRUMENTS.index(piece),
+        ZONES.index(zone),
+        HIHATS.index(hat),
+        math.nan,
+        0,
+    )
     return row
 
 
@@ -58,11 +67,16 @@ def ringing_sfz(folder: Path) -> Path:
     t = np.arange(2 * 48_000) / 48_000
     for name, hz in (("crash.wav", 700.0), ("open.wav", 1100.0), ("rim.wav", 1500.0)):
         decay = 0.01 if name == "rim.wav" else 1.5
-        sf.write(str(folder / name), (0.5 * np.sin(2 * np.pi * hz * t) * np.exp(-t / decay))
-                 .astype(np.float32), 48_000)  # fmt: skip
+        sf.write(
+            str(folder / name),
+            (0.5 * np.sin(2 * np.pi * hz * t) * np.exp(-t / decay)).astype(np.float32),
+            48_000,
+        )
     path = folder / "ringing.sfz"
-    path.write_text("<region> key=49 sample=crash.wav\n<region> key=46 sample=open.wav\n"
-                    "<region> key=37 sample=rim.wav\n")  # fmt: skip
+    path.write_text(
+        "<region> key=49 sample=crash.wav\n<region> key=46 sample=open.wav\n"
+        "<region> key=37 sample=rim.wav\n"
+    )
     return path
 
 
@@ -154,8 +168,10 @@ def test_a_grab_and_a_closing_hihat_stop_the_ring_at_their_time_plus_d(
     ends, rests = zip(*(ring_end(rec.samples, rec.times, e) for e in expected), strict=True)
     # the fade (5 ms, linear) falls below a tenth of the level 4.5 ms into it
     lag = np.array(ends) - expected - 0.9 * GRAB_FADE_S
-    print(f"ring end - (control + D + fade): {np.round(lag * 1000, 2).tolist()} ms; level left "
-          f"after: {np.round(rests, 4).tolist()}")  # fmt: skip
+    print(
+        f"ring end - (control + D + fade): {np.round(lag * 1000, 2).tolist()} ms; level left "
+        f"after: {np.round(rests, 4).tolist()}"
+    )
     # the rings stop (uncut, the crash and the open hat ring on for 300 ms at more than half
     # their level) at about their time (a loaded machine may hold the synth's forwarding)
     assert max(rests) < 0.02 and np.all(np.abs(lag) < 0.15), (rests, lag * 1000)

@@ -24,11 +24,19 @@ from tests.services.show.test_live_osc import Frames
 
 
 def test_a_stage_cue_round_trips_on_the_pose_stream_and_is_checked() -> None:
-    cues = parse_cues({"cue": [{"name": "cut", "bar": 3, "camera": 4, "cut": True},
-                               {"name": "dark", "bar": 5, "blackout": True},
-                               {"name": "style", "bar": 6, "preset": "relaxed"}]}, "test")  # fmt: skip
-    rows = stage_cue_rows([(10.5, 3, cues["cut"]), (13.5, 5, cues["dark"]),
-                           (15.0, 6, cues["style"])])  # fmt: skip
+    cues = parse_cues(
+        {
+            "cue": [
+                {"name": "cut", "bar": 3, "camera": 4, "cut": True},
+                {"name": "dark", "bar": 5, "blackout": True},
+                {"name": "style", "bar": 6, "preset": "relaxed"},
+            ]
+        },
+        "test",
+    )
+    rows = stage_cue_rows(
+        [(10.5, 3, cues["cut"]), (13.5, 5, cues["dark"]), (15.0, 6, cues["style"])]
+    )
     assert rows.size == 2, "a cue with no camera or blackout sends nothing to the displays"
     frames = p.encode(p.Message(p.Kind.STAGE_CUE, rows, performer=1, seq=4, stream=p.Stream.POSES))
     back = p.decode(frames)
@@ -51,8 +59,15 @@ def test_the_display_applies_a_stage_cue_at_its_show_time_and_a_replay_agrees() 
 
     kit = load_kit("rock5")
     show = DisplayShow(kit, "stage", None)
-    cues = parse_cues({"cue": [{"name": "cut", "bar": 3, "camera": "front", "cut": True},
-                               {"name": "dark", "bar": 5, "blackout": True}]}, "t")  # fmt: skip
+    cues = parse_cues(
+        {
+            "cue": [
+                {"name": "cut", "bar": 3, "camera": "front", "cut": True},
+                {"name": "dark", "bar": 5, "blackout": True},
+            ]
+        },
+        "t",
+    )
     show.schedule(stage_cue_rows([(2.05, 5, cues["dark"]), (1.02, 3, cues["cut"])]))
     seen = []
     for k in range(40):  # 10 fps, each frame shown 0.1 s after it is rendered
@@ -111,10 +126,13 @@ def test_up_cuts_the_camera_and_blacks_out_on_the_bars_the_tracker_counts(
     gl_ok: None, tmp_path: Path
 ) -> None:
     cues = tmp_path / "cues.toml"
-    cues.write_text('[[cue]]\nname = "cut"\nbar = 4\ncamera = "front"\ncut = true\n\n'
-                    '[[cue]]\nname = "dark"\nbar = 6\nblackout = true\n')  # fmt: skip
-    proc = launch(tmp_path, "--headless", "--seconds", "17", "--png", "--fps", "10",
-                  "--cues", str(cues))  # fmt: skip
+    cues.write_text(
+        '[[cue]]\nname = "cut"\nbar = 4\ncamera = "front"\ncut = true\n\n'
+        '[[cue]]\nname = "dark"\nbar = 6\nblackout = true\n'
+    )
+    proc = launch(
+        tmp_path, "--headless", "--seconds", "17", "--png", "--fps", "10", "--cues", str(cues)
+    )
     out, _ = proc.communicate(timeout=180)
     assert proc.returncode == 0, out[-3000:]
     frames = Frames(tmp_path / "frames")
@@ -157,12 +175,31 @@ def test_bench_latency_measures_with_and_without_show_control(gl_ok: None) -> No
 
     from tests.services.cli.test_live_up import REPO
 
-    bad = subprocess.run([sys.executable, "-m", "services", "bench", "latency", "--overlay",
-                          "scroe"], capture_output=True, text=True, cwd=REPO)  # fmt: skip
+    bad = subprocess.run(
+        [sys.executable, "-m", "services", "bench", "latency", "--overlay", "scroe"],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+    )
     assert bad.returncode == 2 and "unknown overlay 'scroe'" in bad.stderr
-    run = subprocess.run([sys.executable, "-m", "services", "bench", "latency", "--rates", "10",
-                          "--seconds", "0.5", "--both"], capture_output=True, text=True,
-                         cwd=REPO, timeout=240)  # fmt: skip
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "bench",
+            "latency",
+            "--rates",
+            "10",
+            "--seconds",
+            "0.5",
+            "--both",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=240,
+    )
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     out = run.stdout
     assert "10 plain" in out and "10 show" in out

@@ -35,12 +35,33 @@ def test_up_overlay_draws_scrolling_score_and_angle_strips(tmp_path: Path) -> No
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
     done = subprocess.run(
-        [sys.executable, "-m", "services", "up", "--demo", "--headless", "--port-base", str(base),
-         "--seconds", "4", "--overlay", "score,joints", "--frames-dir", str(frames), "--png",
-         "--size", f"{W}x{H}", "--fps", "10"],
-        capture_output=True, text=True, timeout=150, env=env,
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            "--demo",
+            "--headless",
+            "--port-base",
+            str(base),
+            "--seconds",
+            "4",
+            "--overlay",
+            "score,joints",
+            "--frames-dir",
+            str(frames),
+            "--png",
+            "--size",
+            f"{W}x{H}",
+            "--fps",
+            "10",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=150,
+        env=env,
         cwd=Path(__file__).resolve().parents[3],
-    )  # fmt: skip
+    )
     assert done.returncode == 0, done.stderr[-1500:]
     records = [json.loads(line) for line in (frames / "frames.jsonl").read_text().splitlines()]
     drawn = [r for r in records if r["pose_s"] is not None]
@@ -96,13 +117,20 @@ def test_keys_o_and_g_show_the_strips_in_a_live_window(tmp_path: Path) -> None:
     py = sys.executable
     shots = [tmp_path / f"shot{i}.npy" for i in range(3)]
     press = "xdotool search --sync --name '^livedrummer' key"
-    script = (f"{py} -m services display --live --sub tcp://127.0.0.1:{free_port()} "
-              f"--size {W}x{H} --aa 0 --seconds 8 --clock monotonic & sleep 4; "
-              f"{py} {grab} {shots[0]}; {press} o; sleep 1; {py} {grab} {shots[1]}; "
-              f"{press} g; sleep 1; {py} {grab} {shots[2]}; wait")  # fmt: skip
+    script = (
+        f"{py} -m services display --live --sub tcp://127.0.0.1:{free_port()} "
+        f"--size {W}x{H} --aa 0 --seconds 8 --clock monotonic & sleep 4; "
+        f"{py} {grab} {shots[0]}; {press} o; sleep 1; {py} {grab} {shots[1]}; "
+        f"{press} g; sleep 1; {py} {grab} {shots[2]}; wait"
+    )
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    run = subprocess.run(["xvfb-run", "-a", "-s", f"-screen 0 {W}x{H}x24", "sh", "-c", script],
-                         capture_output=True, text=True, timeout=120, env=env)  # fmt: skip
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", f"-screen 0 {W}x{H}x24", "sh", "-c", script],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
     assert run.returncode == 0 and all(s.exists() for s in shots), run.stderr[-1500:]
     plain, score, both = (np.load(s).astype(int) for s in shots)
     heights = strip_heights(H, frozenset({"score", "joints"}))
@@ -119,9 +147,22 @@ def test_keys_o_and_g_show_the_strips_in_a_live_window(tmp_path: Path) -> None:
 
 
 def test_up_names_an_unknown_overlay_in_one_line_and_exits_2() -> None:
-    done = subprocess.run([sys.executable, "-m", "services", "up", "--demo", "--headless",
-                           "--overlay", "score,jionts"], capture_output=True, text=True,
-                          timeout=60, cwd=Path(__file__).resolve().parents[3])  # fmt: skip
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            "--demo",
+            "--headless",
+            "--overlay",
+            "score,jionts",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=Path(__file__).resolve().parents[3],
+    )
     assert done.returncode == 2
     assert done.stderr.strip().splitlines() == [
         "livedrummer: error: --overlay 'score,jionts': unknown overlay 'jionts' "

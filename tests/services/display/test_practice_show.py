@@ -60,16 +60,47 @@ def test_ghost_image_is_tinted_and_translucent() -> None:
 def test_panel_changes_with_each_message_and_shows_the_summary() -> None:
     panel = PracticePanel()
     first = panel_image(panel)
-    panel.apply({"plan": {"pass": 2, "bars": [3, 4], "bpm": 120.0, "window_ms": 100.0,
-                          "level_ms": 40.0, "teacher": "ghost"}})  # fmt: skip
-    panel.apply({"hit": {"piece": "snare", "offset_ms": 25.0, "on_time": True, "streak": 4,
-                         "accuracy_pct": 90.0}})  # fmt: skip
+    panel.apply(
+        {
+            "plan": {
+                "pass": 2,
+                "bars": [3, 4],
+                "bpm": 120.0,
+                "window_ms": 100.0,
+                "level_ms": 40.0,
+                "teacher": "ghost",
+            }
+        }
+    )
+    panel.apply(
+        {
+            "hit": {
+                "piece": "snare",
+                "offset_ms": 25.0,
+                "on_time": True,
+                "streak": 4,
+                "accuracy_pct": 90.0,
+            }
+        }
+    )
     late = panel_image(panel)
-    assert panel.lines()[:3] == ["PASS 2  BARS 3-4  120.0 BPM   TEACHER GHOST",
-                                 "SNARE  +25.0 MS ON TIME", "STREAK 4   ACCURACY 90.0 PCT"]  # fmt: skip
+    assert panel.lines()[:3] == [
+        "PASS 2  BARS 3-4  120.0 BPM   TEACHER GHOST",
+        "SNARE  +25.0 MS ON TIME",
+        "STREAK 4   ACCURACY 90.0 PCT",
+    ]
     assert late.shape != first.shape or not np.array_equal(late, first)
-    panel.apply({"hit": {"piece": "snare", "offset_ms": -25.0, "on_time": True, "streak": 5,
-                         "accuracy_pct": 91.0}})  # fmt: skip
+    panel.apply(
+        {
+            "hit": {
+                "piece": "snare",
+                "offset_ms": -25.0,
+                "on_time": True,
+                "streak": 5,
+                "accuracy_pct": 91.0,
+            }
+        }
+    )
     early = panel_image(panel)
     # the newest hit's block moved from right of centre to left of it
     green = (
@@ -95,8 +126,17 @@ def test_view_counts_bad_messages_and_keeps_reading() -> None:
     port = pub.bind_to_random_port("tcp://127.0.0.1")
     view = PracticeView(ctx, f"tcp://127.0.0.1:{port}", load_kit("rock5"))
     try:
-        plan = {"pass": 1, "bars": [1, 1], "bpm": 100.0, "window_ms": 100.0, "level_ms": 40.0,
-                "start_s": 1.0, "scale": 1.0, "seg_start_s": 0.0, "seg_end_s": 2.4}  # fmt: skip
+        plan = {
+            "pass": 1,
+            "bars": [1, 1],
+            "bpm": 100.0,
+            "window_ms": 100.0,
+            "level_ms": 40.0,
+            "start_s": 1.0,
+            "scale": 1.0,
+            "seg_start_s": 0.0,
+            "seg_end_s": 2.4,
+        }
         msgs = [b"\xff not json", b"[1, 2]", json.dumps({"hit": {"piece": "snare"}}).encode(),
                 json.dumps({"plan": plan}).encode(),
                 json.dumps({"hit": {"piece": "kick", "offset_ms": None, "on_time": False,
@@ -142,8 +182,17 @@ def test_ghost_is_blended_over_the_player(gl_ok: None, groove: object) -> None:
     view = PracticeView(ctx, f"tcp://127.0.0.1:{port}", kit, "ghost", teacher)
     surface = HeadlessSurface(kit, (320, 180), "stage")
     try:
-        plan = {"pass": 1, "bars": [1, 1], "bpm": 100.0, "window_ms": 100.0, "level_ms": 40.0,
-                "start_s": 0.0, "scale": 1.0, "seg_start_s": 0.0, "seg_end_s": 8.0}  # fmt: skip
+        plan = {
+            "pass": 1,
+            "bars": [1, 1],
+            "bpm": 100.0,
+            "window_ms": 100.0,
+            "level_ms": 40.0,
+            "start_s": 0.0,
+            "scale": 1.0,
+            "seg_start_s": 0.0,
+            "seg_end_s": 8.0,
+        }
         deadline = time.monotonic() + 10
         while view.messages == 0 and time.monotonic() < deadline:
             pub.send(json.dumps({"plan": plan}).encode())
@@ -197,8 +246,15 @@ def body_alone_alpha(surface: object, frame: object) -> np.ndarray:
             if f.name != "pieces"
         },
     )
-    r = Renderer(main.ctx, bare, BODY_SKELETON, main.size, samples=0, shadows=False,
-                 background=Background(kind="transparent"))  # fmt: skip
+    r = Renderer(
+        main.ctx,
+        bare,
+        BODY_SKELETON,
+        main.size,
+        samples=0,
+        shadows=False,
+        background=Background(kind="transparent"),
+    )
     r.draw(frame, surface.view)  # type: ignore[attr-defined, arg-type]
     alpha: np.ndarray = r.read_rgba_top()[..., 3]
     return alpha
@@ -243,11 +299,23 @@ def test_ahead_teacher_is_an_inset_ahead_of_the_show(gl_ok: None, groove: object
 
 def test_bad_teacher_is_one_line_and_exit_2(tmp_path: Path, groove_dir: Path) -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "services", "practice", str(groove_dir / FUNK), "--virtual",
-         "pads", "--teacher", "ahead:soon", "--no-sound"],
-        capture_output=True, text=True, timeout=60,
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "practice",
+            str(groove_dir / FUNK),
+            "--virtual",
+            "pads",
+            "--teacher",
+            "ahead:soon",
+            "--no-sound",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
         env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path)},
-    )  # fmt: skip
+    )
     assert done.returncode == 2
     assert done.stderr.strip().splitlines()[-1] == (
         "livedrummer: error: --teacher 'ahead:soon': 'soon' is not a number of seconds"
@@ -263,8 +331,9 @@ def read_png(path: Path) -> np.ndarray:
     return np.asarray(Image.open(path).convert("RGB"))
 
 
-def silhouette_strays(shots: list[tuple[Path, float]], kit: object, teacher: object,
-                      size: tuple[int, int]) -> list[int]:  # fmt: skip
+def silhouette_strays(
+    shots: list[tuple[Path, float]], kit: object, teacher: object, size: tuple[int, int]
+) -> list[int]:
     """Per (frame PNG, reference second): the frame's tinted pixels outside the teacher's
     silhouette at that second (grown by a pixel), the silhouette rendered by the display's own
     view in a real context."""
@@ -317,13 +386,48 @@ def test_practice_headless_shows_player_ghost_and_readout(
     env["LP_NUM_THREADS"] = "1"  # llvmpipe on one core: the scripted player keeps its times
     w, h = 320, 180
     proc = subprocess.Popen(
-        [sys.executable, "-m", "services", "practice", str(ref), "--virtual", "pads", "--api",
-         "jack", "--map", "roland-td", "--bars", "2:2", "--count-in", "1", "--no-sound",
-         "--json", "--take", str(take), "--seconds", "40", "--passes", "1", "--headless",
-         "--png", "--frames-dir", str(frames), "--size", f"{w}x{h}", "--fps", "12",
-         "--teacher", "ghost", "--port-base", str(20000 + os.getpid() % 20000)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "practice",
+            str(ref),
+            "--virtual",
+            "pads",
+            "--api",
+            "jack",
+            "--map",
+            "roland-td",
+            "--bars",
+            "2:2",
+            "--count-in",
+            "1",
+            "--no-sound",
+            "--json",
+            "--take",
+            str(take),
+            "--seconds",
+            "40",
+            "--passes",
+            "1",
+            "--headless",
+            "--png",
+            "--frames-dir",
+            str(frames),
+            "--size",
+            f"{w}x{h}",
+            "--fps",
+            "12",
+            "--teacher",
+            "ghost",
+            "--port-base",
+            str(20000 + os.getpid() % 20000),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     try:
         assert proc.stdout is not None
         plan = json.loads(proc.stdout.readline())
@@ -357,10 +461,27 @@ def test_practice_headless_shows_player_ghost_and_readout(
         # still equals the score of its take, checked below in every case)
         assert (live["missed"], live["wrong_piece"], live["extra"]) == (1, 1, 0)
     scored = subprocess.run(
-        [sys.executable, "-m", "services", "practice", "score", str(ref), str(take), "--map",
-         "roland-td", "--take-map", "roland-td", "--bars", "2:2", "--json"],
-        capture_output=True, text=True, timeout=60, env=env,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "practice",
+            "score",
+            str(ref),
+            str(take),
+            "--map",
+            "roland-td",
+            "--take-map",
+            "roland-td",
+            "--bars",
+            "2:2",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
     score = json.loads(scored.stdout)
     for key in ("reference_notes", "hits", "missed", "wrong_piece", "extra", "perfect", "good"):
         assert score[key] == live[key], key
@@ -419,11 +540,19 @@ def test_practice_headless_shows_player_ghost_and_readout(
     from services.display.practice_view import MARGIN
 
     messages: list[dict[str, object]] = [
-        {"plan": {"pass": 1, "bars": [2, 2], "bpm": plan["bpm"], "window_ms": 100.0,
-                  "level_ms": 40.0, "teacher": "ghost"}},
+        {
+            "plan": {
+                "pass": 1,
+                "bars": [2, 2],
+                "bpm": plan["bpm"],
+                "window_ms": 100.0,
+                "level_ms": 40.0,
+                "teacher": "ghost",
+            }
+        },
         *({"hit": hit} for hit in hits),
         {"summary": {"pass": 1, "lines": summary_lines(live)}},
-    ]  # fmt: skip
+    ]
 
     def shows_its_panel(frame: dict[str, object]) -> bool:
         panel = PracticePanel()
@@ -466,23 +595,58 @@ def test_practice_opens_a_window_where_there_is_a_screen(
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     env.update(LIVEDRUMMER_HOME=str(tmp_path / "home"), LP_NUM_THREADS="1")
     proc = subprocess.Popen(
-        ["xvfb-run", "-n", str(num), "-s", f"-screen 0 {w}x{h}x24 -ac", sys.executable, "-m",
-         "services", "practice", str(groove_dir / FUNK), "--virtual", "pads", "--api", "jack",
-         "--map", "roland-td", "--bars", "2:3", "--no-sound", "--json", "--no-save",
-         "--seconds", "60", "--size", f"{w}x{h}", "--fps", "10",
-         "--port-base", str(20000 + (os.getpid() + 7) % 20000)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-    )  # fmt: skip
+        [
+            "xvfb-run",
+            "-n",
+            str(num),
+            "-s",
+            f"-screen 0 {w}x{h}x24 -ac",
+            sys.executable,
+            "-m",
+            "services",
+            "practice",
+            str(groove_dir / FUNK),
+            "--virtual",
+            "pads",
+            "--api",
+            "jack",
+            "--map",
+            "roland-td",
+            "--bars",
+            "2:3",
+            "--no-sound",
+            "--json",
+            "--no-save",
+            "--seconds",
+            "60",
+            "--size",
+            f"{w}x{h}",
+            "--fps",
+            "10",
+            "--port-base",
+            str(20000 + (os.getpid() + 7) % 20000),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     x = {**env, "DISPLAY": f":{num}"}
     try:
         assert proc.stdout is not None
         plan = json.loads(proc.stdout.readline())
         while time.monotonic() < plan["start_s"] + 0.5:
             time.sleep(0.01)
-        subprocess.run([sys.executable, str(grab), str(shot), f"{w}x{h}"], env=x, check=True,
-                       timeout=30)  # fmt: skip
-        subprocess.run("xdotool search --sync --name '^livedrummer' key q", shell=True, env=x,
-                       check=True, timeout=30)  # fmt: skip
+        subprocess.run(
+            [sys.executable, str(grab), str(shot), f"{w}x{h}"], env=x, check=True, timeout=30
+        )
+        subprocess.run(
+            "xdotool search --sync --name '^livedrummer' key q",
+            shell=True,
+            env=x,
+            check=True,
+            timeout=30,
+        )
         stdout, stderr = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:

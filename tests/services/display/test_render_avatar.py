@@ -62,8 +62,17 @@ def project(cam: Camera, points: np.ndarray, size: tuple[int, int] = (W, H)) -> 
 def floor_only(km: KitMesh) -> KitMesh:
     """The same stage floor (same lighting centre) without the kit's pieces."""
     keep = km.mesh == "floor"
-    names = ("mesh", "model", "color", "material", "highlight_weight", "piece", "motion",
-             "pivot", "axis")  # fmt: skip
+    names = (
+        "mesh",
+        "model",
+        "color",
+        "material",
+        "highlight_weight",
+        "piece",
+        "motion",
+        "pivot",
+        "axis",
+    )
     return dataclasses.replace(km, **{n: getattr(km, n)[keep] for n in names})
 
 
@@ -124,9 +133,16 @@ def test_weights_are_renormalised_on_the_gpu(ctx: Any) -> None:
     r = Renderer(ctx, empty_stage(), BODY_SKELETON, (64, 64), samples=0, avatar=avatar)
     assert r.skinned is not None
     r.skinned._vbo.write(  # the shader reads the scaled weights
-        np.column_stack([scaled.positions, scaled.normals, scaled.uv,
-                         scaled.joints.astype(np.float32), scaled.weights]).astype(np.float32)
-    )  # fmt: skip
+        np.column_stack(
+            [
+                scaled.positions,
+                scaled.normals,
+                scaled.uv,
+                scaled.joints.astype(np.float32),
+                scaled.weights,
+            ]
+        ).astype(np.float32)
+    )
     rot = np.tile(np.array([1, 0, 0, 0], np.float32), (N_JOINTS, 1))
     pos = mesh.bind[:, :3, 3] + np.array([0.0, 0.0, 0.5], np.float32)
     gpu = r.skinned.skinned_positions(rot, pos)
@@ -147,8 +163,9 @@ def test_the_silhouette_covers_the_skinned_mesh(ctx: Any, scene: BodyScene) -> N
     union = (drawn | expect).sum()
     assert (drawn & expect).sum() / union > 0.95
     # the rest pose does not cover it: the skinning moved the mesh
-    rest = rasterise(project(cam, AVATAR.mesh.positions.astype(np.float64)),
-                     AVATAR.mesh.indices.reshape(-1, 3))  # fmt: skip
+    rest = rasterise(
+        project(cam, AVATAR.mesh.positions.astype(np.float64)), AVATAR.mesh.indices.reshape(-1, 3)
+    )
     assert (rest & expect).sum() / (rest | expect).sum() < 0.8
 
 
@@ -221,8 +238,9 @@ def test_the_face_is_visible_from_the_front(ctx: Any, scene: BodyScene) -> None:
 
 @pytest.mark.parametrize("kit_name", ["rock5", "rock5-left"])
 @pytest.mark.parametrize("camera", ["front", "stage"])
-def test_front_and_stage_frame_drummer_and_kit(ctx: Any, scene: BodyScene, groove: Performance,
-                                               kit_name: str, camera: str) -> None:  # fmt: skip
+def test_front_and_stage_frame_drummer_and_kit(
+    ctx: Any, scene: BodyScene, groove: Performance, kit_name: str, camera: str
+) -> None:
     from livedrummer.midi.notemap import load_note_map
     from services.cli.files import DEMO_MAP
 

@@ -205,8 +205,22 @@ def alpha_frames(path: Path) -> list[np.ndarray]:
 @pytest.mark.parametrize("suffix", [".mov", ".webm"])
 def test_transparent_video_decodes_back_with_alpha(midi: Path, tmp_path: Path, suffix: str) -> None:
     out = tmp_path / f"show{suffix}"
-    argv = ["render", str(midi), "--size", "160x90", "--fps", "10", "--tail", "0",
-            "--camera", "front", "--background", "transparent", "-o", str(out)]  # fmt: skip
+    argv = [
+        "render",
+        str(midi),
+        "--size",
+        "160x90",
+        "--fps",
+        "10",
+        "--tail",
+        "0",
+        "--camera",
+        "front",
+        "--background",
+        "transparent",
+        "-o",
+        str(out),
+    ]
     assert main(argv) == 0
     alphas = alpha_frames(out)
     assert len(alphas) >= 4
@@ -218,8 +232,20 @@ def test_transparent_video_decodes_back_with_alpha(midi: Path, tmp_path: Path, s
 
 def test_transparent_pngs_and_bad_values(midi: Path, tmp_path: Path, capsys: Any) -> None:
     frames = tmp_path / "frames"
-    argv = ["render", str(midi), "--size", "160x90", "--fps", "10", "--tail", "0",
-            "--camera", "front", "--background", "transparent"]  # fmt: skip
+    argv = [
+        "render",
+        str(midi),
+        "--size",
+        "160x90",
+        "--fps",
+        "10",
+        "--tail",
+        "0",
+        "--camera",
+        "front",
+        "--background",
+        "transparent",
+    ]
     assert main([*argv, "--frames-dir", str(frames)]) == 0
     first = sorted(frames.glob("*.png"))[0]
     with av.open(str(first)) as c:
@@ -252,12 +278,33 @@ def test_the_live_headless_recording_has_the_background(tmp_path: Path) -> None:
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
     done = subprocess.run(
-        [sys.executable, "-m", "services", "up", "--demo", "--headless", "--port-base", str(base),
-         "--seconds", "2", "--background", "chroma", "--frames-dir", str(frames), "--png",
-         "--size", "160x90", "--fps", "10"],
-        capture_output=True, text=True, timeout=120, env=env,
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            "--demo",
+            "--headless",
+            "--port-base",
+            str(base),
+            "--seconds",
+            "2",
+            "--background",
+            "chroma",
+            "--frames-dir",
+            str(frames),
+            "--png",
+            "--size",
+            "160x90",
+            "--fps",
+            "10",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
         cwd=Path(__file__).resolve().parents[3],
-    )  # fmt: skip
+    )
     assert done.returncode == 0, done.stderr[-1500:]
     pngs = sorted(frames.glob("*.png"))
     assert pngs, done.stderr[-800:]
@@ -268,8 +315,18 @@ def test_the_live_headless_recording_has_the_background(tmp_path: Path) -> None:
 
 
 def test_render_look_picks_the_show_lights(midi: Path, tmp_path: Path, capsys: Any) -> None:
-    argv = ["render", str(midi), "--size", "160x90", "--fps", "10", "--end", "0.3",
-            "--camera", "front"]  # fmt: skip
+    argv = [
+        "render",
+        str(midi),
+        "--size",
+        "160x90",
+        "--fps",
+        "10",
+        "--end",
+        "0.3",
+        "--camera",
+        "front",
+    ]
     shown = {}
     for look in ("concert", "neon"):
         frames = tmp_path / look

@@ -29,8 +29,19 @@ from services.display.renderer import Renderer
 
 W, H = 320, 180
 # General MIDI at 120 bpm, 480 ticks per beat: kick, hi-hat, snare + hi-hat, hi-hat, kick...
-NOTES = [(0, 36), (0, 42), (240, 42), (240, 38), (0, 42), (240, 42), (240, 36), (0, 42),
-         (240, 38), (0, 42), (480, 49)]  # fmt: skip
+NOTES = [
+    (0, 36),
+    (0, 42),
+    (240, 42),
+    (240, 38),
+    (0, 42),
+    (240, 42),
+    (240, 36),
+    (0, 42),
+    (240, 38),
+    (0, 42),
+    (480, 49),
+]
 
 
 @pytest.fixture(scope="module")

@@ -36,8 +36,15 @@ def test_the_cached_static_shadow_map_gives_the_fully_redrawn_frame() -> None:
         cam = pick_camera(kit, "stage")
         size = (320, 180)
         cached = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, fxaa=True)
-        full = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, fxaa=True,
-                        cache_static_shadow=False)  # fmt: skip
+        full = Renderer(
+            ctx,
+            build_kit_mesh(kit),
+            BODY_SKELETON,
+            size,
+            samples=0,
+            fxaa=True,
+            cache_static_shadow=False,
+        )
         assert cached.cache_static_shadow and not full.cache_static_shadow
         for frame in frames:
             cached.draw(frame, cam)

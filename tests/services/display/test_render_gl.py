@@ -101,9 +101,13 @@ def test_the_struck_piece_lights_up(ctx: Any) -> None:
     x, y = project(cam, c[None])[0].astype(int)
     assert after[y, x].sum() - before[y, x].sum() > 150
     changed = np.abs(after - before).sum(axis=2) > 6
-    outline = project(cam, np.r_[ring(c, piece.normal, piece.radius_m * 1.05),
-                                 ring(c - piece.depth_m * piece.normal, piece.normal,
-                                      piece.radius_m * 1.05)])  # fmt: skip
+    outline = project(
+        cam,
+        np.r_[
+            ring(c, piece.normal, piece.radius_m * 1.05),
+            ring(c - piece.depth_m * piece.normal, piece.normal, piece.radius_m * 1.05),
+        ],
+    )
     ys, xs = np.nonzero(changed)
     assert xs.min() >= outline[:, 0].min() - 2 and xs.max() <= outline[:, 0].max() + 2
     assert ys.min() >= outline[:, 1].min() - 2 and ys.max() <= outline[:, 1].max() + 2

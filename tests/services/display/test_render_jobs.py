@@ -103,8 +103,22 @@ def read_png(path: Path) -> np.ndarray:
 
 
 def _render(*extra: str) -> None:
-    code = main(["render", "--size", SIZE, "--fps", "20", "--start", "2.5", "--end", "4.2",
-                 "--tail", "0", *extra])  # fmt: skip
+    code = main(
+        [
+            "render",
+            "--size",
+            SIZE,
+            "--fps",
+            "20",
+            "--start",
+            "2.5",
+            "--end",
+            "4.2",
+            "--tail",
+            "0",
+            *extra,
+        ]
+    )
     assert code == 0
 
 
@@ -169,15 +183,35 @@ def test_a_stage_from_workers_is_one_process_stage(tmp_path: Path) -> None:
     counts = write_band(tmp_path / "band.mid")
     (tmp_path / "duo.toml").write_text(
         '[formation]\nshape = "line"\nspacing = 4.0\n\n'
-        + "".join(f'[[performer]]\nid = "d{c}"\nfile = "band.mid"\nchannel = {c}\n'
-                  f'map = "general-midi"\n\n' for c in list(counts)[:2])
-    )  # fmt: skip
+        + "".join(
+            f'[[performer]]\nid = "d{c}"\nfile = "band.mid"\nchannel = {c}\n'
+            f'map = "general-midi"\n\n'
+            for c in list(counts)[:2]
+        )
+    )
     dirs = []
     for jobs in ("1", "2"):
         dirs.append(tmp_path / f"jobs{jobs}")
-        assert main(["render", "--stage", str(tmp_path / "duo.toml"), "--frames-dir",
-                     str(dirs[-1]), "--size", "192x108", "--fps", "12", "--end", "3",
-                     "--jobs", jobs]) == 0  # fmt: skip
+        assert (
+            main(
+                [
+                    "render",
+                    "--stage",
+                    str(tmp_path / "duo.toml"),
+                    "--frames-dir",
+                    str(dirs[-1]),
+                    "--size",
+                    "192x108",
+                    "--fps",
+                    "12",
+                    "--end",
+                    "3",
+                    "--jobs",
+                    jobs,
+                ]
+            )
+            == 0
+        )
     names = sorted(p.name for p in dirs[0].iterdir())
     assert len(names) == 36
     assert names == sorted(p.name for p in dirs[1].iterdir())
@@ -185,8 +219,9 @@ def test_a_stage_from_workers_is_one_process_stage(tmp_path: Path) -> None:
         assert np.array_equal(read_png(dirs[0] / name), read_png(dirs[1] / name)), name
 
 
-def test_bad_jobs_is_one_line_and_exit_2(tmp_path: Path,
-                                         capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+def test_bad_jobs_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     code = main(["render", "--jobs", "0", "-o", str(tmp_path / "x.mp4")])
     err = capsys.readouterr().err.strip()
     assert code == 2

@@ -50,8 +50,9 @@ def test_a_frame_from_the_layer_equals_the_fully_drawn_frame(config: str) -> Non
     try:
         size = (256, 144)
         layered = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, **kw)
-        full = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0,
-                        static_layer=False, **kw)  # fmt: skip
+        full = Renderer(
+            ctx, build_kit_mesh(kit), BODY_SKELETON, size, samples=0, static_layer=False, **kw
+        )
         assert layered.layer is not None and full.layer is None
         redrawn = []
         for name in CAMERA_NAMES:
@@ -139,8 +140,10 @@ def test_a_window_frame_drawn_through_the_layer_and_presented_equals_the_full_pa
     ctx = headless_context()
     try:
         size = (256, 144)
-        screen = ctx.framebuffer(color_attachments=[ctx.renderbuffer(size, 4)],
-                                 depth_attachment=ctx.depth_renderbuffer(size))  # fmt: skip
+        screen = ctx.framebuffer(
+            color_attachments=[ctx.renderbuffer(size, 4)],
+            depth_attachment=ctx.depth_renderbuffer(size),
+        )
         kw: dict[str, Any] = {"samples": 0, "fxaa": fxaa}
         layered = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, **kw)
         full = Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, size, static_layer=False, **kw)

@@ -45,9 +45,14 @@ def test_a_light_parameter_changes_one_light_only() -> None:
     assert out.rim.intensity == 5.0 and out.key == rig.key and out.fill == rig.fill
     assert with_light_param(rig, "fill", "color", "#ff0000").fill.color == (1.0, 0.0, 0.0)
     assert with_light_param(rig, "fill", "g", 0.25).fill.color[1] == 0.25
-    for light, param, value in (("spot", "intensity", 1.0), ("key", "size", 1.0),
-                                ("key", "intensity", -1.0), ("key", "elevation", 120.0),
-                                ("key", "color", "red"), ("key", "r", float("nan"))):  # fmt: skip
+    for light, param, value in (
+        ("spot", "intensity", 1.0),
+        ("key", "size", 1.0),
+        ("key", "intensity", -1.0),
+        ("key", "elevation", 120.0),
+        ("key", "color", "red"),
+        ("key", "r", float("nan")),
+    ):
         with pytest.raises(LightError, match=light):
             with_light_param(rig, light, param, value)
 
@@ -68,10 +73,12 @@ def test_cameras_frame_the_body_of_the_avatar_at_hand() -> None:
     small = SegmentLengths(**{f.name: getattr(base, f.name) * 0.8 for f in fields(base)})
     pts_default, pts_small = figure_points(KIT), figure_points(KIT, small)
     assert pts_small[:, 2].max() < pts_default[:, 2].max() - 0.1  # a shorter head top
-    near = np.linalg.norm(np.subtract(kit_cameras(KIT, small)["front"].eye,
-                                      kit_cameras(KIT, small)["front"].target))  # fmt: skip
-    far = np.linalg.norm(np.subtract(kit_cameras(KIT)["front"].eye,
-                                     kit_cameras(KIT)["front"].target))  # fmt: skip
+    near = np.linalg.norm(
+        np.subtract(kit_cameras(KIT, small)["front"].eye, kit_cameras(KIT, small)["front"].target)
+    )
+    far = np.linalg.norm(
+        np.subtract(kit_cameras(KIT)["front"].eye, kit_cameras(KIT)["front"].target)
+    )
     assert near < far  # a smaller drummer is framed closer
 
 
@@ -102,10 +109,22 @@ def test_default_cameras_are_lit_over_a_dark_hall(ctx: Any, rest_body: BodyScene
     size = (256, 144)
     frame = next(iter(rest_body.frames(np.array([6.5]))))
     lit_r = Renderer(ctx, build_kit_mesh(KIT), BODY_SKELETON, size, samples=0)
-    bare = Renderer(ctx, build_kit_mesh(KIT, floor=False), BODY_SKELETON, size, samples=0,
-                    background=parse_background("transparent"))  # fmt: skip
-    dark = Renderer(ctx, build_kit_mesh(KIT), BODY_SKELETON, size, samples=0,
-                    lights=with_light_param(look_rig("concert"), "key", "intensity", 0.0))  # fmt: skip
+    bare = Renderer(
+        ctx,
+        build_kit_mesh(KIT, floor=False),
+        BODY_SKELETON,
+        size,
+        samples=0,
+        background=parse_background("transparent"),
+    )
+    dark = Renderer(
+        ctx,
+        build_kit_mesh(KIT),
+        BODY_SKELETON,
+        size,
+        samples=0,
+        lights=with_light_param(look_rig("concert"), "key", "intensity", 0.0),
+    )
     for name in ("front", "stage", "drummer"):
         cam = kit_cameras(KIT)[name]
         lit_r.draw(frame, cam)
@@ -129,5 +148,6 @@ def rest_body() -> BodyScene:
     from services.cli.files import DEMO_MAP, demo_groove
 
     note_map = load_note_map(DEMO_MAP)
-    return BodyScene(KIT, perform(read_midi_file(demo_groove(), note_map), build_rig(KIT),
-                                  note_map))  # fmt: skip
+    return BodyScene(
+        KIT, perform(read_midi_file(demo_groove(), note_map), build_rig(KIT), note_map)
+    )

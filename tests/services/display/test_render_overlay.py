@@ -77,15 +77,20 @@ def sticking(kit: Kit, notes: list[tuple[float, int, int, int]]) -> Sticking:
     onsets = np.zeros(len(notes), ONSET_DTYPE)
     onsets["time_s"] = [n[0] for n in notes]
     onsets["velocity"] = [n[2] for n in notes]
-    return Sticking(onsets, np.array([n[3] for n in notes], np.int8),
-                    np.array([n[1] for n in notes], np.int16), {}, "test", kit.name)  # fmt: skip
+    return Sticking(
+        onsets,
+        np.array([n[3] for n in notes], np.int8),
+        np.array([n[1] for n in notes], np.int16),
+        {},
+        "test",
+        kit.name,
+    )
 
 
 # --- the score model -------------------------------------------------------------------------
 
 
-def test_a_note_scrolls_from_the_right_edge_through_the_now_line_to_the_left_edge(kit: Kit
-                                                                                 ) -> None:  # fmt: skip
+def test_a_note_scrolls_from_the_right_edge_through_the_now_line_to_the_left_edge(kit: Kit) -> None:
     snare = piece_of(kit, PieceKind.SNARE)
     model = ScoreModel.from_sticking(sticking(kit, [(10.0, snare, 100, LH)]), kit)
     assert HISTORY_S == LOOKAHEAD_S == 4.0
@@ -114,8 +119,10 @@ def test_the_window_holds_exactly_the_notes_within_four_seconds(kit: Kit) -> Non
         inside = times[(times >= now - 4.0) & (times <= now + 4.0)]
         assert view.x.size == inside.size
         np.testing.assert_allclose(view.x, 0.5 + (inside - now) / 8.0)
-        np.testing.assert_array_equal(view.lane, model.lanes.lane_of_piece[
-            pieces[(times >= now - 4.0) & (times <= now + 4.0)]])  # fmt: skip
+        np.testing.assert_array_equal(
+            view.lane,
+            model.lanes.lane_of_piece[pieces[(times >= now - 4.0) & (times <= now + 4.0)]],
+        )
 
 
 def test_lanes_run_like_a_drum_staff_cymbals_on_top_kick_at_the_bottom(kit: Kit) -> None:
@@ -159,8 +166,9 @@ def test_overlay_names_parse_and_a_typo_names_itself() -> None:
 # --- joint angles ----------------------------------------------------------------------------
 
 
-def arm_pose(shoulder_dir: tuple[float, ...], fore_dir: tuple[float, ...],
-             stick_dir: tuple[float, ...]) -> np.ndarray:  # fmt: skip
+def arm_pose(
+    shoulder_dir: tuple[float, ...], fore_dir: tuple[float, ...], stick_dir: tuple[float, ...]
+) -> np.ndarray:
     """(24, 3) joints: a vertical spine and the right arm built from segment directions."""
     p = np.zeros((N_JOINTS, 3))
     p[J["lower_back"]] = (0.0, 0.0, 0.7)
@@ -216,8 +224,9 @@ def test_the_angle_model_samples_the_body(kit: Kit, groove: Path) -> None:
     model = AngleModel.from_body(body, 2.0, chunk=50)  # several chunks
     assert model.degrees.shape == (121, 6)
     t = np.array([0.5, 1.25])
-    np.testing.assert_allclose(model.degrees[(t * 60).astype(int)],
-                               joint_angles(body.arrays(t)[0]), atol=1e-3)  # fmt: skip
+    np.testing.assert_allclose(
+        model.degrees[(t * 60).astype(int)], joint_angles(body.arrays(t)[0]), atol=1e-3
+    )
     assert model.degrees[:, 1].max() - model.degrees[:, 1].min() > 5  # the elbows move
     view = model.view(1.0)
     np.testing.assert_allclose(view.x[view.x.size // 2], 0.5, atol=1 / 480)
@@ -231,7 +240,8 @@ def test_the_angle_model_samples_the_body(kit: Kit, groove: Path) -> None:
 def test_score_pixels_markers_background_and_now_line(kit: Kit) -> None:
     snare, kick = piece_of(kit, PieceKind.SNARE), piece_of(kit, PieceKind.KICK)
     model = ScoreModel.from_sticking(
-        sticking(kit, [(1.0, snare, 127, RH), (5.0, kick, 127, RF)]), kit)  # fmt: skip
+        sticking(kit, [(1.0, snare, 127, RH), (5.0, kick, 127, RF)]), kit
+    )
     strip = ScoreStrip(model, 640, 120)
     img = np.zeros((120, 640, 4), np.uint8)
     strip.paint(img, 3.0)
@@ -283,12 +293,25 @@ def test_graph_pixels_are_the_curves_colours_at_their_angles() -> None:
 
 def test_fill_boxes_clips_and_later_boxes_cover_earlier() -> None:
     img = np.zeros((10, 10, 4), np.uint8)
-    fill_boxes(img, np.array([-2, 5]), np.array([-2, 5]), np.array([5, 10]), np.array([5, 10]),
-               np.array([[1, 1, 1, 1], [2, 2, 2, 2]], np.uint8))  # fmt: skip
+    fill_boxes(
+        img,
+        np.array([-2, 5]),
+        np.array([-2, 5]),
+        np.array([5, 10]),
+        np.array([5, 10]),
+        np.array([[1, 1, 1, 1], [2, 2, 2, 2]], np.uint8),
+    )
     assert (img[:3, :3] == 1).all() and img[3, 3, 0] == 0
     assert (img[5:, 5:] == 2).all()
-    fill_boxes(img, np.array([0]), np.array([0]), np.array([5]), np.array([5]),
-               np.array([9, 9, 9, 9], np.uint8), np.array([True]))  # fmt: skip
+    fill_boxes(
+        img,
+        np.array([0]),
+        np.array([0]),
+        np.array([5]),
+        np.array([5]),
+        np.array([9, 9, 9, 9], np.uint8),
+        np.array([True]),
+    )
     assert img[2, 2, 0] == 9 and img[0, 0, 0] == 1 and img[0, 2, 0] == 9  # diamond
 
 
@@ -314,16 +337,23 @@ def test_strips_stack_at_the_bottom_score_above_graph(kit: Kit, groove: Path) ->
 @pytest.fixture
 def groove(write_midi) -> Path:  # type: ignore[no-untyped-def]
     msgs: list[mido.Message] = [mido.MetaMessage("set_tempo", tempo=500_000, time=0)]
-    for delta, note, vel in [(0, 36, 110), (240, 38, 100), (240, 42, 90), (240, 38, 127),
-                             (240, 36, 120), (240, 42, 70)]:  # fmt: skip
+    for delta, note, vel in [
+        (0, 36, 110),
+        (240, 38, 100),
+        (240, 42, 90),
+        (240, 38, 127),
+        (240, 36, 120),
+        (240, 42, 70),
+    ]:
         msgs.append(mido.Message("note_on", channel=9, note=note, velocity=vel, time=delta))
         msgs.append(mido.Message("note_off", channel=9, note=note, velocity=0, time=30))
     path: Path = write_midi(msgs)
     return path
 
 
-def test_the_overlay_is_blended_into_the_read_back_frame(gl_ok: None, kit: Kit, groove: Path
-                                                         ) -> None:  # fmt: skip
+def test_the_overlay_is_blended_into_the_read_back_frame(
+    gl_ok: None, kit: Kit, groove: Path
+) -> None:
     from livedrummer.midi.smf import read_midi_file
 
     nm = load_note_map("general-midi")
@@ -366,8 +396,23 @@ def test_render_command_draws_the_overlays(gl_ok: None, groove: Path, tmp_path: 
                                            capsys) -> None:  # fmt: skip
     def frame(argv: list[str], name: str) -> np.ndarray:
         out = tmp_path / name
-        code = main(["render", str(groove), "--frames-dir", str(out), "--size", "160x90", "--fps",
-                     "10", "--tail", "0", "--camera", "front", *argv])  # fmt: skip
+        code = main(
+            [
+                "render",
+                str(groove),
+                "--frames-dir",
+                str(out),
+                "--size",
+                "160x90",
+                "--fps",
+                "10",
+                "--tail",
+                "0",
+                "--camera",
+                "front",
+                *argv,
+            ]
+        )
         assert code == 0
         with av.open(str(sorted(out.glob("*.png"))[8])) as c:
             img: np.ndarray = next(iter(c.decode(video=0))).to_ndarray(format="rgb24")
@@ -394,12 +439,30 @@ def test_window_overlay_keys_are_free_and_name_each_overlay() -> None:
 @pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
 def test_window_plays_with_overlays_under_xvfb(groove: Path) -> None:
     run = subprocess.run(
-        ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", sys.executable, "-c",
-         "import sys; from services.cli import main; sys.exit(main())", "-v", "display",
-         str(groove), "--size", "640x360", "--aa", "0", "--overlay", "score,joints",
-         "--seconds", "1.5"],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        [
+            "xvfb-run",
+            "-a",
+            "-s",
+            "-screen 0 640x360x24",
+            sys.executable,
+            "-c",
+            "import sys; from services.cli import main; sys.exit(main())",
+            "-v",
+            "display",
+            str(groove),
+            "--size",
+            "640x360",
+            "--aa",
+            "0",
+            "--overlay",
+            "score,joints",
+            "--seconds",
+            "1.5",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 0, run.stderr
     line = next(ln for ln in run.stderr.splitlines() if "window:" in ln)
     assert int(line.split("window:")[1].split()[0]) > 3  # frames drawn

@@ -90,8 +90,9 @@ def test_up_videos_drum_track_stops_a_crash_the_journal_says_was_grabbed(
         )  # tests/livedrummer/audio/test_soundfont.py fails under CI without it
         t = np.arange(3 * 48_000) / 48_000  # rings for seconds, through its note-off
         wave = 0.8 * np.cos(2 * np.pi * 440.0 * t) * np.exp(-t / 1.5)
-        soundfont = write_sf2(tmp_path / "ringing.sf2", np.round(wave * 32767).astype("<i2"),
-                              release_s=8.0)  # fmt: skip
+        soundfont = write_sf2(
+            tmp_path / "ringing.sf2", np.round(wave * 32767).astype("<i2"), release_s=8.0
+        )
     video, frames, show0 = tmp_path / "show.mp4", 2 * FPS, 1000.0
     writer = VideoWriter(video, VideoSettings(size=SIZE, fps=FPS))
     for _ in range(frames):
@@ -102,16 +103,26 @@ def test_up_videos_drum_track_stops_a_crash_the_journal_says_was_grabbed(
     # (polyphonic aftertouch on its note) at 1000.75
     spec = load_note_map("general-midi").lookup(49)
     assert spec is not None
-    hit = np.array([Onset(show0 + 0.25, 49, 120, 9, spec.instrument, spec.zone, spec.hihat,
-                          math.nan).to_record()], ONSET_DTYPE)  # fmt: skip
+    hit = np.array(
+        [
+            Onset(
+                show0 + 0.25, 49, 120, 9, spec.instrument, spec.zone, spec.hihat, math.nan
+            ).to_record()
+        ],
+        ONSET_DTYPE,
+    )
     grab = np.array([(show0 + 0.75, ControlKind.CHOKE, 9, 49, 127, 0)], CONTROL_DTYPE)
     sessions = tmp_path / "sessions"
     journal = JournalWriter.create({"performer": 0}, MonotonicClock(), sessions, "s1", 0.0)
     journal.append_onsets(hit, show0 + 0.25, 0)
     journal.append_controls(grab, show0 + 0.75, 0)
     journal.close()
-    settings = ShowSettings("general-midi", "rock5", delay=Delay(delay_s=0.030),
-                            sound=Sound(kit_file=None if soundfont is None else str(soundfont)))  # fmt: skip
+    settings = ShowSettings(
+        "general-midi",
+        "rock5",
+        delay=Delay(delay_s=0.030),
+        sound=Sound(kit_file=None if soundfont is None else str(soundfont)),
+    )
     add_drum_track(settings, video, sessions, started=0.0)
     assert "1 hits in its drum track" in capsys.readouterr().out
     with av.open(str(video)) as c:
@@ -147,8 +158,13 @@ while w._queue.qsize():  # the test's only look inside: wait for the encoder to 
 time.sleep(0.3)
 os.kill(os.getpid(), signal.SIGKILL)
 """
-    done = subprocess.run([sys.executable, "-c", script], cwd=Path(__file__).parents[3],
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        cwd=Path(__file__).parents[3],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == -9, done.stderr[-2000:]
     frames = 0
     with av.open(str(video)) as c:
@@ -165,11 +181,22 @@ def test_a_recordings_track_is_mixed_on_disk_not_in_memory() -> None:
 
     spec = load_note_map("general-midi").lookup(38)
     assert spec is not None
-    hits = np.array([Onset(t, 38, 100, 9, spec.instrument, spec.zone, spec.hihat,
-                           math.nan).to_record() for t in (10.1, 10.6)], ONSET_DTYPE)  # fmt: skip
+    hits = np.array(
+        [
+            Onset(t, 38, 100, 9, spec.instrument, spec.zone, spec.hihat, math.nan).to_record()
+            for t in (10.1, 10.6)
+        ],
+        ONSET_DTYPE,
+    )
     kit = load_kit("rock5")
-    track = recording_track(hits, np.zeros(0, CONTROL_DTYPE), Timing(10.0, FPS, 2 * FPS),
-                            delay_s=0.03, kit=kit, note_map=load_note_map("general-midi"))  # fmt: skip
+    track = recording_track(
+        hits,
+        np.zeros(0, CONTROL_DTYPE),
+        Timing(10.0, FPS, 2 * FPS),
+        delay_s=0.03,
+        kit=kit,
+        note_map=load_note_map("general-midi"),
+    )
     assert isinstance(track, np.memmap)  # page cache, written out under pressure
     shifted = hits.copy()
     shifted["time_s"] += 0.03 - 10.0

@@ -42,12 +42,20 @@ def test_a_source_is_parsed_and_a_bad_one_is_one_line_naming_the_performer(
     assert parse_source("midi:TD-17").opens_midi
     remote = parse_source("remote:tcp://10.0.0.2:5710,control=tcp://10.0.0.2:5711")
     assert remote == LiveSource("remote", "tcp://10.0.0.2:5710", "tcp://10.0.0.2:5711")
-    assert remote.input_argv() == ["--remote", "tcp://10.0.0.2:5710",
-                                   "--remote-control", "tcp://10.0.0.2:5711"]  # fmt: skip
+    assert remote.input_argv() == [
+        "--remote",
+        "tcp://10.0.0.2:5710",
+        "--remote-control",
+        "tcp://10.0.0.2:5711",
+    ]
     assert parse_source("file:a.mid", tmp_path).value == str(tmp_path / "a.mid")
-    for bad, why in (("pads", "KIND:VALUE"), ("remote:host:5710", "tcp://HOST:PORT"),
-                     ("virtual:pads,control=tcp://a:1", "only remote"),
-                     ("remote:tcp://a:1,control=b", "control="), ("midi:", "nothing after")):  # fmt: skip
+    for bad, why in (
+        ("pads", "KIND:VALUE"),
+        ("remote:host:5710", "tcp://HOST:PORT"),
+        ("virtual:pads,control=tcp://a:1", "only remote"),
+        ("remote:tcp://a:1,control=b", "control="),
+        ("midi:", "nothing after"),
+    ):
         with pytest.raises(ValueError, match=why):
             parse_source(bad)
     path = tmp_path / "s.toml"
@@ -84,8 +92,10 @@ def test_each_stream_keeps_its_own_sequence_and_refuses_another_performer() -> N
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
     pubs = [ctx.socket(zmq.PUB) for _ in range(2)]
     eps = [f"tcp://127.0.0.1:{s.bind_to_random_port('tcp://127.0.0.1')}" for s in pubs]
-    who = [StagePerformer(name, k + 3, ep, kit, Placement(2.0 * k, 0.0, 0.0))
-           for k, (name, ep) in enumerate(zip("ab", eps, strict=True))]  # fmt: skip
+    who = [
+        StagePerformer(name, k + 3, ep, kit, Placement(2.0 * k, 0.0, 0.0))
+        for k, (name, ep) in enumerate(zip("ab", eps, strict=True))
+    ]
     clock = MonotonicFrameClock()
     display = StageDisplay(who, StageConfig(fps=50, render=False, frames=40), clock, ctx)
     display.start()
@@ -142,8 +152,7 @@ def test_the_onsets_and_controls_a_synth_forwards_are_numbered_not_bad() -> None
         onset["velocity"], onset["time_s"], control["time_s"] = 90, now, now
         pub.send_multipart(_pose_message(3, 0, now, len(kit.pieces)))
         pub.send_multipart(encode(Message(Kind.SHOWN_ONSET, onset, 3, 1, now, Stream.POSES)))
-        pub.send_multipart(encode(Message(Kind.SHOWN_CONTROL, control, 3, 2, now,
-                                          Stream.POSES)))  # fmt: skip
+        pub.send_multipart(encode(Message(Kind.SHOWN_CONTROL, control, 3, 2, now, Stream.POSES)))
         pub.send_multipart(_pose_message(3, 3, now + 0.01, len(kit.pieces)))
         thread.join(10)
     finally:
@@ -200,15 +209,21 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
     source = FileSource(demo_groove(), remote_clock, load_note_map(DEMO_MAP), loop=True)
     source.load()
     any_port = "tcp://127.0.0.1:*"
-    site = InputDaemon(source, DaemonConfig(pub=any_port, control=any_port, journal=False,
-                                            wait_subscribers=1), remote_clock, ctx)  # fmt: skip
+    site = InputDaemon(
+        source,
+        DaemonConfig(pub=any_port, control=any_port, journal=False, wait_subscribers=1),
+        remote_clock,
+        ctx,
+    )
     eps = site.start()
     stop = threading.Event()
     relay_at: list[str] = []
     proxy_at: list[str] = []
-    threads = [threading.Thread(target=jitter_relay, args=(ctx, eps["pub"], stop, relay_at)),
-               threading.Thread(target=control_proxy, args=(ctx, eps["control"], stop, proxy_at)),
-               threading.Thread(target=site.run, args=(stop,))]  # fmt: skip
+    threads = [
+        threading.Thread(target=jitter_relay, args=(ctx, eps["pub"], stop, relay_at)),
+        threading.Thread(target=control_proxy, args=(ctx, eps["control"], stop, proxy_at)),
+        threading.Thread(target=site.run, args=(stop,)),
+    ]
     for t in threads:
         t.start()
     while not relay_at or not proxy_at:
@@ -223,11 +238,35 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
     frames = tmp_path / "frames"
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
     up = subprocess.Popen(
-        [sys.executable, "-m", "services", "up", "--stage", str(stage), "--api", "jack",
-         "--headless", "--video", str(tmp_path / "stage.mp4"), "--frames-dir", str(frames), "--fps", "10", "--size",
-         "330x150", "--camera", "front", "--port-base", "7300", "--no-journal"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            "--stage",
+            str(stage),
+            "--api",
+            "jack",
+            "--headless",
+            "--video",
+            str(tmp_path / "stage.mp4"),
+            "--frames-dir",
+            str(frames),
+            "--fps",
+            "10",
+            "--size",
+            "330x150",
+            "--camera",
+            "front",
+            "--port-base",
+            "7300",
+            "--no-journal",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     try:
         assert up.stdout is not None
         deadline = time.monotonic() + 120
@@ -273,8 +312,9 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
     # every stream drawn; A's and C's lost nothing while B's synth was restarted, alone
     for name, lost in (("a", "0"), ("b", r"\d+"), ("c", "0")):
         restarts = "1" if name == "b" else "0"
-        assert re.search(rf"{name}: [1-9]\d* pose samples, {lost} lost, 0 bad, {restarts} restarts",
-                         err), err[-1500:]  # fmt: skip
+        assert re.search(
+            rf"{name}: [1-9]\d* pose samples, {lost} lost, 0 bad, {restarts} restarts", err
+        ), err[-1500:]
     assert "up: stopped (1 restarts)" in err, err[-1500:]
     # while B's stream was down, A's drummer kept getting poses; B drew its hits again after
     after = [r for r in log if r["render_s"] > killed_at + 0.2]  # what was in flight drawn
@@ -286,8 +326,12 @@ def test_up_stage_puts_two_local_kits_and_a_remote_site_on_one_stage(
         outage.append(r)
     a_newest = [r["performers"][0]["newest_s"] for r in outage]
     assert len(outage) >= 3 and a_newest[-1] - a_newest[0] > 0.2, (len(outage), a_newest)
-    back = {x for r in log if r["render_s"] > killed_at + 0.5
-            and r["performers"][1]["newest_s"] > b_at_kill for x in r["performers"][1]["lit"]}  # fmt: skip
+    back = {
+        x
+        for r in log
+        if r["render_s"] > killed_at + 0.5 and r["performers"][1]["newest_s"] > b_at_kill
+        for x in r["performers"][1]["lit"]
+    }
     assert back == {"tom1"}, back
     import av
 
@@ -325,17 +369,24 @@ def test_one_pass_depth_tested_drawing_is_the_offline_merge_by_depth(tmp_path: P
         live = painter.read_rgba().astype(int)
         world = group_camera_for(kit, spots, "front", w / h)
         colours, depths = [], []
-        renderers = [Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, (w, h), samples=0,
-                              offscreen=False) for _ in spots]  # fmt: skip
+        renderers = [
+            Renderer(ctx, build_kit_mesh(kit), BODY_SKELETON, (w, h), samples=0, offscreen=False)
+            for _ in spots
+        ]
         cells = cell_neighbours(spots, [r.pool_centre() for r in renderers])
         for s, r, cell in zip(spots, renderers, cells, strict=True):
             r.floor_cell_others = cell
-            fbo = ctx.framebuffer(color_attachments=[ctx.texture((w, h), 4)],
-                                  depth_attachment=ctx.depth_texture((w, h)))  # fmt: skip
+            fbo = ctx.framebuffer(
+                color_attachments=[ctx.texture((w, h), 4)],
+                depth_attachment=ctx.depth_texture((w, h)),
+            )
             r.draw(None, local_camera(world, s), target=fbo)
             colours.append(np.frombuffer(fbo.read(components=4), np.uint8).reshape(h, w, 4))
-            depths.append(np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4"),
-                                        np.float32).reshape(h, w))  # fmt: skip
+            depths.append(
+                np.frombuffer(
+                    fbo.read(components=1, attachment=-1, dtype="f4"), np.float32
+                ).reshape(h, w)
+            )
         nearest = np.argmin(np.stack(depths), axis=0)
         offline = np.take_along_axis(np.stack(colours), nearest[None, :, :, None], 0)[0]
         offline = offline.astype(int)
@@ -350,20 +401,55 @@ def test_one_pass_depth_tested_drawing_is_the_offline_merge_by_depth(tmp_path: P
 @pytest.mark.skipif(shutil.which("xvfb-run") is None, reason="xvfb-run not installed")
 def test_the_stage_display_draws_in_a_window_under_xvfb(tmp_path: Path) -> None:
     stage = tmp_path / "s.toml"
-    stage.write_text('[[performer]]\nid = "a"\nsource = "virtual:a"\n\n'
-                     '[[performer]]\nid = "b"\nsource = "midi:TD"\n')  # fmt: skip
+    stage.write_text(
+        '[[performer]]\nid = "a"\nsource = "virtual:a"\n\n'
+        '[[performer]]\nid = "b"\nsource = "midi:TD"\n'
+    )
     run = subprocess.run(
-        ["xvfb-run", "-a", "-s", "-screen 0 640x360x24", sys.executable, "-m", "services",
-         "display", "--live", "--stage", str(stage), "--sub",
-         "tcp://127.0.0.1:1,tcp://127.0.0.1:2", "--size", "320x180", "--max-frames", "6",
-         "--fps", "30"],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        [
+            "xvfb-run",
+            "-a",
+            "-s",
+            "-screen 0 640x360x24",
+            sys.executable,
+            "-m",
+            "services",
+            "display",
+            "--live",
+            "--stage",
+            str(stage),
+            "--sub",
+            "tcp://127.0.0.1:1,tcp://127.0.0.1:2",
+            "--size",
+            "320x180",
+            "--max-frames",
+            "6",
+            "--fps",
+            "30",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 0, run.stderr
     assert "display: 6 stage frames; a: 0 pose samples" in run.stderr, run.stderr
-    short = subprocess.run([sys.executable, "-m", "services", "display", "--live", "--stage",
-                            str(stage), "--sub", "tcp://127.0.0.1:1", "--headless"],
-                           capture_output=True, text=True, timeout=60)  # fmt: skip
+    short = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "display",
+            "--live",
+            "--stage",
+            str(stage),
+            "--sub",
+            "tcp://127.0.0.1:1",
+            "--headless",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert short.returncode == 2 and "1 endpoints for 2 live performers" in short.stderr
     assert short.stderr.strip().count("\n") == 0
 
@@ -382,15 +468,25 @@ def test_a_stage_performers_map_is_resolved_once_for_its_input_and_synths(
     from services.cli.up_stage import stage_specs
 
     notes = [35, 60, 61, 62, 63, 64, 38, 42] * 4
-    groove = write_midi([m for n in notes for m in (mido.Message("note_on", channel=9, note=n,
-                         velocity=100, time=120), mido.Message("note_off", channel=9, note=n,
-                         time=0))], name="congas.mid")  # fmt: skip
+    groove = write_midi(
+        [
+            m
+            for n in notes
+            for m in (
+                mido.Message("note_on", channel=9, note=n, velocity=100, time=120),
+                mido.Message("note_off", channel=9, note=n, time=0),
+            )
+        ],
+        name="congas.mid",
+    )
     best = read_midi_file(groove, bundled_note_maps()).map_name
     assert best != "roland-td"
     stage = tmp_path / "stage.toml"
-    stage.write_text('[ensemble]\ncopies = 2\n\n[[performer]]\nid = "file"\n'
-                     f'source = "file:{groove.name}"\n\n[[performer]]\nid = "kit"\n'
-                     'source = "virtual:pads"\nkit = "rock5-left"\n')  # fmt: skip
+    stage.write_text(
+        '[ensemble]\ncopies = 2\n\n[[performer]]\nid = "file"\n'
+        f'source = "file:{groove.name}"\n\n[[performer]]\nid = "kit"\n'
+        'source = "virtual:pads"\nkit = "rock5-left"\n'
+    )
     argv = ["up", "--stage", str(stage), "--headless", "--delay-ms", "60", "--lookahead-ms", "20"]
     args = build_parser(argv).parse_args(argv)
     folder = tmp_path / "settings"

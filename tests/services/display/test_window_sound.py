@@ -27,8 +27,9 @@ def ramp_track(n: int = SR) -> np.ndarray:
     return np.repeat(x, 2, axis=1)
 
 
-def play(r: TrackRenderer, request: Request | None, start_dac: float, blocks: int, n: int = 64
-         ) -> np.ndarray:  # fmt: skip
+def play(
+    r: TrackRenderer, request: Request | None, start_dac: float, blocks: int, n: int = 64
+) -> np.ndarray:
     return np.concatenate([r.render(n, start_dac + k * n / SR, request) for k in range(blocks)])
 
 
@@ -107,10 +108,18 @@ def test_the_window_sounds_each_hit_with_the_frame_that_shows_it(
     midi, log = hits_file(tmp_path / "hits.mid"), tmp_path / "frames.jsonl"
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     recorder = JackRecorder(env)
-    cmd = (f"{sys.executable} -m services display {midi} --map general-midi --size 320x180 "
-           f"--aa 0 --seconds 5.5 --audio-device 'system, JACK' --frame-log {log}")  # fmt: skip
-    run = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", cmd],
-                         cwd=REPO, capture_output=True, text=True, timeout=180, env=env)  # fmt: skip
+    cmd = (
+        f"{sys.executable} -m services display {midi} --map general-midi --size 320x180 "
+        f"--aa 0 --seconds 5.5 --audio-device 'system, JACK' --frame-log {log}"
+    )
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", cmd],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=180,
+        env=env,
+    )
     rec = recorder.stop()
     assert run.returncode == 0, run.stderr[-2000:]
     assert "no sound" not in run.stderr and rec.sources, run.stderr[-2000:]
@@ -125,11 +134,19 @@ def test_the_window_sounds_each_hit_with_the_frame_that_shows_it(
 def test_with_no_sound_output_the_window_plays_silently_and_says_so_once(tmp_path: Path) -> None:
     log = tmp_path / "frames.jsonl"
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    cmd = (f"{sys.executable} -m services display {hits_file(tmp_path / 'h.mid')} --map "
-           f"general-midi --size 160x90 --aa 0 --seconds 1.5 --audio-device no-such-output "
-           f"--frame-log {log}")  # fmt: skip
-    run = subprocess.run(["xvfb-run", "-a", "-s", "-screen 0 160x90x24", "sh", "-c", cmd],
-                         cwd=REPO, capture_output=True, text=True, timeout=120, env=env)  # fmt: skip
+    cmd = (
+        f"{sys.executable} -m services display {hits_file(tmp_path / 'h.mid')} --map "
+        f"general-midi --size 160x90 --aa 0 --seconds 1.5 --audio-device no-such-output "
+        f"--frame-log {log}"
+    )
+    run = subprocess.run(
+        ["xvfb-run", "-a", "-s", "-screen 0 160x90x24", "sh", "-c", cmd],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     said = [line for line in run.stderr.splitlines() if "no sound" in line]
     assert len(said) == 1 and "no-such-output" in said[0] and "monotonic" in said[0], run.stderr

@@ -44,10 +44,17 @@ def _same_hits(live: np.ndarray, offline: np.ndarray) -> float:
     differ by an offset, and rounding shifted stamps would reorder a snare and the hi-hat
     stamped 3-8 ms after it."""
     notes = np.array(GM_NOTES)[offline["cls"].astype(int)]
-    mine = sorted(zip(np.round(offline["time_s"], 4).tolist(), notes.tolist(),
-                      offline["velocity"].tolist(), strict=True))  # fmt: skip
-    theirs = sorted(zip(live["time_s"].tolist(), live["note"].tolist(),
-                        live["velocity"].tolist(), strict=True))  # fmt: skip
+    mine = sorted(
+        zip(
+            np.round(offline["time_s"], 4).tolist(),
+            notes.tolist(),
+            offline["velocity"].tolist(),
+            strict=True,
+        )
+    )
+    theirs = sorted(
+        zip(live["time_s"].tolist(), live["note"].tolist(), live["velocity"].tolist(), strict=True)
+    )
     same = sum(a[1:] == b[1:] for a, b in zip(mine, theirs, strict=False))
     return same / max(len(mine), 1)
 
@@ -111,15 +118,24 @@ def test_the_live_bench_at_real_time_priority(jack_server: str, groove) -> None:
     if "no real-time scheduling" not in run.stderr:  # granted (a warning line where refused)
         assert run.daemon_policy == os.SCHED_FIFO, run.stderr
     assert os.sched_getscheduler(0) == os.SCHED_OTHER
-    bad = subprocess.run([sys.executable, "-m", "services", "bench", "transcribe", "--live",
-                          "--realtime", "61"], cwd=REPO, capture_output=True, text=True,
-                         timeout=60)  # fmt: skip
+    bad = subprocess.run(
+        [sys.executable, "-m", "services", "bench", "transcribe", "--live", "--realtime", "61"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert bad.returncode == 2 and "--realtime 61: expected 1..60" in bad.stderr
 
 
 def _input(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "services", "input", *args], cwd=REPO,
-                          capture_output=True, text=True, timeout=60)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "services", "input", *args],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
 
 
 def test_bad_audio_devices_are_one_line(jack_server: str) -> None:
@@ -128,8 +144,13 @@ def test_bad_audio_devices_are_one_line(jack_server: str) -> None:
     assert r.stderr.strip().splitlines() == [
         "livedrummer: error: audio device 'no-such-card': no such audio input (inputs: 'system')"
     ]
-    up = subprocess.run([sys.executable, "-m", "services", "up", "--audio", "no-such-card",
-                         "--headless"], cwd=REPO, capture_output=True, text=True, timeout=60)  # fmt: skip
+    up = subprocess.run(
+        [sys.executable, "-m", "services", "up", "--audio", "no-such-card", "--headless"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert up.returncode == 2 and len(up.stderr.strip().splitlines()) == 1
     assert "audio device 'no-such-card': no such audio input" in up.stderr
     r = _input("--audio", "system", "--channels", "3=kick", "--no-journal")
@@ -145,9 +166,14 @@ def test_a_device_at_another_rate_is_refused_in_one_line(tmp_path: Path) -> None
     try:
         with dummy_jack("acoustic-rate", rate=44_100) as name:
             env = {**os.environ, **jack_env(name)}
-            r = subprocess.run([sys.executable, "-m", "services", "input", "--audio", "system",
-                                "--no-journal"], cwd=REPO, capture_output=True, text=True,
-                               timeout=60, env=env)  # fmt: skip
+            r = subprocess.run(
+                [sys.executable, "-m", "services", "input", "--audio", "system", "--no-journal"],
+                cwd=REPO,
+                capture_output=True,
+                text=True,
+                timeout=60,
+                env=env,
+            )
     except JackError as exc:
         pytest.skip(str(exc))
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
@@ -190,14 +216,19 @@ def test_audio_learn_hears_each_drum_and_its_profile_tells_them_apart(
     for start, note, gap in ((4.2, 37, 0.2), (5.9, 51, 0.25), (7.85, 53, 0.25)):
         hits += [(start + gap * i, note, v) for i, v in enumerate(velocities)]
     out = tmp_path / "mykit-audio.toml"
-    r = learn_from(_strokes(hits, 9.75), ["-o", str(out), "--drums", "kick,snare,ride",
-                                          "--hits", "6"])  # fmt: skip
+    r = learn_from(
+        _strokes(hits, 9.75), ["-o", str(out), "--drums", "kick,snare,ride", "--hits", "6"]
+    )
     assert r.returncode == 0, r.stderr
     assert "hit the kick about 6 times" in r.stdout and "snare: 6 hits" in r.stdout
     asked = [line for line in r.stdout.splitlines()[:-1] if not line.startswith(" ")]
     assert [line.split(" about")[0].split(":")[0] for line in asked] == [
-        "hit the kick", "hit the snare", "side stick", "hit the ride", "ride bell"
-    ], r.stdout  # fmt: skip
+        "hit the kick",
+        "hit the snare",
+        "side stick",
+        "hit the ride",
+        "ride bell",
+    ], r.stdout
     assert "side stick: lay the stick on the snare and click the rim" in r.stdout
     assert "side-stick: 6 hits" in r.stdout and "ride-bell: 6 hits" in r.stdout
     learnt = load_profile(out)
@@ -219,9 +250,25 @@ def test_audio_learn_hears_each_drum_and_its_profile_tells_them_apart(
     classes = np.array([CLASSES.index("kick" if n == 36 else "snare") for _t, n, _v in pattern])
     s = score(found["time_s"], found["cls"], times, classes, np.full(len(times), 100))
     assert s["kick"].f >= 0.9 and s["snare"].f >= 0.9, s
-    r = subprocess.run([sys.executable, "-m", "services", "audio", "learn", "--audio", "system",
-                        "-o", str(out), "--drums", "kick,cowbell"], cwd=REPO,
-                       capture_output=True, text=True, timeout=60)  # fmt: skip
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "audio",
+            "learn",
+            "--audio",
+            "system",
+            "-o",
+            str(out),
+            "--drums",
+            "kick,cowbell",
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert r.returncode == 2 and "unknown drum 'cowbell'" in r.stderr
 
 
@@ -252,23 +299,50 @@ def test_an_other_stroke_not_played_in_time_is_skipped_and_the_profile_still_mad
     # (the timeout is on the wall clock: these blocks are all there at once and take ~0.1 s,
     # a twentieth of it)
     for notes, templates, last in (
-        (snare, 3, "  side-stick: heard 0 of 6 hits in 2 s: skipped (the profile has no "
-                   "side-stick template)"),
+        (
+            snare,
+            3,
+            "  side-stick: heard 0 of 6 hits in 2 s: skipped (the profile has no "
+            "side-stick template)",
+        ),
         (snare + side, 4, "  side-stick: 4 hits"),
-    ):  # fmt: skip
+    ):
         said: list[str] = []
-        profile = learn_blocks(_blocks(_strokes(notes, 3.5)), [code], "mine", hits=6,
-                               timeout_s=2.0, say=said.append,
-                               other_strokes=["side-stick", "ride-bell"])  # fmt: skip
+        profile = learn_blocks(
+            _blocks(_strokes(notes, 3.5)),
+            [code],
+            "mine",
+            hits=6,
+            timeout_s=2.0,
+            say=said.append,
+            other_strokes=["side-stick", "ride-bell"],
+        )
         assert profile.template_class.tolist() == [code] * templates, said
         assert said[2].startswith("side stick: lay the stick on the snare"), said
         assert said[3:] == [last], said  # and no ride bell: no ride was learnt
     assert parse_other_strokes("none") == [] and parse_other_strokes(DEFAULT_OTHER_STROKES) == [
-        "side-stick", "ride-bell"
-    ] == list(OTHER_STROKES) == parse_other_strokes("ride-bell, side-stick")  # fmt: skip
-    r = subprocess.run([sys.executable, "-m", "services", "audio", "learn", "--audio", "system",
-                        "-o", "x.toml", "--other-strokes", "side-stick,rimshot"], cwd=REPO,
-                       capture_output=True, text=True, timeout=60)  # fmt: skip
+        "side-stick",
+        "ride-bell",
+    ] == list(OTHER_STROKES) == parse_other_strokes("ride-bell, side-stick")
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "audio",
+            "learn",
+            "--audio",
+            "system",
+            "-o",
+            "x.toml",
+            "--other-strokes",
+            "side-stick,rimshot",
+        ],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert r.returncode == 2 and r.stderr.strip().splitlines() == [
         "livedrummer: error: --other-strokes: unknown stroke 'rimshot' "
         "(one of side-stick, ride-bell, or none)"
@@ -279,10 +353,26 @@ def test_the_daemon_keeps_waiting_for_an_absent_audio_device(jack_server: str) -
     import json
     import time
 
-    daemon = subprocess.Popen([sys.executable, "-m", "services", "input", "--audio", "usb-mics",
-                               "--wait", "--no-journal", "--pub", "tcp://127.0.0.1:*",
-                               "--control", "tcp://127.0.0.1:*"], cwd=REPO,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    daemon = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "input",
+            "--audio",
+            "usb-mics",
+            "--wait",
+            "--no-journal",
+            "--pub",
+            "tcp://127.0.0.1:*",
+            "--control",
+            "tcp://127.0.0.1:*",
+        ],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert daemon.stdout is not None
         assert json.loads(daemon.stdout.readline())["service"] == "input"

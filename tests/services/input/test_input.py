@@ -433,11 +433,31 @@ def test_cli_file_player_end_to_end(tmp_path: Path, ctx: zmq.Context[zmq.Socket[
     onsets, controls = expected_events(path)
     home = tmp_path / "home"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "services", "input", "--file", str(path), "--map", "roland-td",
-         "--pub", LOCAL, "--control", LOCAL, "--performer", "4", "--wait-subscribers", "1", "--exit-at-end"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO,
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "input",
+            "--file",
+            str(path),
+            "--map",
+            "roland-td",
+            "--pub",
+            LOCAL,
+            "--control",
+            LOCAL,
+            "--performer",
+            "4",
+            "--wait-subscribers",
+            "1",
+            "--exit-at-end",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=REPO,
         env={**os.environ, "LIVEDRUMMER_HOME": str(home)},
-    )  # fmt: skip
+    )
     try:
         assert proc.stdout is not None
         info = json.loads(proc.stdout.readline())
@@ -467,13 +487,24 @@ def test_cli_file_player_end_to_end(tmp_path: Path, ctx: zmq.Context[zmq.Socket[
     assert journal.onsets.tobytes() == got.tobytes()
     # The session lists and exports through the CLI.
     env = {**os.environ, "LIVEDRUMMER_HOME": str(home)}
-    listed = subprocess.run([sys.executable, "-m", "services", "sessions", "list"], capture_output=True,
-                            text=True, env=env, cwd=REPO, check=True).stdout  # fmt: skip
+    listed = subprocess.run(
+        [sys.executable, "-m", "services", "sessions", "list"],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=REPO,
+        check=True,
+    ).stdout
     session_id = sessions[0].stem
     assert session_id in listed and f"{onsets.size} onsets" in listed and "(closed)" in listed
     out = tmp_path / "out.mid"
-    subprocess.run([sys.executable, "-m", "services", "sessions", "export", session_id, "-o", str(out)],
-                   env=env, cwd=REPO, check=True, capture_output=True)  # fmt: skip
+    subprocess.run(
+        [sys.executable, "-m", "services", "sessions", "export", session_id, "-o", str(out)],
+        env=env,
+        cwd=REPO,
+        check=True,
+        capture_output=True,
+    )
     back = read_midi_file(out, ROLAND)
     assert back.onsets["note"].tolist() == onsets["note"].tolist()
 
@@ -488,8 +519,13 @@ def test_cli_input_errors_are_one_line(tmp_path: Path) -> None:
         (["--serial", "/dev/null", "--baud", "1234"], "--baud"),
     ]
     for args, needle in cases:
-        proc = subprocess.run([sys.executable, "-m", "services", "input", *args, "--no-journal"],
-                              capture_output=True, text=True, cwd=REPO, timeout=60)  # fmt: skip
+        proc = subprocess.run(
+            [sys.executable, "-m", "services", "input", *args, "--no-journal"],
+            capture_output=True,
+            text=True,
+            cwd=REPO,
+            timeout=60,
+        )
         assert proc.returncode == 2, proc.stderr
         lines = proc.stderr.strip().splitlines()
         assert lines[-1].startswith("livedrummer: error: ") and needle in lines[-1], proc.stderr
@@ -505,11 +541,28 @@ def test_cli_serial_daemon_journal_survives_stop_and_kill(
     master, name = pty_pair()
     home = tmp_path / "home"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "services", "input", "--serial", name, "--map", "roland-td",
-         "--pub", LOCAL, "--control", LOCAL, "--wait-subscribers", "1"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO,
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "input",
+            "--serial",
+            name,
+            "--map",
+            "roland-td",
+            "--pub",
+            LOCAL,
+            "--control",
+            LOCAL,
+            "--wait-subscribers",
+            "1",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=REPO,
         env={**os.environ, "LIVEDRUMMER_HOME": str(home)},
-    )  # fmt: skip
+    )
     try:
         assert proc.stdout is not None
         info = json.loads(proc.stdout.readline())
@@ -603,10 +656,27 @@ def test_cli_unwritable_journal_is_a_one_line_error(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
     proc = subprocess.run(
-        [sys.executable, "-m", "services", "input", "--file", str(short_groove(tmp_path / "g.mid", 5)),
-         "--map", "roland-td", "--pub", LOCAL, "--control", LOCAL, "--sessions-dir", str(blocker / "sessions")],
-        capture_output=True, text=True, cwd=REPO, timeout=60,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "input",
+            "--file",
+            str(short_groove(tmp_path / "g.mid", 5)),
+            "--map",
+            "roland-td",
+            "--pub",
+            LOCAL,
+            "--control",
+            LOCAL,
+            "--sessions-dir",
+            str(blocker / "sessions"),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
+    )
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.strip().splitlines()[-1].startswith("livedrummer: error: ")
     assert "cannot create journal" in proc.stderr and "Traceback" not in proc.stderr

@@ -38,8 +38,13 @@ def test_daemon_receives_notes_from_a_jack_port_and_reconnects(
 ) -> None:
     kit = kit_port()
     assert "kit:pads" in list_ports("jack")
-    listed = subprocess.run([sys.executable, "-m", "services", "ports", "--api", "jack"],
-                            capture_output=True, text=True, timeout=60, check=True).stdout  # fmt: skip
+    listed = subprocess.run(
+        [sys.executable, "-m", "services", "ports", "--api", "jack"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    ).stdout
     assert ": kit:pads  [jack]" in listed
     assert ("jack", "kit:pads") in list_ports_by_api("auto")  # ALSA absent or not: JACK found
     ctx: zmq.Context[zmq.Socket[bytes]] = zmq.Context()
@@ -47,8 +52,13 @@ def test_daemon_receives_notes_from_a_jack_port_and_reconnects(
     source = MidiPortSource(
         "pads", clock, MessageDecoder(load_note_map("roland-td"), 3), api="auto"
     )
-    config = DaemonConfig(pub="tcp://127.0.0.1:*", control="tcp://127.0.0.1:*", performer=3,
-                          sessions_dir=tmp_path, reconnect_s=0.05)  # fmt: skip
+    config = DaemonConfig(
+        pub="tcp://127.0.0.1:*",
+        control="tcp://127.0.0.1:*",
+        performer=3,
+        sessions_dir=tmp_path,
+        reconnect_s=0.05,
+    )
     daemon = InputDaemon(source, config, clock, ctx)
     daemon.start()
     stop = threading.Event()
@@ -114,5 +124,6 @@ def test_an_unknown_midi_api_is_one_clear_error() -> None:
     from livedrummer.errors import MidiInputError
 
     with pytest.raises(MidiInputError, match="'coremidi': expected one of auto, alsa, jack"):
-        MidiPortSource("pads", MonotonicClock(), MessageDecoder(load_note_map("roland-td")),
-                       api="coremidi")  # fmt: skip
+        MidiPortSource(
+            "pads", MonotonicClock(), MessageDecoder(load_note_map("roland-td")), api="coremidi"
+        )

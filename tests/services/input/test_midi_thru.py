@@ -42,15 +42,38 @@ def test_thru_forwards_each_hit_remapped_and_its_latency_is_measured(
     kit = rtmidi.MidiOut(rtmidi.API_UNIX_JACK, "kit")
     kit.open_virtual_port("pads")
     daemon = subprocess.Popen(
-        [sys.executable, "-m", "services", "input", "--midi", "kit:pads", "--api", "jack",
-         "--map", "roland-td", "--pub", "tcp://127.0.0.1:*", "--control", "tcp://127.0.0.1:*",
-         "--no-journal", "--thru", "ldthru", "--thru-map", "general-midi"],
-        stdout=subprocess.PIPE, stderr=(tmp_path / "input.err").open("w"), text=True, env=env,
-        cwd=REPO)  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "input",
+            "--midi",
+            "kit:pads",
+            "--api",
+            "jack",
+            "--map",
+            "roland-td",
+            "--pub",
+            "tcp://127.0.0.1:*",
+            "--control",
+            "tcp://127.0.0.1:*",
+            "--no-journal",
+            "--thru",
+            "ldthru",
+            "--thru-map",
+            "general-midi",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=(tmp_path / "input.err").open("w"),
+        text=True,
+        env=env,
+        cwd=REPO,
+    )
     refs = []
     try:
         assert daemon.stdout is not None and daemon.stdout.readline(), (
-            tmp_path / "input.err").read_text()  # fmt: skip
+            tmp_path / "input.err"
+        ).read_text()
         ports = subprocess.run(["jack_lsp"], capture_output=True, text=True, env=env).stdout
         thru_port = next(p for p in ports.splitlines() if p.endswith(":ldthru"))
         refs = [Reference(exe, "kit:pads", env), Reference(exe, thru_port, env)]
@@ -77,8 +100,10 @@ def test_thru_forwards_each_hit_remapped_and_its_latency_is_measured(
     assert [e[1] for e in got] == [(42 if k % 2 else 38, 40 + k) for k in range(30)]
     assert [e[1][1] for e in sent] == [40 + k for k in range(30)]
     lag_ms = (np.array([e[0] for e in got]) - np.array([e[0] for e in sent])) * 1000
-    print(f"thru added latency: p50 {np.percentile(lag_ms, 50):.2f} ms, "
-          f"p99 {np.percentile(lag_ms, 99):.2f} ms, max {lag_ms.max():.2f} ms")  # fmt: skip
+    print(
+        f"thru added latency: p50 {np.percentile(lag_ms, 50):.2f} ms, "
+        f"p99 {np.percentile(lag_ms, 99):.2f} ms, max {lag_ms.max():.2f} ms"
+    )
     assert np.all(lag_ms > 0) and np.percentile(lag_ms, 50) < 10.0
     err = (tmp_path / "input.err").read_text()
     assert "thru: " in err and " failed" in err and ", 0 failed" in err, err[-800:]
@@ -96,11 +121,18 @@ def test_display_sends_a_files_notes_with_the_frames_that_show_them(
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     env.update(jack_env(jack_rig_server))
     midi, log = hits_file(tmp_path / "hits.mid"), tmp_path / "frames.jsonl"
-    cmd = (f"{sys.executable} -m services display {midi} --map general-midi --size 320x180 "
-           f"--aa 0 --seconds 5.5 --no-sound --midi-out ldsampler --frame-log {log}")  # fmt: skip
-    window = subprocess.Popen(["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", cmd],
-                              cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                              text=True, env=env)  # fmt: skip
+    cmd = (
+        f"{sys.executable} -m services display {midi} --map general-midi --size 320x180 "
+        f"--aa 0 --seconds 5.5 --no-sound --midi-out ldsampler --frame-log {log}"
+    )
+    window = subprocess.Popen(
+        ["xvfb-run", "-a", "-s", "-screen 0 320x180x24", "sh", "-c", cmd],
+        cwd=REPO,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     ref = None
     try:
         deadline = time.monotonic() + 30
@@ -123,8 +155,10 @@ def test_display_sends_a_files_notes_with_the_frames_that_show_them(
     sent = np.array([e[0] for e in ref.events])
     seen, frame_s = picture_times(log, HITS)
     gap = sent - seen
-    print(f"midi-out note - picture: {np.round(gap * 1000, 1).tolist()} ms, frames "
-          f"{np.round(frame_s * 1000, 1).tolist()} ms")  # fmt: skip
+    print(
+        f"midi-out note - picture: {np.round(gap * 1000, 1).tolist()} ms, frames "
+        f"{np.round(frame_s * 1000, 1).tolist()} ms"
+    )
     # the contact is on screen from the frame around it; the note is timed for when a frame is
     # seen by the median draw time, so a frame far off the median (a loaded machine) moves the
     # picture, not the note: allowed one median frame more

@@ -79,11 +79,17 @@ def test_the_buffer_rises_at_once_and_falls_slowly() -> None:
 
 
 def test_a_remote_drummers_intervals_survive_network_jitter(tmp_path: Path) -> None:
-    run = remote_session(16.0, control=True, offset_s=OFFSET_S, home=str(tmp_path / "home"),
-                         err_path=tmp_path / "input.err")  # fmt: skip
+    run = remote_session(
+        16.0,
+        control=True,
+        offset_s=OFFSET_S,
+        home=str(tmp_path / "home"),
+        err_path=tmp_path / "input.err",
+    )
     summary = run.summary
-    m = re.search(r"remote clock ([+-][\d.]+) ms \(\+/- ([\d.]+)\).*played ([\d.]+) ms behind",
-                  summary)  # fmt: skip
+    m = re.search(
+        r"remote clock ([+-][\d.]+) ms \(\+/- ([\d.]+)\).*played ([\d.]+) ms behind", summary
+    )
     assert m, summary
     offset_ms, delay_ms = float(m.group(1)), float(m.group(3))
     assert abs(offset_ms - 1000 * OFFSET_S) < 1.0, summary

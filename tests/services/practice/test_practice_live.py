@@ -78,8 +78,10 @@ def test_readout_agrees_with_the_offline_judge_when_hits_are_unambiguous() -> No
     played = np.delete(played, [5, 40, 77])
     played = played[np.argsort(played["time_s"])]
     readout = LiveReadout(ref["time_s"], piece_codes(ref), 100.0, Level.EASY)
-    live = [readout.process(float(h["time_s"]), int(c)) for h, c in
-            zip(played, piece_codes(played), strict=True)]  # fmt: skip
+    live = [
+        readout.process(float(h["time_s"]), int(c))
+        for h, c in zip(played, piece_codes(played), strict=True)
+    ]
     offline = match_take(ref, played)
     hit = offline.notes["result"] == Result.HIT
     want = sorted(np.round(offline.notes["offset_ms"][hit], 6).tolist())
@@ -127,8 +129,9 @@ def wait_port(name: str, timeout_s: float = 20.0) -> str:
         probe.delete()
 
 
-def test_live_pass_equals_score_of_its_take(jack_rig_server: str, groove_dir: Path,
-                                            tmp_path: Path) -> None:  # fmt: skip
+def test_live_pass_equals_score_of_its_take(
+    jack_rig_server: str, groove_dir: Path, tmp_path: Path
+) -> None:
     """The JACK server runs realtime (``-R``, as docs/guide/rig.md asks of a rig): without it, CPU
     hogs beside the test stall JACK's cycle by up to 0.7 s (jackd logs the xruns), the player's
     notes reach the rig in late batches, their driver stamps late with them, and the planted
@@ -137,11 +140,37 @@ def test_live_pass_equals_score_of_its_take(jack_rig_server: str, groove_dir: Pa
     take = tmp_path / "take.mid"
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
     proc = subprocess.Popen(
-        [sys.executable, "-m", "services", "practice", str(ref), "--virtual", "pads", "--api",
-         "jack", "--map", "roland-td", "--bars", "2:3", "--count-in", "1", "--no-sound", "--no-window",
-         "--json", "--take", str(take), "--seconds", "40", "--passes", "1"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "practice",
+            str(ref),
+            "--virtual",
+            "pads",
+            "--api",
+            "jack",
+            "--map",
+            "roland-td",
+            "--bars",
+            "2:3",
+            "--count-in",
+            "1",
+            "--no-sound",
+            "--no-window",
+            "--json",
+            "--take",
+            str(take),
+            "--seconds",
+            "40",
+            "--passes",
+            "1",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     try:
         assert proc.stdout is not None
         plan = json.loads(proc.stdout.readline())
@@ -177,10 +206,27 @@ def test_live_pass_equals_score_of_its_take(jack_rig_server: str, groove_dir: Pa
     assert live["hits"] == len(notes) - 3
     assert lines[-1]["done"] and lines[-1]["passes"] == 1
     scored = subprocess.run(
-        [sys.executable, "-m", "services", "practice", "score", str(ref), str(take), "--map",
-         "roland-td", "--take-map", "roland-td", "--bars", "2:3", "--json"],
-        capture_output=True, text=True, timeout=60, env=env,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "practice",
+            "score",
+            str(ref),
+            str(take),
+            "--map",
+            "roland-td",
+            "--take-map",
+            "roland-td",
+            "--bars",
+            "2:3",
+            "--json",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
     assert scored.returncode == 0, scored.stderr
     score = json.loads(scored.stdout)
     for key in ("reference_notes", "hits", "missed", "wrong_piece", "extra", "perfect", "good"):
@@ -197,11 +243,37 @@ def test_ramp_and_quiet_count_drill(jack_server: str, groove_dir: Path, tmp_path
     a pass nobody played is all missed and kept in the database."""
     env = {**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")}
     proc = subprocess.run(
-        [sys.executable, "-m", "services", "practice", str(groove_dir / FUNK), "--virtual", "p",
-         "--api", "jack", "--map", "roland-td", "--bars", "2:3", "--bpm", "240", "--ramp", "20",
-         "--ramp-target", "260", "--quiet-count", "1:1", "--no-sound", "--json", "--no-window"],
-        capture_output=True, text=True, timeout=60, env=env,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "practice",
+            str(groove_dir / FUNK),
+            "--virtual",
+            "p",
+            "--api",
+            "jack",
+            "--map",
+            "roland-td",
+            "--bars",
+            "2:3",
+            "--bpm",
+            "240",
+            "--ramp",
+            "20",
+            "--ramp-target",
+            "260",
+            "--quiet-count",
+            "1:1",
+            "--no-sound",
+            "--json",
+            "--no-window",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
     assert proc.returncode == 0, proc.stderr
     lines = [json.loads(line) for line in proc.stdout.splitlines()]
     plans = [ln for ln in lines if "notes" in ln and "pass" in ln]
@@ -214,6 +286,11 @@ def test_ramp_and_quiet_count_drill(jack_server: str, groove_dir: Path, tmp_path
     results = [ln for ln in lines if "pass_result" in ln]
     assert [r["missed"] for r in results] == [r["reference_notes"] for r in results]
     assert lines[-1]["passes"] == 2
-    hist = subprocess.run([sys.executable, "-m", "services", "practice", "history", "--json"],
-                          capture_output=True, text=True, timeout=60, env=env)  # fmt: skip
+    hist = subprocess.run(
+        [sys.executable, "-m", "services", "practice", "history", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
     assert [s["kind"] for s in json.loads(hist.stdout)["sessions"]] == ["live", "live"]

@@ -33,14 +33,28 @@ def test_planted_take_scores_exactly(groove_dir: Path, tmp_path: Path) -> None:
     take = tmp_path / "take.mid"
     planted = plant_take(ref, take, seed=11)
     home = tmp_path / "home"
-    proc = run("practice", "score", str(ref), str(take), "--map", "roland-td", "--take-map",
-               "roland-td", "--json", "--save", LIVEDRUMMER_HOME=str(home))  # fmt: skip
+    proc = run(
+        "practice",
+        "score",
+        str(ref),
+        str(take),
+        "--map",
+        "roland-td",
+        "--take-map",
+        "roland-td",
+        "--json",
+        "--save",
+        LIVEDRUMMER_HOME=str(home),
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["reference_notes"] == planted.reference_notes
     assert (out["hits"], out["missed"], out["wrong_piece"], out["extra"]) == (
-        planted.hits, planted.missed, planted.wrong_piece, planted.extra,
-    )  # fmt: skip
+        planted.hits,
+        planted.missed,
+        planted.wrong_piece,
+        planted.extra,
+    )
     assert out["mean_offset_ms"] == pytest.approx(planted.mean_offset_ms, abs=0.5)
     assert len(out["notes"]) == planted.reference_notes
     assert {n["result"] for n in out["notes"]} == {"hit", "missed", "wrong_piece"}
@@ -60,8 +74,18 @@ def test_text_output_and_pieces(groove_dir: Path, tmp_path: Path) -> None:
     ref = groove_dir / SOUL
     take = tmp_path / "take.mid"
     plant_take(ref, take, seed=4, deleted=0, moved=0, extra=0)
-    proc = run("practice", "score", str(ref), str(take), "--map", "roland-td", "--take-map",
-               "roland-td", "--pieces", "snare")  # fmt: skip
+    proc = run(
+        "practice",
+        "score",
+        str(ref),
+        str(take),
+        "--map",
+        "roland-td",
+        "--take-map",
+        "roland-td",
+        "--pieces",
+        "snare",
+    )
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.splitlines()
     assert " 0 missed, 0 extra" in lines[0]
@@ -78,10 +102,30 @@ def test_align_first_judges_an_export_that_starts_at_its_first_hit(
     notes = read_midi_file(take, load_note_map("roland-td")).onsets
     notes["time_s"] -= float(notes["time_s"][0]) - 1.0  # + the take's 1 s lead: starts at 0
     write_take(export, notes, lead_s=0.0)
-    plain = run("practice", "score", str(ref), str(export), "--map", "roland-td", "--take-map",
-                "roland-td", "--json")  # fmt: skip
-    aligned = run("practice", "score", str(ref), str(export), "--map", "roland-td", "--take-map",
-                  "roland-td", "--json", "--align", "first")  # fmt: skip
+    plain = run(
+        "practice",
+        "score",
+        str(ref),
+        str(export),
+        "--map",
+        "roland-td",
+        "--take-map",
+        "roland-td",
+        "--json",
+    )
+    aligned = run(
+        "practice",
+        "score",
+        str(ref),
+        str(export),
+        "--map",
+        "roland-td",
+        "--take-map",
+        "roland-td",
+        "--json",
+        "--align",
+        "first",
+    )
     assert json.loads(aligned.stdout)["hits"] == planted.hits
     assert json.loads(aligned.stdout)["mean_offset_ms"] == pytest.approx(0.0, abs=0.5)
     assert json.loads(plain.stdout)["hits"] < planted.hits
@@ -142,8 +186,20 @@ def test_json_and_text_name_the_windows_and_grades_alike(groove_dir: Path, tmp_p
     ref = groove_dir / SOUL
     take = tmp_path / "take.mid"
     plant_take(ref, take, seed=5)
-    args = ("practice", "score", str(ref), str(take), "--map", "roland-td", "--take-map",
-            "roland-td", "--window-ms", "80", "--level", "hard")  # fmt: skip
+    args = (
+        "practice",
+        "score",
+        str(ref),
+        str(take),
+        "--map",
+        "roland-td",
+        "--take-map",
+        "roland-td",
+        "--window-ms",
+        "80",
+        "--level",
+        "hard",
+    )
     proc, text = run(*args, "--json"), run(*args)
     assert proc.returncode == 0 and text.returncode == 0, proc.stderr + text.stderr
     out = json.loads(proc.stdout)
@@ -152,8 +208,10 @@ def test_json_and_text_name_the_windows_and_grades_alike(groove_dir: Path, tmp_p
     assert out["grade_limits_ms"] == {"perfect": 20.0, "good": 40.0, "ok": 80.0}
     lines = text.stdout.splitlines()
     assert f"{out['hits']} hits (match window ±80 ms)" in lines[0]
-    assert (f"perfect {out['perfect']} (≤ 20 ms), good {out['good']} (≤ 40 ms), "
-            f"ok {out['ok']} (≤ 80 ms)") in lines[1]  # fmt: skip
+    assert (
+        f"perfect {out['perfect']} (≤ 20 ms), good {out['good']} (≤ 40 ms), "
+        f"ok {out['ok']} (≤ 80 ms)"
+    ) in lines[1]
     assert lines[2].startswith(f"accuracy {out['accuracy_pct']:.1f} % (on time ±20 ms, hard)")
     assert "100 ms" not in text.stdout  # the default window appears nowhere
 

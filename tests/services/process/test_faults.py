@@ -174,8 +174,9 @@ def test_up_over_curve_renders_and_refuses_a_stranger(gl_ok: None, tmp_path: Pat
                 sock = ctx.socket(zmq.SUB)
                 sock.setsockopt(zmq.LINGER, 0)
                 sock.setsockopt(zmq.SUBSCRIBE, b"")
-                sec = Security.from_files(secret=keys / f"{name}.key_secret",
-                                          server_key=keys / "rig.key")  # fmt: skip
+                sec = Security.from_files(
+                    secret=keys / f"{name}.key_secret", server_key=keys / "rig.key"
+                )
                 connect(sock, f"tcp://127.0.0.1:{base + 10}", "test sub", sec)
                 subs[name] = sock
             plain = ctx.socket(zmq.SUB)
@@ -216,11 +217,25 @@ def test_up_refuses_an_allow_folder_without_its_own_key(tmp_path: Path) -> None:
     allow.mkdir()
     (allow / "friend.key").write_bytes((keys / "friend.key").read_bytes())
     proc = subprocess.run(
-        [sys.executable, "-m", "services", "up", "--demo", "--seconds", "1",
-         "--curve-secret", str(keys / "rig.key_secret"), "--allow", str(allow)],
-        capture_output=True, text=True, timeout=60, cwd=REPO,
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "up",
+            "--demo",
+            "--seconds",
+            "1",
+            "--curve-secret",
+            str(keys / "rig.key_secret"),
+            "--allow",
+            str(allow),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=REPO,
         env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")},
-    )  # fmt: skip
+    )
     assert proc.returncode == 2, proc.stderr
     assert "lacks this rig's public key" in proc.stderr and str(allow) in proc.stderr
 

@@ -51,8 +51,9 @@ def free_port() -> int:
 
 def synth_service(ctx: zmq.Context[zmq.Socket[bytes]], pub: str, control: str) -> SynthService:
     synth = LiveSynth(build_rig(load_kit("rock5")), SynthParams(0.01, 0.03))
-    return SynthService(synth, SynthConfig(sub="tcp://127.0.0.1:1", pub=pub, control=control),
-                        MonotonicClock(), ctx)  # fmt: skip
+    return SynthService(
+        synth, SynthConfig(sub="tcp://127.0.0.1:1", pub=pub, control=control), MonotonicClock(), ctx
+    )
 
 
 def services(ctx: zmq.Context[zmq.Socket[bytes]]) -> list[Service]:
@@ -61,11 +62,13 @@ def services(ctx: zmq.Context[zmq.Socket[bytes]]) -> list[Service]:
     clock = MonotonicClock()
     source = FileSource(demo_groove(), clock, load_note_map(DEMO_MAP), 0)
     source.load()
-    daemon = InputDaemon(source, DaemonConfig(pub=LOCAL, control=LOCAL, journal=False), clock,
-                         ctx)  # fmt: skip
-    display = LiveDisplay(load_kit("rock5"), LiveConfig(sub="tcp://127.0.0.1:1", render=False,
-                                                        control=LOCAL),
-                          MonotonicFrameClock(), ctx)  # fmt: skip
+    daemon = InputDaemon(source, DaemonConfig(pub=LOCAL, control=LOCAL, journal=False), clock, ctx)
+    display = LiveDisplay(
+        load_kit("rock5"),
+        LiveConfig(sub="tcp://127.0.0.1:1", render=False, control=LOCAL),
+        MonotonicFrameClock(),
+        ctx,
+    )
     return [daemon, synth_service(ctx, LOCAL, LOCAL), display]
 
 
@@ -92,8 +95,12 @@ def test_every_service_answers_hello_with_its_ready_and_shuts_down_once(
 def test_a_display_binds_no_control_socket_unless_asked(
     ctx: zmq.Context[zmq.Socket[bytes]],
 ) -> None:
-    display = LiveDisplay(load_kit("rock5"), LiveConfig(sub="tcp://127.0.0.1:1", render=False),
-                          MonotonicFrameClock(), ctx)  # fmt: skip
+    display = LiveDisplay(
+        load_kit("rock5"),
+        LiveConfig(sub="tcp://127.0.0.1:1", render=False),
+        MonotonicFrameClock(),
+        ctx,
+    )
     assert "control" not in display.start()
     display.shutdown()
 
@@ -123,10 +130,22 @@ def test_a_start_that_fails_half_way_leaves_nothing_bound(
 
 def test_serve_prints_the_endpoints_and_stops_on_sigterm() -> None:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "services", "synth", "--sub", "tcp://127.0.0.1:1",
-         "--pub", LOCAL, "--control", LOCAL],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "synth",
+            "--sub",
+            "tcp://127.0.0.1:1",
+            "--pub",
+            LOCAL,
+            "--control",
+            LOCAL,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout is not None
         line = json.loads(proc.stdout.readline())

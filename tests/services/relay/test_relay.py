@@ -42,9 +42,12 @@ LOCAL = "tcp://127.0.0.1:*"
 def relay(tmp: Path, name: str, *args: str) -> tuple[subprocess.Popen[str], dict[str, Any]]:
     proc = subprocess.Popen(
         [sys.executable, "-m", "services", "relay", "--pub", LOCAL, "--control", LOCAL, *args],
-        stdout=subprocess.PIPE, stderr=(tmp / f"{name}.err").open("w"), text=True, cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=(tmp / f"{name}.err").open("w"),
+        text=True,
+        cwd=REPO,
         env={**os.environ, "LIVEDRUMMER_HOME": str(tmp / "home")},
-    )  # fmt: skip
+    )
     assert proc.stdout is not None
     line = proc.stdout.readline()
     assert line, (tmp / f"{name}.err").read_text()
@@ -68,10 +71,18 @@ def test_poses_reach_every_display_through_a_tree_of_relays(tmp_path: Path) -> N
     pub = ctx.socket(zmq.XPUB)
     pub.setsockopt(zmq.LINGER, 0)
     port = pub.bind_to_random_port("tcp://127.0.0.1")
-    synth = SynthService(LiveSynth(build_rig(kit), params),
-                         SynthConfig(sub=f"tcp://127.0.0.1:{port}", pub=LOCAL, control=LOCAL,
-                                     performer=7, avatar="0123456789abcdef"),
-                         clock, ctx)  # fmt: skip
+    synth = SynthService(
+        LiveSynth(build_rig(kit), params),
+        SynthConfig(
+            sub=f"tcp://127.0.0.1:{port}",
+            pub=LOCAL,
+            control=LOCAL,
+            performer=7,
+            avatar="0123456789abcdef",
+        ),
+        clock,
+        ctx,
+    )
     eps = synth.start()
     stop_synth = threading.Event()
     thread = threading.Thread(target=synth.run, args=(stop_synth,), daemon=True)
@@ -79,11 +90,18 @@ def test_poses_reach_every_display_through_a_tree_of_relays(tmp_path: Path) -> N
     procs: list[subprocess.Popen[str]] = []
     subs: list[zmq.Socket[bytes]] = []
     try:
-        first, first_eps = relay(tmp_path, "relay1", "--upstream", eps["pub"],
-                                 "--upstream-control", eps["control"])  # fmt: skip
+        first, first_eps = relay(
+            tmp_path, "relay1", "--upstream", eps["pub"], "--upstream-control", eps["control"]
+        )
         procs.append(first)
-        second, second_eps = relay(tmp_path, "relay2", "--upstream", first_eps["pub"],
-                                   "--upstream-control", first_eps["control"])  # fmt: skip
+        second, second_eps = relay(
+            tmp_path,
+            "relay2",
+            "--upstream",
+            first_eps["pub"],
+            "--upstream-control",
+            first_eps["control"],
+        )
         procs.append(second)
         for hello_from in (first_eps, second_eps):
             ready = request_ready(ctx, hello_from["control"], p.Hello("test", "frames"), 5.0)
@@ -158,7 +176,12 @@ def test_poses_reach_every_display_through_a_tree_of_relays(tmp_path: Path) -> N
       "refusing to bind tcp://10.1.2.3:5820 without CURVE")],
 )  # fmt: skip
 def test_bad_relay_options_are_one_line(tmp_path: Path, argv: list[str], message: str) -> None:
-    done = subprocess.run([sys.executable, "-m", "services", "relay", *argv], cwd=REPO,
-                          capture_output=True, text=True, timeout=30)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-m", "services", "relay", *argv],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
     assert done.returncode == 2
     assert message in done.stderr and done.stderr.count("\n") == 1, done.stderr

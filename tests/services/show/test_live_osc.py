@@ -74,10 +74,13 @@ def test_up_is_steered_over_osc(gl_ok: None, tmp_path: Path) -> None:
     port = probe.getsockname()[1]
     probe.close()
     cues = tmp_path / "cues.toml"
-    cues.write_text('[[cue]]\nname = "outro"\npreset = "relaxed"\ncamera = "overhead"\n'
-                    '[cue.params]\ntwist_fraction = 0.1\n')  # fmt: skip
-    proc = launch(tmp_path, "--seconds", "60", "--osc", str(port), "--png", "--fps", "10",
-                  "--cues", str(cues))  # fmt: skip
+    cues.write_text(
+        '[[cue]]\nname = "outro"\npreset = "relaxed"\ncamera = "overhead"\n'
+        "[cue.params]\ntwist_fraction = 0.1\n"
+    )
+    proc = launch(
+        tmp_path, "--seconds", "60", "--osc", str(port), "--png", "--fps", "10", "--cues", str(cues)
+    )
     client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     client.bind(("127.0.0.1", 0))
     client.settimeout(5.0)

@@ -44,9 +44,13 @@ def spawn(args: list[str], tmp: Path, name: str) -> subprocess.Popen[str]:
     env.pop("DISPLAY", None)
     env.pop("WAYLAND_DISPLAY", None)
     return subprocess.Popen(
-        [sys.executable, "-m", "services", *args], stdout=subprocess.PIPE,
-        stderr=(tmp / f"{name}.err").open("w"), text=True, env=env, cwd=REPO,
-    )  # fmt: skip
+        [sys.executable, "-m", "services", *args],
+        stdout=subprocess.PIPE,
+        stderr=(tmp / f"{name}.err").open("w"),
+        text=True,
+        env=env,
+        cwd=REPO,
+    )
 
 
 def first_line(proc: subprocess.Popen[str], tmp: Path, name: str) -> dict[str, Any]:
@@ -94,9 +98,23 @@ def test_a_groove_played_on_a_jack_port_reaches_the_display(
         answer = request_ready(ctx, syn_eps["control"], ready, 30.0)
         assert answer.service == "synth" and answer.pose == fmt  # the display's own format
         frames_dir = tmp_path / "frames"
-        disp = spawn(["display", "--live", "--headless", "--sub", syn_eps["pub"], "--fps",
-                      str(FPS), "--size", "320x180", "--frames-dir", str(frames_dir)],
-                     tmp_path, "display")  # fmt: skip
+        disp = spawn(
+            [
+                "display",
+                "--live",
+                "--headless",
+                "--sub",
+                syn_eps["pub"],
+                "--fps",
+                str(FPS),
+                "--size",
+                "320x180",
+                "--frames-dir",
+                str(frames_dir),
+            ],
+            tmp_path,
+            "display",
+        )
         procs.append(disp)
         first_line(disp, tmp_path, "display")
 
@@ -132,8 +150,9 @@ def test_a_groove_played_on_a_jack_port_reaches_the_display(
         probes = sum(m.rows.size for m in onsets)
 
         # a few bars of the GMD groove, played in real time
-        groove = read_midi_file(REPO / "kits/grooves/gmd-drummer1-funk-80.mid",
-                                load_note_map("roland-td"))  # fmt: skip
+        groove = read_midi_file(
+            REPO / "kits/grooves/gmd-drummer1-funk-80.mid", load_note_map("roland-td")
+        )
         notes = groove.onsets[(groove.onsets["time_s"] > 2.0) & (groove.onsets["time_s"] < 6.0)]
         t0 = clock.now() + 0.2
         for row in notes:
@@ -167,8 +186,10 @@ def test_a_groove_played_on_a_jack_port_reaches_the_display(
         codes = {i: stop(proc) for i, proc in enumerate(reversed(procs))}
         ctx.destroy(0)
         kit_port.close_port()
-    assert all(c == 0 for c in codes.values()), (codes, [
-        (tmp_path / f"{n}.err").read_text()[-500:] for n in ("input", "synth", "display")])  # fmt: skip
+    assert all(c == 0 for c in codes.values()), (
+        codes,
+        [(tmp_path / f"{n}.err").read_text()[-500:] for n in ("input", "synth", "display")],
+    )
     # the synth got every onset the daemon published (the test's own subscriber may have
     # joined after the first probe), with no gap in the sequence numbers
     published = re.search(r"input: (\d+) onsets", (tmp_path / "input.err").read_text())

@@ -100,9 +100,12 @@ def test_the_service_s_contacts_equal_the_offline_twin_s(rig: Rig, groove: Perfo
     pub = ctx.socket(zmq.XPUB)
     pub.setsockopt(zmq.LINGER, 0)
     port = pub.bind_to_random_port("tcp://127.0.0.1")
-    service = SynthService(LiveSynth(rig, params),
-                           SynthConfig(sub=f"tcp://127.0.0.1:{port}", pub=LOCAL, control=LOCAL),
-                           clock, ctx)  # fmt: skip
+    service = SynthService(
+        LiveSynth(rig, params),
+        SynthConfig(sub=f"tcp://127.0.0.1:{port}", pub=LOCAL, control=LOCAL),
+        clock,
+        ctx,
+    )
     eps = service.start()
     stop = threading.Event()
     thread = threading.Thread(target=service.run, args=(stop,), daemon=True)
@@ -153,8 +156,7 @@ def test_the_service_s_contacts_equal_the_offline_twin_s(rig: Rig, groove: Perfo
     sticking = stick_online(onsets, rig.kit, params.lookahead_s)
     hands = np.flatnonzero((sticking.limb >= 0) & (sticking.limb <= 1) & (sticking.piece >= 0))
     assert hands.size > 10
-    anim = animate(rig, sticking, np.zeros(0),
-                   hihat_openness(onsets, np.zeros(0, CONTROL_DTYPE)))  # fmt: skip
+    anim = animate(rig, sticking, np.zeros(0), hihat_openness(onsets, np.zeros(0, CONTROL_DTYPE)))
     _, world = anim.world(sticking.onsets["time_s"][hands].astype(np.float64))
     answered_on_target = 0
     for k, i in enumerate(hands):

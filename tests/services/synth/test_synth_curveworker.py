@@ -63,8 +63,19 @@ def rebuild_args(rig: Rig, groove: Performance) -> dict[str, object]:
     rebuild = synth.curves.rebuild
 
     def spy(*args: object, **kwargs: object) -> object:
-        names = ("sticking", "beats", "openness", "key", "contacts_s", "chokes", "start_s",
-                 "horizon_s", "answer", "expression", "change")  # fmt: skip
+        names = (
+            "sticking",
+            "beats",
+            "openness",
+            "key",
+            "contacts_s",
+            "chokes",
+            "start_s",
+            "horizon_s",
+            "answer",
+            "expression",
+            "change",
+        )
         caught.append({**dict(zip(names, args, strict=False)), **kwargs})
         return rebuild(*args, **kwargs)  # type: ignore[arg-type]
 
@@ -116,8 +127,7 @@ def test_a_bad_request_is_answered_with_an_error_and_the_worker_carries_on(
     rig: Rig, groove: Performance, worker: CurveWorker
 ) -> None:
     pid = worker.pid
-    assert worker._exchange(b"not a pickle") == (
-        "error", "UnpicklingError: invalid load key, 'n'.")  # fmt: skip
+    assert worker._exchange(b"not a pickle") == ("error", "UnpicklingError: invalid load key, 'n'.")
     reply = worker._exchange(dumps(("frobnicate", 1)))
     assert reply == ("error", "ValueError: unknown request 'frobnicate' (of 2 items)")
     args = rebuild_args(rig, groove)

@@ -81,9 +81,11 @@ def site(tmp_path: Path, ctx: zmq.Context[zmq.Socket[bytes]]) -> Iterator[tuple[
     (allow / "friend.key").write_bytes((keys / "friend.key").read_bytes())
     clock = MonotonicClock()
     config = DaemonConfig(
-        pub=LOCAL, control=LOCAL, journal=False,
+        pub=LOCAL,
+        control=LOCAL,
+        journal=False,
         security=Security.from_files(secret=server_secret, allow=allow),
-    )  # fmt: skip
+    )
     daemon = InputDaemon(SnareSource("snare", clock), config, clock, ctx)
     daemon.start()
     stop = threading.Event()
@@ -205,11 +207,25 @@ def test_cli_refuses_a_public_bind_in_one_line(tmp_path: Path) -> None:
 
         groove = demo_groove()
     proc = subprocess.run(
-        [sys.executable, "-m", "services", "input", "--file", str(groove), "--no-journal",
-         "--pub", "tcp://0.0.0.0:*", "--control", LOCAL],
-        capture_output=True, text=True, cwd=REPO, timeout=60,
+        [
+            sys.executable,
+            "-m",
+            "services",
+            "input",
+            "--file",
+            str(groove),
+            "--no-journal",
+            "--pub",
+            "tcp://0.0.0.0:*",
+            "--control",
+            LOCAL,
+        ],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
         env={**os.environ, "LIVEDRUMMER_HOME": str(tmp_path / "home")},
-    )  # fmt: skip
+    )
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "refusing to bind tcp://0.0.0.0:*" in lines[0], proc.stderr
@@ -276,8 +292,17 @@ def test_corrupt_key_file_is_one_named_line(
     with pytest.raises(KeyFileError, match=match) as info:
         load_secret(path)
     assert str(path) in str(info.value) and "\n" not in str(info.value)
-    code = main(["input", "--remote", LOCAL.replace("*", "1"), "--curve-secret", str(path),
-                 "--server-key", str(path)])  # fmt: skip
+    code = main(
+        [
+            "input",
+            "--remote",
+            LOCAL.replace("*", "1"),
+            "--curve-secret",
+            str(path),
+            "--server-key",
+            str(path),
+        ]
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and str(path) in err[0]
 
@@ -335,8 +360,12 @@ def test_the_scanner_finds_what_it_bans() -> None:
         "eval('1')\nbuiltins.exec('x')\nnp.load(f, allow_pickle=True)\nnp.load(f, allow_pickle=False)\n"
     )
     assert [h.split(": ")[1] for h in banned_uses(bad, "x")] == [
-        "import pickle", "import marshal", "eval()", "exec()", "allow_pickle",
-    ]  # fmt: skip
+        "import pickle",
+        "import marshal",
+        "eval()",
+        "exec()",
+        "allow_pickle",
+    ]
 
 
 #: Modules that pickle only to processes they start themselves, over a pipe or socket pair
@@ -361,12 +390,20 @@ def test_no_pickle_eval_or_exec_in_the_code() -> None:
     assert found == []
     for where in PRIVATE_PIPES:  # a private pipe stays private: no network in those modules
         tree = ast.parse((REPO / where).read_text(encoding="utf-8"))
-        names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import)
-                 for a in n.names} | {(n.module or "").split(".")[0] for n in ast.walk(tree)
-                                      if isinstance(n, ast.ImportFrom)}  # fmt: skip
+        names = {
+            a.name.split(".")[0]
+            for n in ast.walk(tree)
+            if isinstance(n, ast.Import)
+            for a in n.names
+        } | {
+            (n.module or "").split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)
+        }
         assert not names & {"zmq", "http", "urllib", "asyncio"}, where
-        calls = {n.func.attr for n in ast.walk(tree)
-                 if isinstance(n, ast.Call) and isinstance(n.func, ast.Attribute)}  # fmt: skip
+        calls = {
+            n.func.attr
+            for n in ast.walk(tree)
+            if isinstance(n, ast.Call) and isinstance(n.func, ast.Attribute)
+        }
         assert not calls & {"bind", "listen", "connect", "accept"}, where
 
 
@@ -390,18 +427,37 @@ def test_cli_remote_jam_over_curve(tmp_path: Path, ctx: zmq.Context[zmq.Socket[b
     def start(*args: str) -> dict[str, str]:
         proc = subprocess.Popen(
             [sys.executable, "-m", "services", "input", *args, *common],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=REPO, env=env,
-        )  # fmt: skip
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=REPO,
+            env=env,
+        )
         procs.append(proc)
         assert proc.stdout is not None
         info: dict[str, str] = json.loads(proc.stdout.readline())
         return info
 
     try:
-        a = start("--file", str(groove), "--loop", "--map", "roland-td",
-                  "--curve-secret", str(a_secret), "--allow", str(allow))  # fmt: skip
-        b = start("--remote", a["pub"], "--curve-secret", str(b_secret),
-                  "--server-key", str(keys / "siteA.key"))  # fmt: skip
+        a = start(
+            "--file",
+            str(groove),
+            "--loop",
+            "--map",
+            "roland-td",
+            "--curve-secret",
+            str(a_secret),
+            "--allow",
+            str(allow),
+        )
+        b = start(
+            "--remote",
+            a["pub"],
+            "--curve-secret",
+            str(b_secret),
+            "--server-key",
+            str(keys / "siteA.key"),
+        )
         # B's own stream is CURVE too (one --curve-secret serves all of B's sockets); no
         # --allow on B, so any client that knows B's public key may read it.
         reader = Security.from_files(secret=a_secret, server_key=keys / "siteB.key")

@@ -100,8 +100,7 @@ def test_unsequenced_intake_takes_every_good_message() -> None:
     assert all(isinstance(g, p.Taken) and g.seq.status is p.SeqStatus.OK for g in got)
 
 
-def test_the_receiver_logs_loss_at_most_once_per_period(caplog: pytest.LogCaptureFixture
-                                                        ) -> None:  # fmt: skip
+def test_the_receiver_logs_loss_at_most_once_per_period(caplog: pytest.LogCaptureFixture) -> None:
     caplog.set_level(logging.WARNING)
     now = [0.0]
     rx = StreamReceiver("unit stream", logging.getLogger("test.rx"), KINDS, clock=lambda: now[0])

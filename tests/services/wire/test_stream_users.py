@@ -108,8 +108,20 @@ def _beat_frames(seq: int, send_s: float) -> Frames:
 def script(good: Callable[[int, float], Frames], t0: float) -> list[Frames]:
     """(seq, send time) with: a gap (3, 4), a reorder (3 after 5), a duplicate (5 again), a
     restart at 0, one seen late (at 4 with a fresh send time), and two bad messages."""
-    seqs = [(0, 0), (1, 1), (2, 2), (5, 5), (3, 3), (5, 5), (6, 6), (0, 20), (1, 21), (2, 22),
-            (1, 40), (2, 41)]  # fmt: skip
+    seqs = [
+        (0, 0),
+        (1, 1),
+        (2, 2),
+        (5, 5),
+        (3, 3),
+        (5, 5),
+        (6, 6),
+        (0, 20),
+        (1, 21),
+        (2, 22),
+        (1, 40),
+        (2, 41),
+    ]
     out = [good(seq, t0 + k * 0.01) for seq, k in seqs]
     out.insert(7, [p.MAGIC + b"\x02" * 9])  # junk after the magic
     out.insert(3, p.encode(p.Message(p.Kind.HELLO, p.Hello("x", "y"), PERFORMER, 3)))
@@ -126,16 +138,18 @@ def ctx() -> Iterator[zmq.Context[zmq.Socket[bytes]]]:
     c.destroy(linger=0)
 
 
-def _user(name: str, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str
-          ) -> tuple[Callable[[], object], StreamReceiver, Callable[[], None], bool]:  # fmt: skip
+def _user(
+    name: str, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str
+) -> tuple[Callable[[], object], StreamReceiver, Callable[[], None], bool]:
     """(read once by the user's own path, its receiver, close, reads poses)."""
     kit = load_kit("rock5")
     if name == "synth":
         from services.synth.service import SynthConfig, SynthService
 
         synth = LiveSynth(build_rig(kit), SynthParams(0.01, 0.03))
-        svc = SynthService(synth, SynthConfig(sub=endpoint, pub=LOCAL, control=LOCAL),
-                           MonotonicClock(), ctx)  # fmt: skip
+        svc = SynthService(
+            synth, SynthConfig(sub=endpoint, pub=LOCAL, control=LOCAL), MonotonicClock(), ctx
+        )
         svc.start()
         return svc._drain, svc.rx, svc.shutdown, False
     if name == "display":
@@ -165,9 +179,9 @@ def _user(name: str, ctx: zmq.Context[zmq.Socket[bytes]], endpoint: str
 
 
 @pytest.mark.parametrize("name", ["synth", "display", "stage", "bus", "remote"])
-def test_every_user_counts_the_same_stream_the_same(name: str,
-                                                    ctx: zmq.Context[zmq.Socket[bytes]]
-                                                    ) -> None:  # fmt: skip
+def test_every_user_counts_the_same_stream_the_same(
+    name: str, ctx: zmq.Context[zmq.Socket[bytes]]
+) -> None:
     xpub = ctx.socket(zmq.XPUB)
     xpub.setsockopt(zmq.LINGER, 0)
     endpoint = f"tcp://127.0.0.1:{xpub.bind_to_random_port('tcp://127.0.0.1')}"

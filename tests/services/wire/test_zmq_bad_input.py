@@ -280,8 +280,12 @@ def test_display_drops_bad_pose_messages_and_keeps_drawing_good_ones(
         now = time.monotonic()
 
         def pose(seq: int) -> Frames:
-            return p.encode(p.Message(p.Kind.POSE, p.Pose(now + seq * 0.01, rows), seq=seq,
-                                      stream=p.Stream.POSES), fmt)  # fmt: skip
+            return p.encode(
+                p.Message(
+                    p.Kind.POSE, p.Pose(now + seq * 0.01, rows), seq=seq, stream=p.Stream.POSES
+                ),
+                fmt,
+            )
 
         other = p.PoseFormat.from_dtype(pose_dtype(len(kit.pieces) + 1))
         wrong_rows = np.zeros(4, other.dtype)
@@ -323,8 +327,9 @@ def test_input_daemon_control_socket_counts_each_kind_and_keeps_answering_hello(
     clock = MonotonicClock()
     src = FileSource(demo_groove(), clock, load_note_map(DEMO_MAP))
     src.load()
-    config = DaemonConfig(pub=LOCAL, control=LOCAL, wait_subscribers=99,
-                          sessions_dir=tmp_path / "sessions")  # fmt: skip
+    config = DaemonConfig(
+        pub=LOCAL, control=LOCAL, wait_subscribers=99, sessions_dir=tmp_path / "sessions"
+    )
     daemon = InputDaemon(src, config, clock, ctx)
     eps = daemon.start()
     stop = threading.Event()
