@@ -107,7 +107,7 @@ def test_the_player_mixes_a_key_over_the_track_from_the_next_buffer() -> None:
 @pytest.mark.skipif(shutil.which("xvfb-run") is None or shutil.which("xdotool") is None,
                     reason="xvfb-run or xdotool not installed")  # fmt: skip
 def test_keys_in_a_real_file_window_play_pieces() -> None:
-    press = "sleep 2; xdotool search --sync --name '^livedrummer$' key z shift+x ctrl+t space"
+    press = "sleep 2; timeout 30 xdotool search --sync --name '^livedrummer$' key z shift+x ctrl+t space"
     script = (
         f"{sys.executable} -m services -v display --size 320x180 --aa 0 --seconds 4 & {press}; wait"
     )
@@ -178,7 +178,7 @@ def test_keys_in_a_live_window_reach_the_input_daemon_as_notes(
         sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
         sub.connect(info["pub"])
         press = (
-            "sleep 3; xdotool search --sync --name '^livedrummer$' key z; sleep 0.3; "
+            "sleep 3; timeout 30 xdotool search --sync --name '^livedrummer$' key z; sleep 0.3; "
             "xdotool search --name '^livedrummer$' key shift+x; sleep 0.3; "
             "xdotool search --name '^livedrummer$' key ctrl+u; sleep 1; "
             "xdotool search --name '^livedrummer$' key q"
@@ -234,7 +234,7 @@ def test_up_keys_plays_the_window_s_keys_into_the_pipeline(
     sub.setsockopt(zmq.SUBSCRIBE, p.topic(p.Kind.ONSET))
     sub.connect(f"tcp://127.0.0.1:{base}")
     press = (
-        "xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1; "
+        "timeout 30 xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1; "
         "xdotool search --name '^livedrummer$' key z; sleep 0.3; "
         "xdotool search --name '^livedrummer$' key shift+x"
     )
@@ -287,7 +287,7 @@ def test_a_key_in_the_file_window_is_heard_through_jack(jack_server: str, tmp_pa
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     recorder = JackRecorder(env)
     press = (
-        "xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1.5; "
+        "timeout 30 xdotool search --sync --name '^livedrummer$' >/dev/null; sleep 1.5; "
         "xdotool search --name '^livedrummer$' key shift+x"
     )
     cmd = (

@@ -114,7 +114,7 @@ def _window(home: Path, shot: Path, xdo: str, seconds: float = 5.0) -> None:
     script = (
         f"{sys.executable} -m services display --size {W}x{H} --aa 0 --camera front "
         f"--seconds {seconds} --screenshot {shot} & sleep 2; "
-        f"W=$(xdotool search --sync --name '^livedrummer$' | head -1); {xdo}; wait"
+        f"W=$(timeout 30 xdotool search --sync --name '^livedrummer$' | head -1); {xdo}; wait"
     )
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     env["LIVEDRUMMER_HOME"] = str(home)

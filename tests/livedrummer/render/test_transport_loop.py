@@ -76,7 +76,7 @@ def test_step_size_cycles_and_the_readout_shows_loop_and_step() -> None:
                     reason="xvfb-run or xdotool not installed")  # fmt: skip
 def test_a_and_b_loop_the_real_window(tmp_path: Path) -> None:
     log = tmp_path / "frames.jsonl"
-    win = "xdotool search --sync --name '^livedrummer$'"
+    win = "timeout 30 xdotool search --sync --name '^livedrummer$'"
     script = (
         f"{sys.executable} -m services display --size 320x180 --aa 0 --no-sound "
         f"--seconds 9 --frame-log {log} & sleep 3; {win} key a; sleep 1.5; {win} key b; "

@@ -116,7 +116,7 @@ def test_keys_o_and_g_show_the_strips_in_a_live_window(tmp_path: Path) -> None:
     grab.write_text(GRAB)
     py = sys.executable
     shots = [tmp_path / f"shot{i}.npy" for i in range(3)]
-    press = "xdotool search --sync --name '^livedrummer' key"
+    press = "timeout 30 xdotool search --sync --name '^livedrummer' key"
     script = (
         f"{py} -m services display --live --sub tcp://127.0.0.1:{free_port()} "
         f"--size {W}x{H} --aa 0 --seconds 8 --clock monotonic & sleep 4; "

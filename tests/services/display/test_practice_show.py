@@ -641,7 +641,7 @@ def test_practice_opens_a_window_where_there_is_a_screen(
             [sys.executable, str(grab), str(shot), f"{w}x{h}"], env=x, check=True, timeout=30
         )
         subprocess.run(
-            "xdotool search --sync --name '^livedrummer' key q",
+            "timeout 30 xdotool search --sync --name '^livedrummer' key q",
             shell=True,
             env=x,
             check=True,
